@@ -1,0 +1,255 @@
+"""Reading, checking and writing GRF records.
+
+A record is a CSV file with a header row and the columns
+
+========== ======= ==================================================
+column     unit    meaning
+========== ======= ==================================================
+time       s       sample times, increasing and uniformly spaced
+force      N       vertical ground reaction force (GRF) of one person
+floor_acc  m/s^2   optional: vertical floor acceleration under the person
+========== ======= ==================================================
+
+The body mass is not in the file; it is given separately (``--mass KG`` on
+the command line). :func:`read_record` and :func:`make_record` check
+everything a later stage relies on and raise a :class:`~smd_statespace.errors.RecordError`
+or :class:`~smd_statespace.errors.MassError` with a one-line message otherwise.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import MassError, RecordError
+
+G = 9.80665
+"""Standard gravity (m/s^2)."""
+
+MASS_RANGE = (20.0, 250.0)
+"""Plausible body masses (kg) accepted by :func:`check_mass`."""
+
+SAMPLING_TOLERANCE = 0.01
+"""Largest relative deviation of a time step from the median step."""
+
+REQUIRED_COLUMNS = ("time", "force")
+OPTIONAL_COLUMNS = ("floor_acc",)
+
+
+@dataclass(frozen=True)
+class Record:
+    """One person's GRF record, checked.
+
+    Attributes
+    ----------
+    time : ndarray, shape (T,)
+        Sample times (s), uniformly spaced.
+    force : ndarray, shape (T,)
+        Vertical ground reaction force (N).
+    mass : float
+        Body mass ``M_h`` (kg).
+    floor_acc : ndarray or None, shape (T,)
+        Measured floor acceleration under the person (m/s^2), if recorded.
+    source : str
+        Where the record came from (file name), used in error messages.
+    """
+
+    time: np.ndarray
+    force: np.ndarray
+    mass: float
+    floor_acc: np.ndarray | None = None
+    source: str = "<arrays>"
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def fs(self) -> float:
+        """Sampling frequency (Hz)."""
+        return 1.0 / float(np.median(np.diff(self.time)))
+
+    @property
+    def dt(self) -> float:
+        """Sampling interval (s)."""
+        return 1.0 / self.fs
+
+    @property
+    def duration(self) -> float:
+        """Record length (s)."""
+        return float(self.time[-1] - self.time[0])
+
+    def to_frame(self) -> pd.DataFrame:
+        """The record as a DataFrame with the CSV column names."""
+        data = {"time": self.time, "force": self.force}
+        if self.floor_acc is not None:
+            data["floor_acc"] = self.floor_acc
+        return pd.DataFrame(data)
+
+
+def check_mass(mass, source: str = "--mass") -> float:
+    """Return ``mass`` as a float (kg), or raise :class:`MassError`.
+
+    Accepts finite masses in :data:`MASS_RANGE`.
+    """
+    try:
+        value = float(mass)
+    except (TypeError, ValueError):
+        raise MassError(f"{source}: body mass {mass!r} is not a number; give it in kg, e.g. 70") from None
+    if not np.isfinite(value) or value <= 0:
+        raise MassError(f"{source}: body mass must be a positive number of kg, got {mass!r}")
+    lo, hi = MASS_RANGE
+    if not lo <= value <= hi:
+        raise MassError(
+            f"{source}: body mass {value:g} kg is implausible; expected {lo:g}-{hi:g} kg (is it in kg?)"
+        )
+    return value
+
+
+def _check_numeric(values: np.ndarray, column: str, source: str) -> np.ndarray:
+    """Convert one column to float64, naming the first bad row (1-based data row)."""
+    numeric = pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=float)
+    bad = ~np.isfinite(numeric)
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise RecordError(
+            f"{source}: column '{column}' row {row + 1} holds {values[row]!r}; "
+            "every value must be a finite number"
+        )
+    return numeric
+
+
+def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> Record:
+    """Check arrays and return a :class:`Record`.
+
+    Parameters
+    ----------
+    time : array_like, shape (T,)
+        Sample times (s), strictly increasing and uniformly spaced
+        (within :data:`SAMPLING_TOLERANCE`).
+    force : array_like, shape (T,)
+        GRF (N). Its mean must be near ``mass * g``: a record in body weights
+        or kilonewtons is rejected.
+    mass : float
+        Body mass (kg).
+    floor_acc : array_like, optional
+        Floor acceleration (m/s^2).
+    source : str
+        Name used in error messages.
+    """
+    mass = check_mass(mass)
+    time = _check_numeric(np.asarray(time).ravel(), "time", source)
+    force = _check_numeric(np.asarray(force).ravel(), "force", source)
+    if floor_acc is not None:
+        floor_acc = _check_numeric(np.asarray(floor_acc).ravel(), "floor_acc", source)
+        if floor_acc.size != time.size:
+            raise RecordError(f"{source}: column 'floor_acc' has {floor_acc.size} rows, 'time' has {time.size}")
+    if force.size != time.size:
+        raise RecordError(f"{source}: column 'force' has {force.size} rows, 'time' has {time.size}")
+    if time.size < 3:
+        raise RecordError(f"{source}: only {time.size} data rows; a record needs at least one bouncing cycle")
+    steps = np.diff(time)
+    if (steps <= 0).any():
+        row = int(np.argmax(steps <= 0)) + 2
+        what = "repeats" if steps[row - 2] == 0 else "decreases"
+        raise RecordError(f"{source}: column 'time' {what} at row {row}; time must strictly increase")
+    median = float(np.median(steps))
+    deviation = np.abs(steps / median - 1.0)
+    if deviation.max() > SAMPLING_TOLERANCE:
+        row = int(np.argmax(deviation)) + 2
+        raise RecordError(
+            f"{source}: non-uniform sampling at row {row} (step {steps[row - 2]:.6g} s, median {median:.6g} s); "
+            f"resample to a uniform rate (tolerance {SAMPLING_TOLERANCE:.0%})"
+        )
+    weight = mass * G
+    ratio = float(np.mean(force)) / weight
+    if not 0.7 <= ratio <= 1.3:
+        if abs(np.mean(force) - 1.0) < 0.3:
+            hint = "it looks like body weights; multiply by mass*g to get N"
+        elif abs(np.mean(force) * 1000.0 / weight - 1.0) < 0.3:
+            hint = "it looks like kN; multiply by 1000 to get N"
+        else:
+            hint = "check the units (N) and the --mass value"
+        raise RecordError(
+            f"{source}: mean of column 'force' is {np.mean(force):.4g}, expected about mass*g = {weight:.1f} N; {hint}"
+        )
+    return Record(time=time, force=force, mass=mass, floor_acc=floor_acc, source=source)
+
+
+def _sniff_delimiter(path: Path, first_line: str) -> None:
+    """Reject files that are not comma-separated, naming the delimiter found."""
+    if "," in first_line:
+        return
+    for name, delimiter in (("semicolon", ";"), ("tab", "\t"), ("space", " "), ("'|'", "|")):
+        if delimiter in first_line.strip():
+            raise RecordError(
+                f"{path}: header {first_line.strip()!r} is {name}-separated; records must be comma-separated CSV "
+                "with columns time,force[,floor_acc]"
+            )
+
+
+def read_record(path, mass) -> Record:
+    """Read a CSV record and check it (see the module docstring for the format).
+
+    Parameters
+    ----------
+    path : str or path-like
+        CSV file with header ``time,force[,floor_acc]``.
+    mass : float
+        Body mass (kg).
+
+    Returns
+    -------
+    Record
+
+    Raises
+    ------
+    RecordError
+        The file is missing, unreadable, empty, not comma-separated, lacks a
+        column or holds bad values.
+    MassError
+        The mass is not plausible.
+    """
+    path = Path(path)
+    check_mass(mass)
+    if not path.exists():
+        raise RecordError(f"{path}: no such file")
+    if path.is_dir():
+        raise RecordError(f"{path}: is a directory, expected a CSV file")
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
+            first_line = handle.readline()
+            if not first_line.strip():
+                raise RecordError(f"{path}: file is empty; expected a header time,force[,floor_acc] and data rows")
+            _sniff_delimiter(path, first_line)
+            handle.seek(0)
+            rows = list(csv.reader(handle))
+    except UnicodeDecodeError:
+        raise RecordError(f"{path}: not a text CSV file (could not decode as UTF-8)") from None
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    header = [name.strip().lower() for name in rows[0]]
+    missing = [name for name in REQUIRED_COLUMNS if name not in header]
+    if missing:
+        raise RecordError(
+            f"{path}: missing column '{missing[0]}'; the header is {','.join(rows[0])!r}, "
+            "expected time,force[,floor_acc]"
+        )
+    body = [row for row in rows[1:] if any(cell.strip() for cell in row)]
+    if not body:
+        raise RecordError(f"{path}: header only, no data rows")
+    for number, row in enumerate(body, start=1):
+        if len(row) != len(header):
+            raise RecordError(f"{path}: data row {number} has {len(row)} fields, the header has {len(header)}")
+    columns = {name: np.array([row[i].strip() for row in body], dtype=object) for i, name in enumerate(header)}
+    floor = columns.get("floor_acc")
+    return make_record(
+        columns["time"], columns["force"], mass, floor_acc=floor, source=os.fspath(path)
+    )
+
+
+def write_record(path, record: Record) -> None:
+    """Write ``record`` as CSV (columns ``time, force[, floor_acc]``)."""
+    record.to_frame().to_csv(path, index=False, float_format="%.6f")
