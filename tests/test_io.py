@@ -1,0 +1,104 @@
+"""Record reading and checking: every bad input is a one-line typed error."""
+
+import numpy as np
+import pytest
+
+from smd_statespace.errors import MassError, RecordError, SMDInputError
+from smd_statespace.io import G, make_record, read_record, write_record
+
+MASS = 70.0
+
+
+def good_rows(n=400, fs=100.0):
+    t = np.arange(n) / fs
+    force = MASS * G * (1 + 0.3 * np.sin(2 * np.pi * 2 * t))
+    return t, force
+
+
+def write_csv(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_round_trip(tmp_path):
+    t, force = good_rows()
+    record = make_record(t, force, MASS, floor_acc=0.01 * np.sin(t))
+    write_record(tmp_path / "r.csv", record)
+    back = read_record(tmp_path / "r.csv", MASS)
+    np.testing.assert_allclose(back.time, t, atol=1e-6)
+    np.testing.assert_allclose(back.force, force, atol=1e-6)
+    np.testing.assert_allclose(back.floor_acc, record.floor_acc, atol=1e-6)
+    assert back.fs == pytest.approx(100.0)
+    assert back.source.endswith("r.csv")
+
+
+@pytest.mark.parametrize(
+    "mass,pattern",
+    [(0, "positive"), (-5, "positive"), (float("nan"), "positive"), (700, "implausible"), (3, "implausible"),
+     ("heavy", "not a number")],
+)
+def test_bad_mass(mass, pattern):
+    t, force = good_rows()
+    with pytest.raises(MassError, match=pattern):
+        make_record(t, force, mass)
+
+
+def csv_text(t, force):
+    return "time,force\n" + "".join(f"{a},{b}\n" for a, b in zip(t, force))
+
+
+@pytest.mark.parametrize(
+    "mutate,pattern",
+    [
+        (lambda t, f: (t, f / (MASS * G)), "body weights"),
+        (lambda t, f: (t, f / 1000.0), "kN"),
+        (lambda t, f: (t, f * 3), "expected about mass\\*g"),
+        (lambda t, f: (np.r_[t[:10], t[9], t[11:]], f), "repeats at row 11"),
+        (lambda t, f: (np.r_[t[:10], t[8], t[11:]], f), "decreases at row 11"),
+        (lambda t, f: (np.r_[t[:50], t[50:] + 0.004], f), "non-uniform sampling at row 51"),
+    ],
+)
+def test_bad_values(tmp_path, mutate, pattern):
+    t, force = mutate(*good_rows())
+    path = write_csv(tmp_path / "bad.csv", csv_text(t, force))
+    with pytest.raises(RecordError, match=pattern) as info:
+        read_record(path, MASS)
+    assert "bad.csv" in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("token", ["nan", "inf", "-inf", "abc", ""])
+def test_non_numeric_cell_names_column_and_row(tmp_path, token):
+    t, force = good_rows()
+    lines = csv_text(t, force).splitlines()
+    lines[8] = f"{t[7]},{token}"
+    path = write_csv(tmp_path / "cell.csv", "\n".join(lines) + "\n")
+    with pytest.raises(RecordError, match="column 'force' row 8"):
+        read_record(path, MASS)
+
+
+def test_structural_problems(tmp_path):
+    t, force = good_rows()
+    with pytest.raises(RecordError, match="no such file"):
+        read_record(tmp_path / "missing.csv", MASS)
+    with pytest.raises(RecordError, match="empty"):
+        read_record(write_csv(tmp_path / "empty.csv", ""), MASS)
+    with pytest.raises(RecordError, match="header only"):
+        read_record(write_csv(tmp_path / "header.csv", "time,force\n"), MASS)
+    with pytest.raises(RecordError, match="semicolon-separated"):
+        read_record(write_csv(tmp_path / "semi.csv", csv_text(t, force).replace(",", ";")), MASS)
+    with pytest.raises(RecordError, match="missing column 'force'"):
+        read_record(write_csv(tmp_path / "cols.csv", csv_text(t, force).replace("force", "grf", 1)), MASS)
+    with pytest.raises(RecordError, match="data row 3 has 3 fields"):
+        lines = csv_text(t, force).splitlines()
+        lines[3] += ",1"
+        read_record(write_csv(tmp_path / "ragged.csv", "\n".join(lines)), MASS)
+    with pytest.raises(RecordError, match="is a directory"):
+        read_record(tmp_path, MASS)
+    binary = tmp_path / "binary.csv"
+    binary.write_bytes(b"\xff\xfe\x00\x81" * 20)
+    with pytest.raises(SMDInputError):
+        read_record(binary, MASS)
+
+
+def test_errors_are_value_errors():
+    assert issubclass(RecordError, ValueError) and issubclass(MassError, ValueError)
