@@ -1,0 +1,1065 @@
+"""Synthetic bouncing records with known truth.
+
+A forward simulator of the spring-mass-damper (SMD) model of a bouncing
+person, independent of the estimator-side model (:mod:`smd_statespace.model`),
+so that it can check the estimators:
+
+- Eq. 2, ``u'' + 2 xi_h w_h u' + w_h^2 u = g F(t)``, integrated with
+  :func:`scipy.integrate.solve_ivp` (DOP853, ``rtol`` 1e-10), restarted at every
+  force-cycle boundary because the force coefficients jump there;
+- Eq. 4, the biomechanical force in units of g,
+  ``F = a0 + sum_i [a_i cos(i phi) + b_i sin(i phi)]`` with a bouncing phase
+  ``phi`` that advances by 2 pi per force cycle; every cycle has its own
+  frequency and coefficients (cycle-to-cycle variation);
+- Eq. 3, ``GRF = M_h (g + u'')``, plus white measurement noise;
+- optional physical effects beyond the base model: a vibrating floor mode
+  (human-structure interaction, Section 6), force harmonics above ``n`` and a
+  cubic (hardening or softening) leg spring.
+
+Symbols and names
+-----------------
+============ ============ ======== ==========================================
+symbol       name         unit     meaning
+============ ============ ======== ==========================================
+``M_h``      ``mass``     kg       body mass
+``f_b``      ``f_b``      Hz       bouncing frequency (force cycles per s)
+``f_h``      ``f_h``      Hz       SMD natural frequency, ``w_h = 2 pi f_h``
+``xi_h``     ``xi_h``     \\-      SMD damping ratio
+``K_h``      ``K_h``      N/m      stiffness, Eq. 17
+``C_h``      ``C_h``      N s/m    damping coefficient, Eq. 18
+``BLF_i``    ``blf``      g        harmonic amplitude ``sqrt(a_i^2 + b_i^2)``, Eq. 5
+``u``        ``u``        m        COM displacement from static equilibrium (absolute)
+``z``        ``z``        m        floor displacement (floor_mode only), upward
+============ ============ ======== ==========================================
+
+Phase convention: harmonic ``i`` of a cycle is
+``a_i cos(i theta) + b_i sin(i theta) = BLF_i cos(i theta - psi_i)`` with
+``theta = 2 pi f_b (t - t_start)``, i.e. ``a_i = BLF_i cos psi_i`` and
+``b_i = BLF_i sin psi_i``; ``phases`` are the ``psi_i`` (rad).
+
+Random numbers come only from a :class:`numpy.random.Generator` built with
+:func:`numpy.random.default_rng` from the ``seed`` argument, and are drawn in a
+fixed order of fixed-size blocks, so switching an effect on or off does not
+change the random numbers used by the rest of the record.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import optimize
+from scipy.integrate import solve_ivp
+
+from . import article
+from .errors import OptionError
+from .io import G, Record, check_mass, make_record, write_record
+
+__all__ = [
+    "EFFECTS",
+    "DEFAULT_BLF",
+    "GRF_PHASE_LAG",
+    "POPULATION_BOUNDS",
+    "MASS_DISTRIBUTION",
+    "SAMPLE_SETTINGS",
+    "SyntheticRecord",
+    "simulate_bouncing",
+    "integrate_response",
+    "default_phases",
+    "acceleration_frf",
+    "sample_population",
+    "write_sample",
+    "sample_path",
+    "sample_truth_path",
+]
+
+RTOL = 1e-10
+"""Relative tolerance of the DOP853 integration."""
+
+ATOL = 1e-13
+"""Absolute tolerance of the DOP853 integration (m and m/s)."""
+
+TRUNCATION_SD = 3.0
+"""Cycle-to-cycle variations are normal, truncated at this many standard deviations."""
+
+DEFAULT_BLF = (0.25, 0.15, 0.05, 0.02)
+"""Default harmonic amplitudes ``BLF_1..BLF_4`` of the biomechanical force (g)."""
+
+GRF_PHASE_LAG = math.pi / 4
+"""Phase lag (rad) of every GRF harmonic in the default force shape.
+
+With ``phases=None`` the force phases are chosen so that, on a rigid floor in
+steady state, harmonic ``i`` of the dynamic GRF is
+``A_i cos(i theta - pi/4)`` (then shifted so that the main peak is at the
+cycle start): a sharp main peak with a fast rise and a slower fall, between
+the symmetric all-cosine shape (peak 1.5-1.7 BW, shallow double trough) and a
+sawtooth (all-sine, peak-to-trough range largest).
+"""
+
+EFFECTS = {
+    "floor_mode": {
+        "frequency": article.TABLE3[0].frequency,
+        "damping": article.TABLE3[0].damping,
+        "modal_mass": article.TABLE3[0].modal_mass,
+        "noise": None,
+    },
+    "harmonics": {"blf": (0.04, 0.03), "phases": None},
+    "cubic_stiffness": {"beta": 400.0},
+}
+"""Physical effects beyond the base model and their default parameters.
+
+``floor_mode``
+    The person bounces on one vibrating floor mode (Section 6). ``frequency``
+    (Hz), ``damping`` (ratio), ``modal_mass`` (kg) default to mode 1 of Table 3.
+    The SMD spring and damper act on the COM displacement relative to the floor
+    and the floor is driven by the dynamic GRF ``-M_h u''`` (z upward)::
+
+        u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + g F(t)
+        m_f z'' + c_f z' + k_f z = -M_h u''
+
+    The record then has a ``floor_acc`` column (``z''``) with white noise of
+    standard deviation ``noise`` times its RMS (``noise=None``: the ``noise``
+    argument of :func:`simulate_bouncing`).
+``harmonics``
+    Force harmonics ``n+1, n+2, ...`` with amplitudes ``blf`` (g) and optional
+    ``phases`` (rad; default: the same GRF-shape rule as the base harmonics).
+``cubic_stiffness``
+    A nonlinear leg spring ``w_h^2 (r + beta r^3)``, ``r = u - z`` (m):
+    ``beta`` (1/m^2) > 0 hardens, < 0 softens. At the default 400 1/m^2 and a
+    COM amplitude of 2 cm the stiffness is 16 % higher at the extremes, which
+    raises the apparent natural frequency by about 6 %.
+"""
+
+POPULATION_BOUNDS = {
+    "f_h": (1.0, 6.0),
+    "xi_h": (0.02, 1.0),
+    "blf": (0.0, 1.0),
+    "mass": (45.0, 100.0),
+}
+"""Physical ranges used by :func:`sample_population`; draws outside are redrawn.
+
+``f_h`` (Hz) may exceed ``f_b``; the upper limit 6 Hz is above the estimator's
+initial range (1-4 Hz) because Table 2 puts 53 % (2.95-3.35 Hz band) and 73 %
+(3.35-3.75 Hz band) of ``f_h`` above 4 Hz. ``xi_h`` (-), BLFs (g), mass (kg).
+"""
+
+MASS_DISTRIBUTION = (65.0, 10.0)
+"""Mean and standard deviation (kg) of the normal body-mass distribution of
+:func:`sample_population` (the article publishes no mass distribution)."""
+
+SAMPLE_SETTINGS = {
+    "mass": 70.0,
+    "f_b": 2.0,
+    "f_h": 2.5,
+    "xi_h": 0.3,
+    "duration": 30.0,
+    "fs": 100.0,
+    "seed": 2019,
+}
+"""Settings of the shipped sample record (other arguments at their defaults)."""
+
+SAMPLE_CSV = "sample.csv"
+SAMPLE_TRUTH = "sample_truth.json"
+
+
+# ---------------------------------------------------------------------------
+# small helpers
+
+
+def _stiffness(mass, f_h):
+    """Eq. 17: ``K_h = M_h (2 pi f_h)^2`` (N/m)."""
+    return mass * (2.0 * np.pi * f_h) ** 2
+
+
+def _damping_coefficient(mass, f_h, xi_h):
+    """Eq. 18: ``C_h = 2 xi_h M_h (2 pi f_h)`` (N s/m)."""
+    return 2.0 * xi_h * mass * 2.0 * np.pi * f_h
+
+
+def _number(value, name, *, positive=False, nonnegative=False, where="simulate_bouncing"):
+    """Return ``value`` as a finite float or raise a one-line :class:`OptionError`."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{where}: {name} must be a number, got {value!r}") from None
+    if not np.isfinite(number):
+        raise OptionError(f"{where}: {name} must be finite, got {value!r}")
+    if positive and number <= 0:
+        raise OptionError(f"{where}: {name} must be positive, got {value!r}")
+    if nonnegative and number < 0:
+        raise OptionError(f"{where}: {name} must be zero or positive, got {value!r}")
+    return number
+
+
+def _vector(values, name, *, nonnegative=False, where="simulate_bouncing"):
+    """Return a non-empty 1-D finite float array or raise :class:`OptionError`."""
+    try:
+        array = np.atleast_1d(np.asarray(values, dtype=float))
+    except (TypeError, ValueError):
+        raise OptionError(f"{where}: {name} must be a sequence of numbers, got {values!r}") from None
+    if array.ndim != 1 or array.size == 0:
+        raise OptionError(f"{where}: {name} must be a non-empty 1-D sequence of numbers, got {values!r}")
+    if not np.all(np.isfinite(array)):
+        raise OptionError(f"{where}: {name} must hold finite numbers, got {values!r}")
+    if nonnegative and np.any(array < 0):
+        raise OptionError(f"{where}: {name} must hold amplitudes >= 0 (use phases for the sign), got {values!r}")
+    return array
+
+
+def acceleration_frf(frequency, f_h, xi_h):
+    """Frequency response of Eq. 2 from force (in g) to COM acceleration (in g).
+
+    Parameters
+    ----------
+    frequency : float or array_like
+        Excitation frequency (Hz).
+    f_h : float
+        SMD natural frequency (Hz).
+    xi_h : float
+        SMD damping ratio (-).
+
+    Returns
+    -------
+    complex ndarray
+        ``H = -w^2 / (w_h^2 - w^2 + 2 i xi_h w_h w)``: the harmonic
+        ``g C e^{i w t}`` of ``g F`` produces ``H g C e^{i w t}`` in ``u''``.
+    """
+    omega = 2.0 * np.pi * np.asarray(frequency, dtype=float)
+    omega_h = 2.0 * np.pi * f_h
+    return -(omega**2) / (omega_h**2 - omega**2 + 2j * xi_h * omega_h * omega)
+
+
+def default_phases(blf, f_b, f_h, xi_h, extra_blf=()):
+    """Force phases that give a realistic GRF shape on a rigid floor.
+
+    The phases ``psi_i`` (rad, see the module docstring for the convention) are
+    chosen so that in steady state harmonic ``i`` of the dynamic GRF is
+    ``|H_i| BLF_i cos(i (theta + theta_p) - pi/4)``, ``H_i`` the response of
+    Eq. 2 at ``i f_b`` (:func:`acceleration_frf`) and ``theta_p`` the shift
+    that puts the main GRF peak of the base harmonics at the start of each
+    cycle (``theta = 0``), where the article starts its cycles.
+
+    Parameters
+    ----------
+    blf : array_like, shape (n,)
+        Base harmonic amplitudes (g).
+    f_b, f_h, xi_h : float
+        Bouncing frequency (Hz), SMD natural frequency (Hz), damping ratio.
+    extra_blf : array_like, shape (m,), optional
+        Amplitudes of harmonics ``n+1..n+m`` (the ``harmonics`` effect); they
+        get phases by the same rule without changing ``theta_p``.
+
+    Returns
+    -------
+    base : ndarray, shape (n,)
+        Phases of harmonics 1..n (rad, in (-pi, pi]).
+    extra : ndarray, shape (m,)
+        Phases of harmonics n+1..n+m (rad).
+    """
+    blf = np.asarray(blf, dtype=float)
+    extra_blf = np.asarray(extra_blf, dtype=float).reshape(-1)
+    n = blf.size
+    orders = np.arange(1, n + extra_blf.size + 1)
+    response = acceleration_frf(orders * f_b, f_h, xi_h)
+    grf_amplitude = np.abs(response[:n]) * blf
+    theta = np.linspace(0.0, 2.0 * np.pi, 4096, endpoint=False)
+    shape = grf_amplitude @ np.cos(np.outer(orders[:n], theta) - GRF_PHASE_LAG)
+    theta_peak = float(theta[np.argmax(shape)]) if np.any(grf_amplitude > 0) else 0.0
+    grf_phase = GRF_PHASE_LAG - orders * theta_peak
+    force_phase = grf_phase + np.angle(response)
+    wrapped = np.pi - np.mod(np.pi - force_phase, 2.0 * np.pi)
+    return wrapped[:n], wrapped[n:]
+
+
+def _resolve_seed(seed):
+    """Return ``(generator, record)``: the Generator and a JSON-able seed record."""
+    if isinstance(seed, np.random.Generator):
+        return np.random.default_rng(seed), None  # the same Generator, its state not recordable
+    if seed is None:
+        seed = np.random.SeedSequence()
+    if isinstance(seed, np.random.SeedSequence):
+        if seed.spawn_key:
+            record = {"entropy": seed.entropy, "spawn_key": list(seed.spawn_key)}
+        else:
+            record = seed.entropy
+        return np.random.default_rng(seed), record
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise OptionError(
+            f"seed must be None, a non-negative int, a numpy SeedSequence or a numpy Generator, got {seed!r}"
+        )
+    return np.random.default_rng(int(seed)), int(seed)
+
+
+# ---------------------------------------------------------------------------
+# effects
+
+
+def _check_effects(effects, allowed=tuple(EFFECTS), where="simulate_bouncing"):
+    """Validate ``effects`` and return ``{name: params}`` with defaults filled in."""
+    if effects is None:
+        return {}
+    if isinstance(effects, str) or not hasattr(effects, "items"):
+        raise OptionError(
+            f"{where}: effects must be a dict {{name: {{parameter: value}}}}, got {effects!r}; "
+            f"valid effects: {', '.join(allowed)}"
+        )
+    resolved = {}
+    for name, params in effects.items():
+        if name not in allowed:
+            raise OptionError(f"{where}: unknown effect {name!r}; valid effects: {', '.join(allowed)}")
+        defaults = EFFECTS[name]
+        if params is None:
+            params = {}
+        if not hasattr(params, "items"):
+            raise OptionError(
+                f"{where}: effect {name!r} takes a dict of parameters, got {params!r}; "
+                f"valid parameters: {', '.join(defaults)}"
+            )
+        for key in params:
+            if key not in defaults:
+                raise OptionError(
+                    f"{where}: effect {name!r} has no parameter {key!r}; valid parameters: {', '.join(defaults)}"
+                )
+        merged = {**defaults, **params}
+        label = f"effect {name!r} parameter"
+        if name == "floor_mode":
+            merged["frequency"] = _number(merged["frequency"], f"{label} 'frequency' (Hz)", positive=True, where=where)
+            merged["damping"] = _number(merged["damping"], f"{label} 'damping'", nonnegative=True, where=where)
+            merged["modal_mass"] = _number(
+                merged["modal_mass"], f"{label} 'modal_mass' (kg)", positive=True, where=where
+            )
+            if merged["noise"] is not None:
+                merged["noise"] = _number(merged["noise"], f"{label} 'noise'", nonnegative=True, where=where)
+        elif name == "harmonics":
+            blf = _vector(merged["blf"], f"{label} 'blf'", nonnegative=True, where=where)
+            merged["blf"] = tuple(float(v) for v in blf)
+            if merged["phases"] is not None:
+                phases = _vector(merged["phases"], f"{label} 'phases'", where=where)
+                if phases.size != blf.size:
+                    raise OptionError(
+                        f"{where}: {label} 'phases' has {phases.size} values, 'blf' has {blf.size}"
+                    )
+                merged["phases"] = tuple(float(v) for v in phases)
+        elif name == "cubic_stiffness":
+            merged["beta"] = _number(merged["beta"], f"{label} 'beta' (1/m^2)", where=where)
+        resolved[name] = merged
+    return resolved
+
+
+# ---------------------------------------------------------------------------
+# the dynamical system
+
+
+@dataclass(frozen=True)
+class _System:
+    """Right-hand side of the (possibly coupled, possibly nonlinear) SMD model.
+
+    State ``x = [u, u', (z, z')]`` (m, m/s); input ``g F(t)`` (m/s^2).
+    """
+
+    omega_h: float
+    xi_h: float
+    beta: float = 0.0
+    floor: tuple | None = None  # (omega_f, xi_f, mass_ratio M_h / m_f)
+
+    @property
+    def n_state(self):
+        return 2 if self.floor is None else 4
+
+    def accelerations(self, x, force_g):
+        """Return ``(u'', z'')`` for states ``x`` (shape (n_state, ...)) and input ``g F``."""
+        if self.floor is None:
+            relative, relative_rate = x[0], x[1]
+        else:
+            relative, relative_rate = x[0] - x[2], x[1] - x[3]
+        spring = relative if self.beta == 0.0 else relative + self.beta * relative**3
+        # Eq. 2 (relative to the floor when there is one, Section 6)
+        u_ddot = -(self.omega_h**2) * spring - 2.0 * self.xi_h * self.omega_h * relative_rate + force_g
+        if self.floor is None:
+            return u_ddot, None
+        omega_f, xi_f, mass_ratio = self.floor
+        z_ddot = -(omega_f**2) * x[2] - 2.0 * xi_f * omega_f * x[3] - mass_ratio * u_ddot
+        return u_ddot, z_ddot
+
+    def rhs(self, t, x, force):
+        """Time derivative of the state ``x`` (shape (n_state,)) at time ``t`` (s)."""
+        u_ddot, z_ddot = self.accelerations(x.tolist(), G * force.scalar(t))
+        if self.floor is None:
+            return np.array([x[1], u_ddot])
+        return np.array([x[1], u_ddot, x[3], z_ddot])
+
+    def linear_matrices(self):
+        """``(A, B)`` of the linear part: ``x' = A x + B g F`` (cubic term dropped)."""
+        w2, c = self.omega_h**2, 2.0 * self.xi_h * self.omega_h
+        if self.floor is None:
+            return np.array([[0.0, 1.0], [-w2, -c]]), np.array([0.0, 1.0])
+        omega_f, xi_f, mu = self.floor
+        person = np.array([-w2, -c, w2, c])
+        floor = -mu * person + np.array([0.0, 0.0, -(omega_f**2), -2.0 * xi_f * omega_f])
+        a_matrix = np.array([[0.0, 1.0, 0.0, 0.0], person, [0.0, 0.0, 0.0, 1.0], floor])
+        return a_matrix, np.array([0.0, 1.0, 0.0, -mu])
+
+
+class _CycleForce:
+    """Biomechanical force of one cycle (g), Eq. 4, referred to the cycle start."""
+
+    def __init__(self, t_start, f_b, a0, a, b):
+        self.t_start = float(t_start)
+        self.omega = 2.0 * np.pi * float(f_b)
+        self.a0 = float(a0)
+        self.a = np.asarray(a, dtype=float)
+        self.b = np.asarray(b, dtype=float)
+        self.orders = np.arange(1, self.a.size + 1, dtype=float)
+
+        self._terms = tuple(zip(self.a.tolist(), self.b.tolist()))
+
+    def scalar(self, t):
+        """Force (g) at one time ``t`` (s): the fast path for the ODE solver."""
+        theta = self.omega * (t - self.t_start)
+        cos_1, sin_1 = math.cos(theta), math.sin(theta)
+        cos_i, sin_i = cos_1, sin_1
+        total = self.a0
+        for a_i, b_i in self._terms:  # Eq. 4, cos(i theta), sin(i theta) by rotation
+            total += a_i * cos_i + b_i * sin_i
+            cos_i, sin_i = cos_i * cos_1 - sin_i * sin_1, sin_i * cos_1 + cos_i * sin_1
+        return total
+
+    def __call__(self, t):
+        """Force (g) at times ``t`` (s), any shape."""
+        angle = np.multiply.outer(self.orders, self.omega * (np.asarray(t, dtype=float) - self.t_start))
+        return self.a0 + self.a @ np.cos(angle) + self.b @ np.sin(angle)  # Eq. 4
+
+
+def _cycle_coefficients(cycles):
+    """``(n_harmonics, a, b)`` arrays of shape (n_cycles, n) from a cycles table."""
+    n = 0
+    while f"a{n + 1}" in cycles.columns and f"b{n + 1}" in cycles.columns:
+        n += 1
+    a = cycles[[f"a{i}" for i in range(1, n + 1)]].to_numpy(dtype=float).reshape(len(cycles), n)
+    b = cycles[[f"b{i}" for i in range(1, n + 1)]].to_numpy(dtype=float).reshape(len(cycles), n)
+    return n, a, b
+
+
+def _linear_steady_state(system, force):
+    """State at the cycle start of the periodic response of the linear part to ``force``."""
+    a_matrix, b_vector = system.linear_matrices()
+    identity = np.eye(system.n_state)
+    try:
+        state = -np.linalg.solve(a_matrix, b_vector * G * force.a0)
+        for order, (a_i, b_i) in enumerate(zip(force.a, force.b), start=1):
+            complex_amplitude = (a_i - 1j * b_i) * G  # g F term = Re(C e^{i w t})
+            response = np.linalg.solve(1j * order * force.omega * identity - a_matrix, b_vector * complex_amplitude)
+            state = state + response.real
+    except np.linalg.LinAlgError:
+        raise OptionError(
+            "the undamped model is forced at its natural frequency: no steady state; "
+            "give xi_h > 0 or an initial_state"
+        ) from None
+    return state
+
+
+def _integrate_cycle(system, force, x0, t_start, t_end, t_eval):
+    """Integrate one cycle; return (states at t_eval, state at t_end)."""
+    times = np.append(t_eval, t_end)
+    solution = solve_ivp(
+        system.rhs,
+        (t_start, t_end),
+        x0,
+        method="DOP853",
+        t_eval=times,
+        rtol=RTOL,
+        atol=ATOL,
+        args=(force,),
+    )
+    if solution.status != 0 or not np.all(np.isfinite(solution.y)):
+        hint = ""
+        if system.beta != 0.0:
+            hint = f"; the cubic_stiffness beta={system.beta:g} 1/m^2 may make the leg spring unstable"
+        raise OptionError(f"integration failed at t={t_start:.3f} s ({solution.message}){hint}")
+    return solution.y[:, :-1], solution.y[:, -1]
+
+
+def _periodic_state(system, force, period, t_start):
+    """Periodic steady state at the cycle start under a repeated cycle force.
+
+    Exact for the linear model; with a cubic spring the linear solution is the
+    initial guess of a shooting (Newton) solve over one period, then a run-in
+    of several decay times if shooting fails.
+    """
+    guess = _linear_steady_state(system, force)
+    if system.beta == 0.0:
+        return guess
+    empty = np.empty(0)
+
+    def mismatch(x0):
+        return _integrate_cycle(system, force, x0, t_start, t_start + period, empty)[1] - x0
+
+    scale = np.maximum(np.abs(guess), 1e-6)
+    solution = optimize.root(lambda s: mismatch(s * scale) / scale, guess / scale, method="hybr", tol=1e-12)
+    state = solution.x * scale
+    if solution.success and np.all(np.abs(mismatch(state)) <= 1e-9 * scale + 1e-12):
+        return state
+    decay = 1.0 / (system.xi_h * system.omega_h) if system.xi_h > 0 else 60.0
+    for _ in range(int(np.ceil(min(60.0, max(3.0, 10.0 * decay)) / period))):
+        guess = _integrate_cycle(system, force, guess, t_start, t_start + period, empty)[1]
+    return guess
+
+
+def _build_system(f_h, xi_h, mass, effects):
+    floor = None
+    if "floor_mode" in effects:
+        params = effects["floor_mode"]
+        floor = (2.0 * np.pi * params["frequency"], params["damping"], mass / params["modal_mass"])
+    beta = effects["cubic_stiffness"]["beta"] if "cubic_stiffness" in effects else 0.0
+    return _System(omega_h=2.0 * np.pi * f_h, xi_h=xi_h, beta=beta, floor=floor)
+
+
+def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial_state=None):
+    """Integrate the SMD model (Eq. 2) under a piecewise-constant cycle force.
+
+    The low-level engine of :func:`simulate_bouncing`, for user-defined forces
+    and initial conditions. One :func:`scipy.integrate.solve_ivp` (DOP853,
+    ``rtol`` = :data:`RTOL`) per force cycle, restarted at each boundary.
+
+    Parameters
+    ----------
+    cycles : pandas.DataFrame
+        One row per force cycle with columns ``t_start, t_end`` (s), ``f_b``
+        (Hz), ``a0`` and ``a1, b1, ..., an, bn`` (g), the force of Eq. 4
+        referred to the cycle start: ``F = a0 + sum a_i cos(2 pi i f_b
+        (t - t_start)) + b_i sin(...)``. Consecutive cycles must be contiguous.
+    time : array_like, shape (T,)
+        Increasing output times (s) within ``[t_start[0], t_end[-1])``.
+    f_h : float
+        SMD natural frequency (Hz), > 0.
+    xi_h : float
+        SMD damping ratio (-), >= 0 (0 allowed here, for energy checks).
+    mass : float
+        Body mass (kg); matters only with ``floor_mode``.
+    effects : dict, optional
+        ``floor_mode`` and/or ``cubic_stiffness`` (see :data:`EFFECTS`);
+        extra force harmonics are simply extra columns of ``cycles``.
+    initial_state : array_like, optional
+        ``[u, u']`` (m, m/s), or ``[u, u', z, z']`` with a floor, at
+        ``t_start[0]``. Default: the periodic steady state of the first
+        cycle's force (no start-up transient).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``time, cycle, u, u_dot, u_ddot, force_bio`` (m, m/s, m/s^2,
+        ``g F`` in m/s^2) and, with a floor, ``z, z_dot, z_ddot``.
+        Accelerations are evaluated from the equations of motion, not by
+        differencing.
+    """
+    where = "integrate_response"
+    f_h = _number(f_h, "f_h (Hz)", positive=True, where=where)
+    xi_h = _number(xi_h, "xi_h", nonnegative=True, where=where)
+    mass = check_mass(mass, source="mass")
+    effects = _check_effects(effects, allowed=("floor_mode", "cubic_stiffness"), where=where)
+    required = {"t_start", "t_end", "f_b", "a0"}
+    if not isinstance(cycles, pd.DataFrame) or not required <= set(cycles.columns) or len(cycles) == 0:
+        raise OptionError(
+            f"{where}: cycles must be a non-empty DataFrame with columns t_start, t_end, f_b, a0, a1, b1, ..."
+        )
+    time = np.asarray(time, dtype=float).reshape(-1)
+    t_start = cycles["t_start"].to_numpy(dtype=float)
+    t_end = cycles["t_end"].to_numpy(dtype=float)
+    if time.size == 0 or not np.all(np.isfinite(time)) or np.any(np.diff(time) <= 0):
+        raise OptionError(f"{where}: time must be a non-empty, finite, strictly increasing array")
+    if time[0] < t_start[0] or time[-1] >= t_end[-1]:
+        raise OptionError(
+            f"{where}: time spans {time[0]:g}-{time[-1]:g} s, the cycles {t_start[0]:g}-{t_end[-1]:g} s; "
+            "the cycles must cover every output time"
+        )
+    if np.any(t_end <= t_start) or np.any(np.abs(t_start[1:] - t_end[:-1]) > 1e-9):
+        raise OptionError(f"{where}: cycles must have t_end > t_start and be contiguous (t_start[j+1] == t_end[j])")
+    system = _build_system(f_h, xi_h, mass, effects)
+    _, a, b = _cycle_coefficients(cycles)
+    f_b = cycles["f_b"].to_numpy(dtype=float)
+    a0 = cycles["a0"].to_numpy(dtype=float)
+    forces = [_CycleForce(t_start[j], f_b[j], a0[j], a[j], b[j]) for j in range(len(cycles))]
+
+    if initial_state is None:
+        state = _periodic_state(system, forces[0], 1.0 / f_b[0], t_start[0])
+    else:
+        state = _vector(initial_state, "initial_state", where=where)
+        if state.size != system.n_state:
+            raise OptionError(
+                f"{where}: initial_state needs {system.n_state} values "
+                f"({'u, u_dot, z, z_dot' if system.floor else 'u, u_dot'}), got {state.size}"
+            )
+
+    bounds = np.searchsorted(time, t_start, side="left")
+    bounds = np.append(bounds, time.size)
+    states = np.empty((system.n_state, time.size))
+    cycle_index = np.empty(time.size, dtype=int)
+    for j, force in enumerate(forces):
+        inside = slice(bounds[j], bounds[j + 1])
+        if time[inside].size == 0 and t_start[j] > time[-1]:
+            break
+        states[:, inside], state = _integrate_cycle(system, force, state, t_start[j], t_end[j], time[inside])
+        cycle_index[inside] = j
+
+    force_g = np.empty(time.size)
+    for j in np.unique(cycle_index):
+        mask = cycle_index == j
+        force_g[mask] = G * forces[j](time[mask])
+    u_ddot, z_ddot = system.accelerations(states, force_g)
+    frame = {
+        "time": time,
+        "cycle": cycle_index,
+        "u": states[0],
+        "u_dot": states[1],
+        "u_ddot": u_ddot,
+        "force_bio": force_g,
+    }
+    if system.floor is not None:
+        frame.update(z=states[2], z_dot=states[3], z_ddot=z_ddot)
+    return pd.DataFrame(frame)
+
+
+# ---------------------------------------------------------------------------
+# the public simulator
+
+
+@dataclass(frozen=True)
+class SyntheticRecord:
+    """A simulated record with everything that produced it.
+
+    Attributes
+    ----------
+    record : Record
+        The measurement an estimator sees: ``time`` (s), ``force`` (GRF, N,
+        Eq. 3 plus noise), ``mass`` (kg) and, with ``floor_mode``,
+        ``floor_acc`` (m/s^2, plus noise).
+    truth : dict
+        JSON-serialisable settings and derived values: ``mass, f_b, f_h,
+        xi_h, K_h, C_h`` (Eq. 17-18), ``n_harmonics`` (base harmonics of the
+        model, ``n``), ``n_force_harmonics`` (including the ``harmonics``
+        effect), ``blf, phases, a0``, ``effects`` (with all parameters),
+        ``seed, fs, duration, noise, variations``, ``n_cycles``.
+    states : pandas.DataFrame
+        Noise-free states per sample: ``time, cycle, u, u_dot, u_ddot,
+        force_bio`` (absolute COM, SI; ``force_bio = g F`` in m/s^2) and, with
+        a floor, ``z, z_dot, z_ddot``.
+    cycles : pandas.DataFrame
+        One row per force cycle: ``cycle, t_start, t_end, f_b, a0, a1, b1,
+        ..., blf1, ...``: the coefficients of Eq. 4 referred to the cycle's
+        own start (``F = a0 + sum a_i cos(2 pi i f_b (t - t_start)) + b_i
+        sin(...)``) and the amplitudes (Eq. 5). The first cycle may start
+        before ``t = 0`` and the last end after the record.
+    """
+
+    record: Record
+    truth: dict
+    states: pd.DataFrame
+    cycles: pd.DataFrame
+
+    def write(self, csv_path, truth_path=None):
+        """Write the record as CSV and the truth as JSON.
+
+        Parameters
+        ----------
+        csv_path : str or path-like
+            Record file (columns ``time, force[, floor_acc]``, 6 decimals).
+        truth_path : str or path-like, optional
+            Truth file; default ``<csv stem>_truth.json`` beside the CSV. It
+            holds :attr:`truth` plus ``"cycles"``: the per-cycle table as a
+            dict of columns.
+
+        Returns
+        -------
+        tuple of pathlib.Path
+            ``(csv_path, truth_path)``.
+        """
+        csv_path = Path(csv_path)
+        truth_path = csv_path.with_name(f"{csv_path.stem}_truth.json") if truth_path is None else Path(truth_path)
+        write_record(csv_path, self.record)
+        content = dict(self.truth)
+        content["cycles"] = {
+            column: [round(float(v), 10) if column != "cycle" else int(v) for v in self.cycles[column]]
+            for column in self.cycles.columns
+        }
+        truth_path.write_text(_format_json(content), encoding="utf-8")
+        return csv_path, truth_path
+
+
+def _format_json(content):
+    """JSON text with one top-level key (or one key of a nested dict) per line."""
+    lines = []
+    for key, value in content.items():
+        if isinstance(value, dict) and value:
+            inner = [f"  {json.dumps(k)}: {json.dumps(v)}" for k, v in value.items()]
+            lines.append(f" {json.dumps(key)}: {{\n" + ",\n".join(inner) + "\n }")
+        else:
+            lines.append(f" {json.dumps(key)}: {json.dumps(value)}")
+    return "{\n" + ",\n".join(lines) + "\n}\n"
+
+
+def _draw_cycles(rng_blocks, duration, f_b, blf, phases, fb_variation, coef_variation):
+    """Cycle table from pre-drawn standard normals; see :func:`simulate_bouncing`."""
+    start_fraction, eps, amp_noise, phase_noise = rng_blocks
+    frequency = f_b * (1.0 + fb_variation * eps)
+    t_end = np.cumsum(1.0 / frequency) - start_fraction / f_b
+    n_cycles = int(np.searchsorted(t_end, duration, side="right")) + 1
+    frequency, t_end = frequency[:n_cycles], t_end[:n_cycles]
+    t_start = np.concatenate([[-start_fraction / f_b], t_end[:-1]])
+    amplitude = blf * np.maximum(1.0 + coef_variation * amp_noise[:n_cycles], 0.0)
+    phase = phases + coef_variation * phase_noise[:n_cycles]
+    return t_start, t_end, frequency, amplitude, phase
+
+
+def simulate_bouncing(
+    mass=70.0,
+    f_b=2.0,
+    f_h=2.5,
+    xi_h=0.3,
+    duration=30.0,
+    fs=100.0,
+    blf=DEFAULT_BLF,
+    phases=None,
+    a0=0.0,
+    fb_variation=0.02,
+    coef_variation=0.10,
+    noise=0.01,
+    effects=None,
+    seed=None,
+):
+    """Simulate one person bouncing: GRF record plus the truth behind it.
+
+    The COM obeys Eq. 2 under the biomechanical force of Eq. 4, integrated
+    accurately (:func:`integrate_response`), and the GRF is Eq. 3 plus noise.
+    Each force cycle ``j`` has its own frequency ``f_b (1 + eps_j)``,
+    ``eps_j ~ N(0, fb_variation)``, and its own harmonics: amplitude
+    ``BLF_i (1 + delta)``, ``delta ~ N(0, coef_variation)``, phase
+    ``psi_i + eta``, ``eta ~ N(0, coef_variation)`` rad (together a complex
+    perturbation of relative size ``coef_variation``); all normals truncated
+    at :data:`TRUNCATION_SD`, constant within a cycle. ``a0`` is the same in
+    every cycle. The record starts at a random point of the first cycle, in
+    the periodic steady state of that cycle's force, so it has no start-up
+    transient.
+
+    Parameters
+    ----------
+    mass : float
+        Body mass ``M_h`` (kg).
+    f_b : float
+        Mean bouncing frequency (Hz).
+    f_h : float
+        SMD natural frequency (Hz), > 0.
+    xi_h : float
+        SMD damping ratio (-), > 0.
+    duration : float
+        Record length (s); samples at ``0, 1/fs, ..., duration``.
+    fs : float
+        Sampling frequency (Hz), at least 4 times the highest frequency in
+        the record (highest harmonic ``n f_b``, floor frequency).
+    blf : sequence of float
+        Harmonic amplitudes ``BLF_1..BLF_n`` of the force (g), >= 0.
+    phases : sequence of float, optional
+        Harmonic phases ``psi_i`` (rad): ``a_i = BLF_i cos psi_i``,
+        ``b_i = BLF_i sin psi_i``. Default :func:`default_phases`: a
+        realistic GRF with its main peak at each cycle start.
+    a0 : float
+        Constant term of Eq. 4 (g).
+    fb_variation : float
+        Relative standard deviation of the cycle frequency, 0-0.2.
+    coef_variation : float
+        Relative standard deviation of the harmonic amplitudes (and standard
+        deviation of the phase jitter, rad), 0-1.
+    noise : float
+        GRF noise standard deviation as a fraction of body weight
+        ``M_h g``; also the default floor-acceleration noise (fraction of
+        its RMS).
+    effects : dict, optional
+        ``{name: {parameter: value}}``, names and defaults in :data:`EFFECTS`.
+    seed : None, int, numpy.random.SeedSequence or numpy.random.Generator
+        Source of randomness (through :func:`numpy.random.default_rng`). With
+        None a fresh SeedSequence is made and its entropy stored in the truth,
+        so every record can be reproduced.
+
+    Returns
+    -------
+    SyntheticRecord
+
+    Raises
+    ------
+    MassError
+        Implausible body mass.
+    OptionError
+        Any other invalid argument (the message names it).
+    """
+    mass = check_mass(mass, source="mass")
+    f_b = _number(f_b, "f_b (Hz)", positive=True)
+    f_h = _number(f_h, "f_h (Hz)", positive=True)
+    xi_h = _number(xi_h, "xi_h", positive=True)
+    duration = _number(duration, "duration (s)", positive=True)
+    fs = _number(fs, "fs (Hz)", positive=True)
+    blf = _vector(blf, "blf (g)", nonnegative=True)
+    a0 = _number(a0, "a0 (g)")
+    fb_variation = _number(fb_variation, "fb_variation", nonnegative=True)
+    coef_variation = _number(coef_variation, "coef_variation", nonnegative=True)
+    noise = _number(noise, "noise", nonnegative=True)
+    if fb_variation > 0.2:
+        raise OptionError(f"simulate_bouncing: fb_variation must be 0-0.2 (relative), got {fb_variation!r}")
+    if coef_variation > 1.0:
+        raise OptionError(f"simulate_bouncing: coef_variation must be 0-1 (relative), got {coef_variation!r}")
+    if duration < 1.0 / f_b:
+        raise OptionError(
+            f"simulate_bouncing: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)"
+        )
+    effects = _check_effects(effects)
+    extra_blf = np.asarray(effects["harmonics"]["blf"]) if "harmonics" in effects else np.empty(0)
+    n_base, n_extra = blf.size, extra_blf.size
+    highest = (n_base + n_extra) * f_b
+    if "floor_mode" in effects:
+        highest = max(highest, effects["floor_mode"]["frequency"])
+    if fs < 4.0 * highest:
+        raise OptionError(
+            f"simulate_bouncing: fs {fs:g} Hz is too low; it must be at least 4 x the highest frequency "
+            f"({highest:g} Hz), i.e. >= {4 * highest:g} Hz"
+        )
+    default_base, default_extra = default_phases(blf, f_b, f_h, xi_h, extra_blf)
+    if phases is None:
+        phases = default_base
+    else:
+        phases = _vector(phases, "phases (rad)")
+        if phases.size != n_base:
+            raise OptionError(f"simulate_bouncing: phases has {phases.size} values, blf has {n_base}")
+    if n_extra:
+        given = effects["harmonics"]["phases"]
+        extra_phases = default_extra if given is None else np.asarray(given, dtype=float)
+        effects["harmonics"]["phases"] = tuple(float(v) for v in extra_phases)
+    else:
+        extra_phases = np.empty(0)
+
+    rng, seed_record = _resolve_seed(seed)
+    n_samples = int(np.floor(duration * fs + 1e-9)) + 1
+    time = np.arange(n_samples) / fs
+    # Fixed-size blocks in a fixed order (see the module docstring).
+    shortest = 1.0 / (f_b * (1.0 + TRUNCATION_SD * fb_variation))
+    longest = 1.0 / (f_b * (1.0 - TRUNCATION_SD * fb_variation))
+    n_max = int(np.ceil((duration + longest) / shortest)) + 2
+
+    def normals(shape):
+        return np.clip(rng.standard_normal(shape), -TRUNCATION_SD, TRUNCATION_SD)
+
+    start_fraction = rng.random()
+    eps = normals(n_max)
+    base_blocks = (normals((n_max, n_base)), normals((n_max, n_base)))
+    grf_noise = rng.standard_normal(n_samples)
+    floor_noise = rng.standard_normal(n_samples)
+    extra_blocks = (normals((n_max, n_extra)), normals((n_max, n_extra)))
+
+    all_blf = np.concatenate([blf, extra_blf])
+    all_phases = np.concatenate([phases, extra_phases])
+    amp_noise = np.concatenate([base_blocks[0], extra_blocks[0]], axis=1)
+    phase_noise = np.concatenate([base_blocks[1], extra_blocks[1]], axis=1)
+    t_start, t_end, frequency, amplitude, phase = _draw_cycles(
+        (start_fraction, eps, amp_noise, phase_noise), duration, f_b, all_blf, all_phases,
+        fb_variation, coef_variation,
+    )
+    n_cycles, n_total = amplitude.shape
+    columns = {
+        "cycle": np.arange(n_cycles),
+        "t_start": t_start,
+        "t_end": t_end,
+        "f_b": frequency,
+        "a0": np.full(n_cycles, a0),
+    }
+    for i in range(n_total):
+        columns[f"a{i + 1}"] = amplitude[:, i] * np.cos(phase[:, i])
+        columns[f"b{i + 1}"] = amplitude[:, i] * np.sin(phase[:, i])
+    for i in range(n_total):
+        columns[f"blf{i + 1}"] = amplitude[:, i]
+    cycles = pd.DataFrame(columns)
+
+    dynamics = {name: params for name, params in effects.items() if name != "harmonics"}
+    states = integrate_response(cycles, time, f_h, xi_h, mass=mass, effects=dynamics)
+
+    weight = mass * G
+    force = mass * (G + states["u_ddot"].to_numpy()) + noise * weight * grf_noise  # Eq. 3
+    floor_acc = None
+    if "floor_mode" in effects:
+        z_ddot = states["z_ddot"].to_numpy()
+        floor_noise_level = effects["floor_mode"]["noise"]
+        floor_noise_level = noise if floor_noise_level is None else floor_noise_level
+        floor_acc = z_ddot + floor_noise_level * float(np.sqrt(np.mean(z_ddot**2))) * floor_noise
+    record = make_record(time, force, mass, floor_acc=floor_acc, source="synthetic")
+
+    truth = {
+        "source": "smd_statespace.simulate.simulate_bouncing",
+        "mass": mass,
+        "f_b": f_b,
+        "f_h": f_h,
+        "xi_h": xi_h,
+        "K_h": float(_stiffness(mass, f_h)),  # Eq. 17
+        "C_h": float(_damping_coefficient(mass, f_h, xi_h)),  # Eq. 18
+        "n_harmonics": int(n_base),
+        "n_force_harmonics": int(n_total),
+        "blf": [float(v) for v in blf],
+        "phases": [float(v) for v in phases],
+        "a0": a0,
+        "effects": {name: {k: (list(v) if isinstance(v, tuple) else v) for k, v in params.items()}
+                    for name, params in effects.items()},
+        "seed": seed_record,
+        "fs": fs,
+        "duration": duration,
+        "noise": noise,
+        "variations": {
+            "fb_variation": fb_variation,
+            "coef_variation": coef_variation,
+            "phase_jitter_rad": coef_variation,
+            "truncation_sd": TRUNCATION_SD,
+        },
+        "n_cycles": int(n_cycles),
+        "units": {
+            "mass": "kg", "f_b": "Hz", "f_h": "Hz", "xi_h": "-", "K_h": "N/m", "C_h": "N*s/m",
+            "blf": "g", "a0": "g", "phases": "rad", "fs": "Hz", "duration": "s", "noise": "body weight",
+        },
+    }
+    return SyntheticRecord(record=record, truth=truth, states=states, cycles=cycles)
+
+
+# ---------------------------------------------------------------------------
+# population (Table 2)
+
+
+def _draw_bounded(distribution, n, low, high, rng, name):
+    """Draw ``n`` values of a frozen distribution, redrawing those outside [low, high]."""
+    accept = float(distribution.cdf(high) - distribution.cdf(low))
+    if accept < 1e-3:
+        raise OptionError(
+            f"sample_population: the {name} distribution puts only {accept:.2g} of its mass in {low:g}-{high:g}"
+        )
+    values = distribution.rvs(size=n, random_state=rng)
+    while True:
+        bad = (values < low) | (values > high)
+        if not bad.any():
+            return values
+        values[bad] = distribution.rvs(size=int(bad.sum()), random_state=rng)
+
+
+def sample_population(n, f_b, seed=None, table=None, bounds=None):
+    """Draw ``n`` people bouncing at ``f_b`` from the article's Table 2.
+
+    ``f_h``, ``xi_h`` and ``BLF1..3`` are drawn independently (the article
+    gives only marginals) from the skew-normal fits (Eq. 19,
+    ``scipy.stats.skewnorm(a, loc=m, scale=s)``) of the band holding ``f_b``;
+    values outside :data:`POPULATION_BOUNDS` are redrawn (truncated
+    distributions). The body mass is not in Table 2: it is drawn from
+    ``N(65, 10)`` kg (:data:`MASS_DISTRIBUTION`) truncated to 45-100 kg. ``K_h``
+    and ``C_h`` follow from Eq. 17-18 (Table 2's own ``K_h``/``C_h`` fits are
+    not used; they are not consistent with its ``f_h`` fits).
+
+    Parameters
+    ----------
+    n : int
+        Number of people, >= 1.
+    f_b : float
+        Bouncing frequency (Hz), within one of :data:`article.BANDS`.
+    seed : None, int, SeedSequence or Generator
+        Source of randomness (:func:`numpy.random.default_rng`).
+    table : mapping, optional
+        Fits in the layout of :data:`article.TABLE2` (``table[parameter][band]
+        = (m, s, a)`` for ``f_h, xi_h, BLF1, BLF2, BLF3``); default Table 2.
+    bounds : dict, optional
+        Overrides of :data:`POPULATION_BOUNDS` (keys ``f_h, xi_h, blf, mass``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``f_b`` (Hz), ``f_h`` (Hz), ``xi_h``, ``blf1, blf2, blf3``
+        (g), ``mass`` (kg), ``K_h`` (N/m), ``C_h`` (N s/m); one row per person.
+
+    Raises
+    ------
+    OptionError
+        ``f_b`` outside every band, bad ``n``, ``table`` or ``bounds``.
+    """
+    from scipy.stats import norm, skewnorm
+
+    where = "sample_population"
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise OptionError(f"{where}: n must be a positive integer, got {n!r}")
+    f_b = _number(f_b, "f_b (Hz)", positive=True, where=where)
+    band = article.band_of(f_b)
+    if band is None:
+        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
+        raise OptionError(f"{where}: f_b = {f_b:g} Hz is outside the article's bands ({edges} Hz)")
+    table = article.TABLE2 if table is None else table
+    limits = dict(POPULATION_BOUNDS)
+    if bounds is not None:
+        for key in bounds:
+            if key not in POPULATION_BOUNDS:
+                raise OptionError(f"{where}: unknown bounds key {key!r}; valid keys: {', '.join(POPULATION_BOUNDS)}")
+        limits.update(bounds)
+    rng, _ = _resolve_seed(seed)
+
+    columns = {"f_b": np.full(n, f_b)}
+    for parameter, column, limit in (
+        ("f_h", "f_h", "f_h"),
+        ("xi_h", "xi_h", "xi_h"),
+        ("BLF1", "blf1", "blf"),
+        ("BLF2", "blf2", "blf"),
+        ("BLF3", "blf3", "blf"),
+    ):
+        try:
+            m, s, a = (float(v) for v in table[parameter][band])
+        except (KeyError, IndexError, TypeError, ValueError):
+            raise OptionError(
+                f"{where}: table has no (m, s, a) fit for {parameter!r} in band {band}; "
+                "expected the layout of article.TABLE2"
+            ) from None
+        low, high = limits[limit]
+        columns[column] = _draw_bounded(skewnorm(a, loc=m, scale=s), n, low, high, rng, parameter)
+    mean, sd = MASS_DISTRIBUTION
+    low, high = limits["mass"]
+    columns["mass"] = _draw_bounded(norm(loc=mean, scale=sd), n, low, high, rng, "mass")
+    frame = pd.DataFrame(columns)
+    frame["K_h"] = _stiffness(frame["mass"], frame["f_h"])  # Eq. 17
+    frame["C_h"] = _damping_coefficient(frame["mass"], frame["f_h"], frame["xi_h"])  # Eq. 18
+    return frame
+
+
+# ---------------------------------------------------------------------------
+# the shipped sample
+
+
+def sample_path() -> Path:
+    """Path of the shipped sample record ``data/sample.csv`` (70 kg, see :data:`SAMPLE_SETTINGS`)."""
+    return Path(str(resources.files("smd_statespace").joinpath("data", SAMPLE_CSV)))
+
+
+def sample_truth_path() -> Path:
+    """Path of the truth of the shipped sample, ``data/sample_truth.json``."""
+    return Path(str(resources.files("smd_statespace").joinpath("data", SAMPLE_TRUTH)))
+
+
+def write_sample(directory) -> SyntheticRecord:
+    """Regenerate the shipped sample (:data:`SAMPLE_SETTINGS`) into ``directory``.
+
+    Writes ``sample.csv`` and ``sample_truth.json``; with the package's own
+    ``data`` directory this reproduces the shipped files.
+
+    Parameters
+    ----------
+    directory : str or path-like
+        Existing directory.
+
+    Returns
+    -------
+    SyntheticRecord
+    """
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise OptionError(f"write_sample: {directory} is not a directory")
+    synthetic = simulate_bouncing(**SAMPLE_SETTINGS)
+    synthetic.write(directory / SAMPLE_CSV, directory / SAMPLE_TRUTH)
+    return synthetic
