@@ -98,7 +98,7 @@ class CubicStiffness(Effect):
     def slots(self, model):
         low, high = self.beta_range
         return (Slot("beta_3", "parameter", "1/m^2", low, high, nominal=max(abs(low), abs(high)) / 4.0,
-                     description="cubic stiffness coefficient"),)
+                     description="cubic stiffness coefficient", linear=False),)
 
     def acceleration(self, model, x, t, inputs):
         omega = TWO_PI * x[..., F_H]

@@ -142,6 +142,11 @@ class Slot:
         is the slot's nominal magnitude and prior spread.
     description : str
         One line for documentation and reports.
+    linear : bool
+        Whether the rate and observation are linear in this slot once the
+        non-linear slots are fixed (``f_h`` and ``xi_h`` are not linear; ``u``,
+        ``u_dot`` and the Fourier coefficients are). Rao-Blackwellised
+        estimators sample the non-linear slots and Kalman-filter the rest.
     """
 
     name: str
@@ -152,6 +157,7 @@ class Slot:
     nominal: float | None = None
     scale: str | None = None
     description: str = ""
+    linear: bool = True
 
     def __post_init__(self):
         if self.kind not in ("dynamic", "parameter"):
@@ -425,9 +431,9 @@ class SMDModel:
             Slot("u", "dynamic", "m", scale="u", description="COM displacement from static equilibrium"),
             Slot("u_dot", "dynamic", "m/s", scale="u_dot", description="COM velocity"),
             Slot("f_h", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
-                 description="SMD natural frequency"),
+                 description="SMD natural frequency", linear=False),
             Slot("xi_h", "parameter", "-", x_lo, x_hi, nominal=0.5 * (x_lo + x_hi),
-                 description="SMD damping ratio"),
+                 description="SMD damping ratio", linear=False),
             Slot("a0", "parameter", "g", a0_lo, a0_hi, nominal=max(abs(a0_lo), abs(a0_hi)) / 2.0,
                  description="mean biomechanical force"),
         ]
@@ -456,6 +462,11 @@ class SMDModel:
     def parameter_names(self) -> tuple[str, ...]:
         """Names of the random-walk parameter slots."""
         return tuple(slot.name for slot in self.slots if slot.kind == "parameter")
+
+    @property
+    def nonlinear_names(self) -> tuple[str, ...]:
+        """Slots in which the model is not linear (``f_h``, ``xi_h`` and effects' such parameters)."""
+        return tuple(slot.name for slot in self.slots if not slot.linear)
 
     @property
     def coefficient_names(self) -> tuple[str, ...]:
