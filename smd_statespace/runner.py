@@ -1,0 +1,238 @@
+"""The cycle runner: a record -> cycles -> repeated passes of one estimator -> a table.
+
+The article identifies the SMD model cycle by cycle (Section 3.2): the record
+is split at GRF peaks, parameters are assumed constant within a cycle, and
+the filter runs over the same cycle again and again, each pass starting from
+where the previous one ended, until no parameter changes by more than ±5 %
+between passes. :class:`CycleRunner` does exactly that with any estimator::
+
+    runner = CycleRunner(SMDModel(), estimator="ukf")
+    table = runner.run(preprocessed)          # one row per cycle
+    runner.history_[3]                        # per-pass estimates of cycle 3
+
+Each cycle's random numbers come from ``SeedSequence(seed, spawn_key=(record_key, cycle))``,
+so results do not depend on the order in which cycles run, or on how many
+run in parallel (any ``concurrent.futures.Executor``). A numerical failure in
+one cycle marks that row ``status="failed"`` with the reason; the run goes on.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from tqdm.auto import tqdm
+
+from .errors import OptionError
+from .estimators import ESTIMATORS, EstimatorFailure, FilterResult, cycle_data, get_estimator
+from .io import Record
+from .model import SMDModel, blf
+from .signals import Preprocessed, preprocess
+
+DETERMINED_RATIO = 0.25
+"""A parameter is 'determined' by a cycle when its posterior sd is below this fraction of its prior sd."""
+
+CONVERGENCE_FLOOR = {"f_h": 0.0, "xi_h": 0.05, "blf": 0.02}
+"""Magnitudes below which the ±tolerance rule is applied to the floor instead (xi_h in -, BLF in g),
+so that a BLF of 0.001 g need not settle to 0.00005 g."""
+
+
+@dataclass
+class CycleOutcome:
+    """What identifying one cycle produced: its table row, per-pass history and final filter result."""
+
+    row: dict
+    history: list = field(default_factory=list)
+    result: FilterResult | None = None
+
+
+def summarise(model: SMDModel, result: FilterResult, mass: float) -> dict:
+    """Reported quantities of a pass: parameters with sds, BLFs (Eq. 5), K_h (Eq. 17), C_h (Eq. 18)."""
+    mean, sd = result.final_mean, result.final_std
+    ratio = result.width_ratio()
+    out = {}
+    for name in model.parameter_names:
+        i = model.index(name)
+        out[name] = float(mean[i])
+        out[f"{name}_sd"] = float(sd[i])
+    for name in ("f_h", "xi_h"):
+        out[f"{name}_width_ratio"] = float(ratio[model.index(name)])
+        out[f"{name}_determined"] = bool(ratio[model.index(name)] < DETERMINED_RATIO)
+    for i in range(1, model.n_harmonics + 1):
+        ia, ib = model.index(f"a{i}"), model.index(f"b{i}")
+        a, b = mean[ia], mean[ib]
+        value = float(blf(a, b))
+        out[f"blf_{i}"] = value
+        # Delta method: sd of sqrt(a^2 + b^2) from the coefficients' sds.
+        out[f"blf_{i}_sd"] = float(np.hypot(a * sd[ia], b * sd[ib]) / value) if value > 0 else float(np.hypot(sd[ia], sd[ib]))
+        out[f"blf_{i}_determined"] = bool(max(ratio[ia], ratio[ib]) < DETERMINED_RATIO)
+    derived = model.derived(mean, mass)
+    out["k_h"], out["c_h"] = float(derived["k_h"]), float(derived["c_h"])
+    out["log_likelihood"] = float(result.log_likelihood)
+    return out
+
+
+def converged(previous: dict, current: dict, model: SMDModel, tolerance: float) -> bool:
+    """The article's rule: every parameter changed by no more than ``tolerance`` (relative) between passes.
+
+    Checked on ``f_h``, ``xi_h`` and ``BLF_1..n``; magnitudes below
+    :data:`CONVERGENCE_FLOOR` are compared against the floor.
+    """
+    names = ["f_h", "xi_h"] + [f"blf_{i}" for i in range(1, model.n_harmonics + 1)]
+    for name in names:
+        floor = CONVERGENCE_FLOOR["blf" if name.startswith("blf") else name]
+        if abs(current[name] - previous[name]) > tolerance * max(abs(previous[name]), floor):
+            return False
+    return True
+
+
+def identify_cycle(model: SMDModel, estimator, data, seed, record_key: int, mass: float, max_passes: int,
+                   tolerance: float, cycle_info: dict) -> CycleOutcome:
+    """Identify one cycle with repeated passes (runs in a worker process when an executor is used)."""
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(record_key, data.index)))
+    row = dict(cycle_info)
+    history = []
+    started = time.perf_counter()
+    result = None
+    try:
+        passes = max_passes if estimator.supports_passes else 1
+        done = not estimator.supports_passes
+        for number in range(1, passes + 1):
+            result = estimator.run(model, data, start=result.restart if result is not None else None, rng=rng)
+            summary = summarise(model, result, mass)
+            history.append(dict(summary, pass_number=number))
+            if number > 1 and converged(history[-2], summary, model, tolerance):
+                done = True
+                break
+        row.update(history[-1])
+        row.update(passes=len(history), converged=done, status="ok", reason="")
+    except EstimatorFailure as failure:
+        row.update(passes=len(history) + 1, converged=False, status="failed", reason=str(failure))
+    row["seconds"] = time.perf_counter() - started
+    return CycleOutcome(row=row, history=history, result=result)
+
+
+class CycleRunner:
+    """Identify every cycle of a record with one estimator and the article's repeated passes.
+
+    Parameters
+    ----------
+    model : SMDModel, optional
+        The augmented-state model (default ``SMDModel()``: 4 harmonics, RK4).
+    estimator : str or Estimator
+        ``"pf"`` (the article's particle filter), ``"rbpf"``, ``"ukf"``,
+        ``"ekf"`` or ``"grid"`` (exact reference, one pass).
+    max_passes : int
+        Largest number of passes per cycle.
+    tolerance : float
+        Relative change between passes below which a cycle has converged (the article: 0.05).
+    seed : int
+        Seed of the run; each cycle's stream is derived from it and the cycle's identity.
+    progress : bool
+        Show a progress bar (tqdm) on the terminal.
+    executor : concurrent.futures.Executor, optional
+        Runs cycles in parallel (processes, threads or a Dask cluster's executor).
+    keep_results : bool
+        Keep every cycle's final :class:`FilterResult` in ``results_`` (for diagnostics).
+    **options
+        Estimator options, e.g. ``n_particles=5000``.
+
+    Attributes (after :meth:`run`)
+    ------------------------------
+    table_ : pandas.DataFrame
+        The returned table.
+    history_ : dict of int to list of dict
+        Per-pass estimates of every cycle (for convergence plots, the article's Fig. 4).
+    results_ : dict of int to FilterResult
+        Final-pass filter results (with ``keep_results=True``).
+    preprocessed_ : Preprocessed
+        The pipeline output the cycles came from.
+    """
+
+    def __init__(self, model: SMDModel | None = None, estimator="pf", max_passes: int = 8, tolerance: float = 0.05,
+                 seed: int = 0, progress: bool = True, executor=None, keep_results: bool = True, **options):
+        self.model = SMDModel() if model is None else model
+        if isinstance(estimator, str) and estimator not in ESTIMATORS:
+            raise OptionError(f"unknown estimator {estimator!r}; choose one of {', '.join(sorted(ESTIMATORS))}")
+        self.estimator = get_estimator(estimator, **options)
+        if isinstance(max_passes, bool) or int(max_passes) != max_passes or max_passes < 1:
+            raise OptionError(f"max_passes must be a whole number >= 1, got {max_passes!r}")
+        if not 0 < float(tolerance) < 1:
+            raise OptionError(f"tolerance must be a fraction in (0, 1), got {tolerance!r}")
+        if isinstance(seed, bool) or int(seed) != seed or seed < 0:
+            raise OptionError(f"seed must be a whole number >= 0, got {seed!r}")
+        self.max_passes = int(max_passes)
+        self.tolerance = float(tolerance)
+        self.seed = int(seed)
+        self.progress = progress
+        self.executor = executor
+        self.keep_results = keep_results
+
+    def cycles(self, preprocessed: Preprocessed):
+        """The valid cycles of a record, as :class:`~smd_statespace.estimators.CycleData`."""
+        return [(cycle, cycle_data(self.model, preprocessed, cycle)) for cycle in preprocessed.valid_cycles]
+
+    def run(self, record, mass: float | None = None, record_key: int = 0) -> pd.DataFrame:
+        """Identify every cycle of ``record``; return one row per cycle.
+
+        Parameters
+        ----------
+        record : Record or Preprocessed
+            A checked record (it is preprocessed first) or a pipeline output.
+        mass : float, optional
+            Body mass (kg); taken from the record when omitted.
+        record_key : int
+            Identity of the record within a batch, part of every cycle's seed.
+        """
+        preprocessed = preprocess(record) if isinstance(record, Record) else record
+        mass = float(preprocessed.mass if mass is None else mass)
+        self.preprocessed_ = preprocessed
+        jobs = []
+        skipped = []
+        for cycle in preprocessed.cycles:
+            info = {"cycle": cycle.index, "t_start": cycle.t_start, "t_end": cycle.t_end, "f_b": cycle.f_b,
+                    "estimator": self.estimator.name}
+            if not cycle.valid:
+                skipped.append(dict(info, status="skipped", reason=cycle.reason, passes=0, converged=False))
+                continue
+            jobs.append((cycle_data(self.model, preprocessed, cycle), info))
+        outcomes = self._execute(jobs, mass, record_key)
+        rows = [outcome.row for outcome in outcomes] + skipped
+        self.history_ = {outcome.row["cycle"]: outcome.history for outcome in outcomes}
+        self.results_ = {o.row["cycle"]: o.result for o in outcomes if o.result is not None} if self.keep_results else {}
+        table = pd.DataFrame(rows).sort_values("cycle").reset_index(drop=True)
+        self.table_ = order_columns(table, self.model)
+        return self.table_
+
+    def _execute(self, jobs, mass, record_key):
+        arguments = [(self.model, self.estimator, data, self.seed, record_key, mass, self.max_passes, self.tolerance,
+                      info) for data, info in jobs]
+        bar = tqdm(total=len(jobs), desc=f"identify ({self.estimator.name})", unit="cycle",
+                   disable=not self.progress, leave=False)
+        outcomes = []
+        try:
+            if self.executor is None:
+                for args in arguments:
+                    outcomes.append(identify_cycle(*args))
+                    bar.update()
+            else:
+                futures = [self.executor.submit(identify_cycle, *args) for args in arguments]
+                for future in futures:
+                    outcomes.append(future.result())
+                    bar.update()
+        finally:
+            bar.close()
+        return outcomes
+
+
+def order_columns(table: pd.DataFrame, model: SMDModel) -> pd.DataFrame:
+    """Put the documented columns first, in a stable order."""
+    n = model.n_harmonics
+    first = ["cycle", "t_start", "t_end", "f_b", "f_h", "f_h_sd", "xi_h", "xi_h_sd"]
+    first += [f"blf_{i}" for i in range(1, n + 1)] + [f"blf_{i}_sd" for i in range(1, n + 1)]
+    first += ["a0", "k_h", "c_h", "passes", "converged", "log_likelihood", "estimator", "status", "reason",
+              "f_h_determined", "xi_h_determined"] + [f"blf_{i}_determined" for i in range(1, n + 1)]
+    first = [c for c in first if c in table.columns]
+    return table[first + [c for c in table.columns if c not in first]]
