@@ -1,0 +1,105 @@
+"""Figures of identification results, written as PNG files.
+
+Every function builds a :class:`matplotlib.figure.Figure` without touching
+pyplot's global state (safe in scripts, tests and worker processes), saves it
+when given a ``path`` and returns it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+PARAMETER_LABELS = {
+    "f_h": r"$f_h$ (Hz)",
+    "xi_h": r"$\xi_h$ (-)",
+    "blf_1": r"BLF$_1$ (g)",
+    "blf_2": r"BLF$_2$ (g)",
+    "blf_3": r"BLF$_3$ (g)",
+    "blf_4": r"BLF$_4$ (g)",
+    "k_h": r"$K_h$ (N/m)",
+    "c_h": r"$C_h$ (N s/m)",
+}
+
+
+def _save(fig: Figure, path):
+    if path is not None:
+        fig.savefig(path, dpi=110)
+    return fig
+
+
+def plot_convergence(history, cycle: int, tolerance: float = 0.05, path=None, names=("f_h", "xi_h", "blf_1",
+                                                                                     "blf_2", "blf_3")) -> Figure:
+    """Parameter estimates of one cycle against the pass number (like the article's Fig. 4).
+
+    Parameters
+    ----------
+    history : list of dict
+        ``CycleRunner.history_[cycle]``: one dict of estimates per pass.
+    cycle : int
+        Cycle number (for the title).
+    tolerance : float
+        The convergence band drawn around the final value (±tolerance).
+    """
+    frame = pd.DataFrame(history)
+    names = [n for n in names if n in frame]
+    fig = Figure(figsize=(2.6 * len(names), 3.0))
+    axes = fig.subplots(1, len(names), squeeze=False)[0]
+    passes = frame["pass_number"].to_numpy()
+    for ax, name in zip(axes, names):
+        values = frame[name].to_numpy()
+        sd = frame.get(f"{name}_sd")
+        if sd is not None:
+            ax.fill_between(passes, values - sd, values + sd, color="tab:blue", alpha=0.2, label="±1 sd")
+        ax.plot(passes, values, "o-", color="tab:blue", label="estimate")
+        final = values[-1]
+        ax.axhspan(final * (1 - tolerance), final * (1 + tolerance), color="tab:green", alpha=0.15,
+                   label=f"±{tolerance:.0%} of final")
+        ax.set_xlabel("pass")
+        ax.set_title(PARAMETER_LABELS.get(name, name), fontsize=10)
+        ax.set_xticks(passes)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="best")
+    fig.suptitle(f"Convergence over repeated passes, cycle {cycle}", fontsize=11)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
+                    names=("f_h", "xi_h", "blf_1", "blf_2", "blf_3")) -> Figure:
+    """Identified parameters of every cycle over the record, with ±1 sd bars.
+
+    Cycles that did not determine a parameter (posterior not much narrower
+    than the prior, the ``*_determined`` columns) are drawn hollow and grey,
+    so a confident-looking number is never shown for them.
+
+    Parameters
+    ----------
+    table : DataFrame
+        ``CycleRunner.run`` output (one row per cycle).
+    truth : dict, optional
+        Known values (e.g. of a synthetic record) drawn as dashed lines.
+    """
+    ok = table[table["status"] == "ok"]
+    names = [n for n in names if n in ok]
+    fig = Figure(figsize=(9.0, 1.9 * len(names) + 0.6))
+    axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    middle = 0.5 * (ok["t_start"] + ok["t_end"])
+    for ax, name in zip(axes, names):
+        sd = ok.get(f"{name}_sd", pd.Series(np.zeros(len(ok)), index=ok.index))
+        flag = ok.get(f"{name}_determined", pd.Series(np.ones(len(ok), dtype=bool), index=ok.index)).astype(bool)
+        for mask, style in ((flag, dict(color="tab:blue", mfc="tab:blue", label="determined")),
+                            (~flag, dict(color="0.6", mfc="white", label="not determined"))):
+            if mask.any():
+                ax.errorbar(middle[mask], ok[name][mask], yerr=sd[mask], fmt="o", ms=4, capsize=2, lw=0.8, **style)
+        if truth and name in truth:
+            ax.axhline(truth[name], color="tab:red", ls="--", lw=1, label="truth")
+        ax.set_ylabel(PARAMETER_LABELS.get(name, name))
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=3, loc="lower right", bbox_to_anchor=(1.0, 1.0), frameon=False)
+    axes[-1].set_xlabel("time (s)")
+    estimator = ok["estimator"].iloc[0] if len(ok) else "?"
+    fig.suptitle(f"Parameters per cycle ({estimator}; bars ±1 sd)", fontsize=11, x=0.02, ha="left")
+    fig.tight_layout()
+    return _save(fig, path)
