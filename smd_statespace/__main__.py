@@ -1,0 +1,7 @@
+"""``python -m smd_statespace`` is the ``smd-statespace`` command (see :mod:`smd_statespace.cli`)."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())

@@ -1,0 +1,218 @@
+"""The command line: simulate, demo, and one-line errors with exit status 2."""
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import smd_statespace
+from smd_statespace.cli import main, parse_effect
+from smd_statespace.errors import OptionError
+from smd_statespace.io import read_record
+from smd_statespace.signals import preprocess
+from smd_statespace.simulate import sample_path, sample_truth_path
+
+ROOT = Path(__file__).resolve().parents[1]
+SIMULATE = ["simulate", "--mass", "70", "--fb", "2.0", "--fh", "2.5", "--xi", "0.3", "--duration", "12",
+            "--seed", "1"]
+
+
+def simulate(tmp_path, *extra, name="rec.csv"):
+    out = tmp_path / name
+    return main(SIMULATE + ["--out", str(out), *extra]), out
+
+
+def sample_preprocessed():
+    mass = json.loads(sample_truth_path().read_text())["mass"]
+    return preprocess(read_record(sample_path(), mass))
+
+
+def test_simulate_writes_a_readable_record_and_its_truth(tmp_path, capsys):
+    status, out = simulate(tmp_path, "--truth", str(tmp_path / "t.json"))
+    assert status == 0
+    record = read_record(out, 70.0)
+    assert record.duration == pytest.approx(12.0)
+    assert record.fs == pytest.approx(100.0)
+    assert record.floor_acc is None
+    truth = json.loads((tmp_path / "t.json").read_text())
+    assert (truth["f_h"], truth["xi_h"], truth["f_b"], truth["seed"], truth["mass"]) == (2.5, 0.3, 2.0, 1, 70.0)
+    line = capsys.readouterr().out.strip()
+    assert "\n" not in line and str(out) in line and "t.json" in line and "12.00 s" in line
+
+
+def test_simulate_default_truth_path_and_options(tmp_path):
+    status, out = simulate(tmp_path, "--fs", "200", "--noise", "0", "--blf", "0.3,0.1", "--fb-variation", "0",
+                           "--coef-variation", "0")
+    assert status == 0
+    truth = json.loads((tmp_path / "rec_truth.json").read_text())
+    assert truth["fs"] == 200.0 and truth["noise"] == 0.0 and truth["blf"] == [0.3, 0.1]
+    assert truth["variations"]["fb_variation"] == 0.0
+    assert read_record(out, 70.0).fs == pytest.approx(200.0)
+
+
+def test_same_seed_gives_the_identical_file(tmp_path):
+    assert simulate(tmp_path, name="a.csv")[0] == 0
+    assert simulate(tmp_path, name="b.csv")[0] == 0
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    assert main(SIMULATE[:-1] + ["2", "--out", str(tmp_path / "c.csv")]) == 0
+    assert (tmp_path / "a.csv").read_bytes() != (tmp_path / "c.csv").read_bytes()
+
+
+def test_effects_reach_the_simulator(tmp_path):
+    status, out = simulate(tmp_path, "--effect", "floor_mode:frequency=3.48,modal_mass=8583",
+                           "--effect", "harmonics:blf=0.04/0.03")
+    assert status == 0
+    record = read_record(out, 70.0)
+    assert record.floor_acc is not None and np.std(record.floor_acc) > 0
+    assert list(np.genfromtxt(out, delimiter=",", names=True, max_rows=1).dtype.names) == \
+        ["time", "force", "floor_acc"]
+    truth = json.loads((tmp_path / "rec_truth.json").read_text())
+    assert truth["effects"]["floor_mode"]["frequency"] == 3.48
+    assert truth["effects"]["harmonics"]["blf"] == [0.04, 0.03]
+
+
+def test_parse_effect():
+    assert parse_effect("floor_mode") == ("floor_mode", {})
+    assert parse_effect("cubic_stiffness:beta=-200") == ("cubic_stiffness", {"beta": -200.0})
+    assert parse_effect("harmonics:blf=0.04/0.03, phases=1/2") == \
+        ("harmonics", {"blf": (0.04, 0.03), "phases": (1.0, 2.0)})
+    for bad in ("", ":beta=1", "floor_mode:frequency", "floor_mode:frequency=fast", "harmonics:blf=0.1/x"):
+        with pytest.raises(OptionError):
+            parse_effect(bad)
+
+
+def test_demo_reports_the_sample_and_writes_the_figure(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path / "fig")]) == 0
+    text = capsys.readouterr().out
+    pre = sample_preprocessed()
+    f_b = np.median([c.f_b for c in pre.valid_cycles])
+    assert f"{len(pre.cycles)} ({len(pre.valid_cycles)} valid)" in text
+    assert f"median {f_b:.3f} Hz" in text
+    assert ", ".join(smd_statespace.SMDModel().state_names[:4]) in text.replace(" |", ",")
+    assert "identify" in text
+    png = tmp_path / "fig" / "pipeline.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert str(png) in text
+    assert max(len(line) for line in text.splitlines() if str(tmp_path) not in line and ".csv" not in line) <= 110
+
+
+def test_demo_on_a_simulated_record_shows_its_truth(tmp_path, capsys):
+    status, out = simulate(tmp_path, "--effect", "floor_mode")
+    assert status == 0
+    assert main(["demo", "--record", str(out), "--mass", "70", "--out", str(tmp_path / "d")]) == 0
+    text = capsys.readouterr().out
+    assert "f_h 2.5 Hz, xi_h 0.3" in text and "floor acceleration recorded" in text
+    assert (tmp_path / "d" / "pipeline.png").exists()
+
+
+def error_line(capsys):
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.err
+    lines = captured.err.splitlines()
+    assert len(lines) == 1, captured.err
+    assert lines[0].startswith("smd-statespace: error: ")
+    return lines[0]
+
+
+@pytest.mark.parametrize(
+    "argv,pattern",
+    [
+        (["--mass", "-70"], "--mass: body mass must be a positive number"),
+        (["--mass", "heavy"], "--mass: invalid float value"),
+        (["--mass", "700"], "implausible"),
+        (["--effect", "wobble"], "unknown effect 'wobble'; valid effects: floor_mode"),
+        (["--effect", "floor_mode:freq=3"], "no parameter 'freq'; valid parameters: frequency"),
+        (["--effect", "floor_mode:frequency=fast"], "is not a number"),
+        (["--effect", "floor_mode", "--effect", "floor_mode"], "given twice"),
+        (["--fb", "-2"], "argument --fb: must be a positive number"),
+        (["--fs", "10"], "fs 10 Hz is too low"),
+        (["--seed", "1.5"], "argument --seed"),
+        (["--out", "/nonexistent-dir/rec.csv"], "does not exist"),
+    ],
+)
+def test_simulate_bad_inputs_are_one_line_errors(tmp_path, capsys, argv, pattern):
+    assert main(SIMULATE + ["--out", str(tmp_path / "r.csv")] + argv) == 2
+    assert re.search(re.escape(pattern), error_line(capsys))
+    assert capsys.readouterr().out == ""
+
+
+@pytest.mark.parametrize(
+    "argv,pattern",
+    [
+        (["simulate", "--mass", "70", "--fb", "2", "--fh", "2.5", "--xi", "0.3", "--duration", "30"],
+         "required: --out"),
+        (["demo", "--record", "no-such-record.csv", "--mass", "70"], "no-such-record.csv: no such file"),
+        (["demo", "--record", "whatever.csv"], "--mass"),
+        (["frobnicate"], "invalid choice"),
+        ([], "choose a command: simulate, demo"),
+        (["demo", "--bogus"], "unrecognized arguments: --bogus"),
+    ],
+)
+def test_usage_and_record_errors_are_one_line(tmp_path, capsys, monkeypatch, argv, pattern):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    assert pattern in error_line(capsys)
+    assert list(tmp_path.iterdir()) == []  # a failed command leaves nothing behind
+
+
+def test_demo_out_must_be_a_directory(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    assert main(["demo", "--out", str(tmp_path / "file")]) == 2
+    assert "not a directory" in error_line(capsys)
+    assert capsys.readouterr().out == ""  # fails before printing a report
+
+
+def test_version_and_help(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"smd-statespace {smd_statespace.__version__}"
+    assert main(["simulate", "--help"]) == 0
+    assert "--effect" in capsys.readouterr().out
+
+
+def test_python_dash_m_version():
+    done = subprocess.run([sys.executable, "-m", "smd_statespace", "--version"], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == f"smd-statespace {smd_statespace.__version__}"
+
+
+def console_script():
+    here = Path(sys.executable).parent / ("smd-statespace.exe" if os.name == "nt" else "smd-statespace")
+    return str(here) if here.exists() else shutil.which("smd-statespace")
+
+
+@pytest.mark.skipif(console_script() is None, reason="the smd-statespace console script is not installed")
+def test_console_script_demo(tmp_path):
+    done = subprocess.run([console_script(), "demo", "--out", "tmp"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+    assert (tmp_path / "tmp" / "pipeline.png").exists()
+    assert f"{len(sample_preprocessed().cycles)} (" in done.stdout
+
+
+def test_console_script_error_is_one_line(tmp_path):
+    script = console_script()
+    if script is None:
+        pytest.skip("the smd-statespace console script is not installed")
+    done = subprocess.run([script, "simulate", "--out", "r.csv", "--mass", "-1", "--fb", "2", "--fh", "2",
+                           "--xi", "0.3", "--duration", "5"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 2
+    assert len(done.stderr.splitlines()) == 1 and done.stderr.startswith("smd-statespace: error: --mass")
+
+
+def test_readme_python_example_runs(tmp_path, monkeypatch, capsys):
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", readme, flags=re.S)
+    assert blocks, "README.md has no python example"
+    monkeypatch.chdir(tmp_path)
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), {"__name__": "readme"})
+    assert "bouncing cycles" in capsys.readouterr().out
