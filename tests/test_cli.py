@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import smd_statespace
-from smd_statespace.cli import main, parse_effect
+from smd_statespace.cli import main
+from smd_statespace.commands.common import parse_effect
 from smd_statespace.errors import OptionError
 from smd_statespace.io import read_record
 from smd_statespace.signals import preprocess

@@ -1,0 +1,1 @@
+"""One module per ``smd-statespace`` subcommand; :mod:`smd_statespace.cli` dispatches."""
