@@ -25,7 +25,7 @@ import os
 import sys
 
 from . import __version__
-from .commands import demo, simulate
+from .commands import compare, demo, identify, simulate
 from .commands.common import PROG
 from .errors import SMDInputError
 
@@ -67,6 +67,8 @@ def _fail(message) -> int:
 COMMANDS = [
     (simulate.add_simulate, simulate.run_simulate),
     (demo.add_demo, demo.run_demo),
+    (identify.add_identify, identify.run_identify),
+    (compare.add_compare, compare.run_compare),
 ]
 """``(add, run)`` pairs, one per subcommand, in the order ``--help`` lists them."""
 

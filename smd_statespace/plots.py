@@ -103,3 +103,40 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
     fig.suptitle(f"Parameters per cycle ({estimator}; bars ±1 sd)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("f_h", "xi_h", "blf_1", "blf_2")) -> Figure:
+    """Per-cycle estimates of several estimators side by side (one marker style per estimator).
+
+    Parameters
+    ----------
+    tables : dict of str to DataFrame
+        ``CycleRunner.run`` outputs keyed by estimator name, on the same cycles.
+    truth : dict, optional
+        Known values drawn as dashed lines.
+    """
+    fig = Figure(figsize=(9.0, 1.9 * len(names) + 0.6))
+    axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    markers = "osD^v<>"
+    width = 0.8 / max(len(tables), 1)
+    for k, (label, table) in enumerate(tables.items()):
+        ok = table[table["status"] == "ok"]
+        # Spread the estimators a little along the time axis so their bars do not overlap.
+        middle = 0.5 * (ok["t_start"] + ok["t_end"]) + (k - (len(tables) - 1) / 2) * width * 0.1
+        for ax, name in zip(axes, names):
+            if name in ok:
+                sd = ok.get(f"{name}_sd")
+                ax.errorbar(middle, ok[name], yerr=sd, fmt=markers[k % len(markers)], ms=3.5, lw=0.7, capsize=1.5,
+                            label=label, alpha=0.85)
+    for ax, name in zip(axes, names):
+        if truth and name in truth:
+            ax.axhline(truth[name], color="k", ls="--", lw=1, label="truth")
+        ax.set_ylabel(PARAMETER_LABELS.get(name, name))
+        ax.grid(alpha=0.3)
+    handles, labels = axes[0].get_legend_handles_labels()
+    axes[0].legend(handles, labels, fontsize=7, ncol=len(labels), loc="lower right", bbox_to_anchor=(1.0, 1.0),
+                   frameon=False)
+    axes[-1].set_xlabel("time (s)")
+    fig.suptitle("Estimators compared on the same cycles (bars ±1 sd)", fontsize=11, x=0.02, ha="left")
+    fig.tight_layout()
+    return _save(fig, path)

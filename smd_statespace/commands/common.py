@@ -141,3 +141,100 @@ def load_record(path, mass):
     except (OSError, ValueError):
         truth = None
     return record, truth
+
+
+def _count(text: str) -> int:
+    """argparse type: a whole number >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}")
+    return value
+
+
+def add_record_arguments(parser):
+    """``REC.csv --mass KG``: the record to identify."""
+    parser.add_argument("record", metavar="REC.csv", help="record with columns time,force[,floor_acc]")
+    parser.add_argument("--mass", required=True, type=float, metavar="KG", help="body mass M_h (kg)")
+
+
+def add_model_arguments(parser):
+    """Options that build the :class:`~smd_statespace.model.SMDModel`."""
+    parser.add_argument("--harmonics", type=_count, default=4, metavar="N",
+                        help="Fourier harmonics of the biomechanical force (default 4, as the article)")
+    parser.add_argument("--discretisation", choices=("rk4", "euler"), default="rk4",
+                        help="transition: rk4 (default) or euler (the article's Eq. 11-12)")
+    parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
+                        help="physical effect added to the model, repeatable (e.g. harmonics:count=2, cubic_stiffness)")
+
+
+def add_run_arguments(parser):
+    """Options of the cycle runner shared by ``identify`` and ``compare``."""
+    parser.add_argument("--particles", type=_count, metavar="N",
+                        help="particles of pf (default 5000, as the article) or rbpf (default 300)")
+    parser.add_argument("--max-passes", type=_count, default=8, metavar="N",
+                        help="largest number of repeated passes per cycle (default 8)")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default 0)")
+    parser.add_argument("--out", default="smd_output", metavar="DIR", help="output directory (default ./smd_output)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def build_model(args):
+    """The model the options describe."""
+    from ..effects import make_effect
+    from ..model import SMDModel
+
+    effects = [make_effect(spec) for spec in args.effect]
+    return SMDModel(n_harmonics=args.harmonics, discretisation=args.discretisation, effects=effects)
+
+
+def estimator_options(name: str, args) -> dict:
+    """Estimator keyword options from the command line (only those the estimator takes)."""
+    if args.particles is not None and name in ("pf", "rbpf"):
+        return {"n_particles": args.particles}
+    return {}
+
+
+def prepare_record(args):
+    """Read, check and preprocess ``args.record``; returns ``(Record, Preprocessed)``."""
+    from ..io import read_record
+    from ..signals import preprocess
+
+    record = read_record(args.record, args.mass)
+    return record, preprocess(record)
+
+
+def out_dir(path) -> Path:
+    """Create (if needed) and return the output directory, failing clearly when it cannot be one."""
+    directory = Path(path)
+    if directory.exists() and not directory.is_dir():
+        raise OptionError(f"--out {directory}: exists and is not a directory")
+    directory.mkdir(parents=True, exist_ok=True)
+    return directory
+
+
+def load_truth(path):
+    """A truth JSON (as ``simulate`` writes) or ``None``."""
+    if path is None:
+        return None
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise OptionError(f"--truth {path}: cannot read ({exc.strerror or exc})") from None
+    except ValueError:
+        raise OptionError(f"--truth {path}: not a JSON file") from None
+
+
+def truth_values(truth) -> dict:
+    """Reported quantities known from a truth file: f_h, xi_h, blf_i, k_h, c_h."""
+    if not truth:
+        return {}
+    values = {name: float(truth[name]) for name in ("f_h", "xi_h") if name in truth}
+    for i, value in enumerate(truth.get("blf", []), start=1):
+        values[f"blf_{i}"] = float(value)
+    for source, name in (("K_h", "k_h"), ("C_h", "c_h")):
+        if source in truth:
+            values[name] = float(truth[source])
+    return values

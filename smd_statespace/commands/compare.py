@@ -1,0 +1,88 @@
+"""``smd-statespace compare``: several estimators side by side on the same cycles of one record."""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from ..errors import OptionError
+from ..estimators import ESTIMATORS
+from .common import (add_model_arguments, add_record_arguments, add_run_arguments, build_model, load_truth, out_dir,
+                     prepare_record, truth_values)
+from .identify import identify
+
+COMPARED = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3")
+
+
+def add_compare(subparsers):
+    """Declare ``smd-statespace compare``."""
+    parser = subparsers.add_parser(
+        "compare",
+        help="run several estimators on the same cycles and compare them",
+        description=("Identify the same cycles with each estimator and print, per estimator, the median estimates, "
+                     "their spread over cycles, the share of cycles that determine each parameter and the run time; "
+                     "with --truth also the median absolute error. Writes DIR/compare.csv and DIR/compare.png."),
+    )
+    add_record_arguments(parser)
+    parser.add_argument("--estimators", default="pf,ukf,ekf,grid", metavar="LIST",
+                        help=f"comma-separated estimators among {','.join(sorted(ESTIMATORS))} (default pf,ukf,ekf,grid)")
+    parser.add_argument("--truth", metavar="JSON", help="truth file of a synthetic record (simulate writes one)")
+    add_model_arguments(parser)
+    add_run_arguments(parser)
+    return parser
+
+
+def parse_estimators(text: str) -> list:
+    """Estimator names from ``--estimators``, checked."""
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in names if name not in ESTIMATORS]
+    if unknown or not names:
+        raise OptionError(f"--estimators {text!r}: unknown {unknown[0]!r}; choose among {', '.join(sorted(ESTIMATORS))}"
+                          if unknown else "--estimators: give at least one estimator")
+    if len(set(names)) != len(names):
+        raise OptionError(f"--estimators {text!r}: an estimator is listed twice")
+    return names
+
+
+def comparison_table(tables: dict, seconds: dict, truth: dict | None = None) -> pd.DataFrame:
+    """One row per estimator: medians, interquartile range of f_h, determined shares, errors, time."""
+    rows = []
+    for name, table in tables.items():
+        ok = table[table["status"] == "ok"]
+        row = {"estimator": name, "cycles": len(ok), "failed": int((table["status"] == "failed").sum())}
+        for parameter in COMPARED:
+            row[parameter] = ok[parameter].median()
+        row["f_h_iqr"] = ok["f_h"].quantile(0.75) - ok["f_h"].quantile(0.25)
+        row["f_h_det_%"] = 100.0 * ok["f_h_determined"].mean()
+        row["xi_h_det_%"] = 100.0 * ok["xi_h_determined"].mean()
+        for parameter in COMPARED:
+            if truth and parameter in truth:
+                row[f"|err| {parameter}"] = (ok[parameter] - truth[parameter]).abs().median()
+        row["s/cycle"] = seconds[name] / max(len(ok), 1)
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("estimator")
+
+
+def run_compare(args) -> int:
+    """Run ``smd-statespace compare``."""
+    from ..plots import plot_comparison
+
+    names = parse_estimators(args.estimators)
+    directory = out_dir(args.out)
+    model = build_model(args)
+    truth = truth_values(load_truth(args.truth))
+    record, preprocessed = prepare_record(args)
+    tables, seconds = {}, {}
+    for name in names:
+        _, tables[name], seconds[name] = identify(args, model, preprocessed, name)
+    result = comparison_table(tables, seconds, truth)
+    print(f"{record.source}: {len(preprocessed.valid_cycles)} cycles, {model}")
+    with pd.option_context("display.float_format", "{:.3g}".format, "display.width", 160,
+                           "display.max_columns", 30):
+        print(result.to_string())
+    if truth:
+        print("truth: " + ", ".join(f"{k} {v:.4g}" for k, v in truth.items() if k in COMPARED))
+    combined = pd.concat(tables.values(), ignore_index=True)
+    combined.to_csv(directory / "compare.csv", index=False)
+    plot_comparison(tables, directory / "compare.png", truth=truth)
+    print(f"wrote {directory / 'compare.csv'}, {directory / 'compare.png'}")
+    return 0

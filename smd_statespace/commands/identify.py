@@ -1,0 +1,130 @@
+"""``smd-statespace identify``: every cycle of a record, one estimator, the article's repeated passes."""
+
+from __future__ import annotations
+
+import json
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+
+from .. import __version__
+from ..estimators import ESTIMATORS
+from .common import (_count, add_model_arguments, add_record_arguments, add_run_arguments, build_model,
+                     estimator_options, load_truth, out_dir, prepare_record, truth_values)
+
+DEFAULT_ESTIMATOR = "ekf"
+"""Estimator used when ``--estimator`` is not given (see docs/benchmarks.md for why)."""
+
+SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
+
+
+def add_identify(subparsers):
+    """Declare ``smd-statespace identify``."""
+    parser = subparsers.add_parser(
+        "identify",
+        help="identify the SMD model cycle by cycle",
+        description=("Split the record into bouncing cycles (GRF peak to peak) and identify f_h, xi_h and the "
+                     "force coefficients of every cycle with repeated passes (Wang et al. 2019, Section 3.2); "
+                     "write DIR/results.csv, DIR/run.json and figures."),
+    )
+    add_record_arguments(parser)
+    parser.add_argument("--estimator", choices=sorted(ESTIMATORS), default=DEFAULT_ESTIMATOR,
+                        help=f"pf (the article's particle filter), rbpf, ukf, ekf or grid (default {DEFAULT_ESTIMATOR})")
+    add_model_arguments(parser)
+    add_run_arguments(parser)
+    parser.add_argument("--jobs", type=_count, default=1, metavar="N", help="parallel processes (default 1)")
+    parser.add_argument("--cycle", type=int, metavar="K",
+                        help="cycle whose convergence over passes is drawn (default: the middle valid cycle)")
+    parser.add_argument("--truth", metavar="JSON", help="truth file of a synthetic record, drawn in the figures")
+    return parser
+
+
+def identify(args, model, preprocessed, estimator: str):
+    """Run the cycle runner as the options say; returns ``(runner, table, seconds)``."""
+    from ..runner import CycleRunner
+
+    options = dict(estimator=estimator, max_passes=args.max_passes, seed=args.seed, progress=not args.quiet,
+                   **estimator_options(estimator, args))
+    started = time.perf_counter()
+    if getattr(args, "jobs", 1) > 1:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            runner = CycleRunner(model, executor=pool, **options)
+            table = runner.run(preprocessed)
+    else:
+        runner = CycleRunner(model, **options)
+        table = runner.run(preprocessed)
+    return runner, table, time.perf_counter() - started
+
+
+def summary_table(table: pd.DataFrame, truth: dict | None = None) -> pd.DataFrame:
+    """Median, interquartile range and share of determining cycles of each reported parameter."""
+    ok = table[table["status"] == "ok"]
+    rows = []
+    for name in SUMMARY_PARAMETERS:
+        if name not in ok:
+            continue
+        values = ok[name]
+        row = {"parameter": name, "median": values.median(), "q25": values.quantile(0.25),
+               "q75": values.quantile(0.75), "median_sd": ok[f"{name}_sd"].median() if f"{name}_sd" in ok else np.nan}
+        flag = f"{name}_determined"
+        row["determined_%"] = 100.0 * ok[flag].mean() if flag in ok else np.nan
+        if truth and name in truth:
+            row["truth"] = truth[name]
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("parameter")
+
+
+def run_summary(table: pd.DataFrame, seconds: float) -> str:
+    """One line: cycles identified, converged, failed, skipped, and time."""
+    counts = table["status"].value_counts()
+    ok = table[table["status"] == "ok"]
+    return (f"{counts.get('ok', 0)} cycles identified ({int(ok['converged'].sum())} converged within the pass limit, "
+            f"mean {ok['passes'].mean():.1f} passes), {counts.get('failed', 0)} failed, "
+            f"{counts.get('skipped', 0)} skipped near the record ends; {seconds:.1f} s "
+            f"({seconds / max(len(ok), 1):.2f} s per cycle)")
+
+
+def write_outputs(directory, runner, table, args, estimator, truth=None) -> list:
+    """results.csv, run.json (version, options, seed) and the figures; returns the paths written."""
+    from ..plots import plot_convergence, plot_parameters
+
+    results = directory / "results.csv"
+    table.to_csv(results, index=False)
+    sidecar = directory / "run.json"
+    sidecar.write_text(json.dumps({
+        "version": __version__, "command": "identify", "record": str(args.record), "mass": args.mass,
+        "estimator": estimator, "options": estimator_options(estimator, args), "harmonics": args.harmonics,
+        "discretisation": args.discretisation, "effects": list(args.effect), "max_passes": args.max_passes,
+        "seed": args.seed,
+    }, indent=2))
+    written = [results, sidecar]
+    ok = table[table["status"] == "ok"]
+    if len(ok):
+        written.append(directory / "parameters.png")
+        plot_parameters(table, written[-1], truth=truth)
+        cycles = [c for c in ok["cycle"] if runner.history_.get(c)]
+        cycle = args.cycle if args.cycle in cycles else (cycles[len(cycles) // 2] if cycles else None)
+        if cycle is not None:
+            written.append(directory / "convergence.png")
+            plot_convergence(runner.history_[cycle], cycle, tolerance=runner.tolerance, path=written[-1])
+    return written
+
+
+def run_identify(args) -> int:
+    """Run ``smd-statespace identify``."""
+    directory = out_dir(args.out)
+    model = build_model(args)
+    truth = truth_values(load_truth(args.truth))
+    record, preprocessed = prepare_record(args)
+    runner, table, seconds = identify(args, model, preprocessed, args.estimator)
+    written = write_outputs(directory, runner, table, args, args.estimator, truth)
+    print(f"{record.source}: {args.estimator} on {model}")
+    print(run_summary(table, seconds))
+    with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 120):
+        print(summary_table(table, truth).to_string())
+    print("'determined_%': cycles whose posterior sd is under a quarter of the prior sd; "
+          "the others do not pin the parameter down.")
+    print("wrote " + ", ".join(str(path) for path in written))
+    return 0
