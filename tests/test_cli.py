@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import smd_statespace
@@ -97,6 +98,9 @@ def test_demo_reports_the_sample_and_writes_the_figure(tmp_path, capsys):
     assert f"median {f_b:.3f} Hz" in text
     assert ", ".join(smd_statespace.SMDModel().state_names[:4]) in text.replace(" |", ",")
     assert "identify" in text
+    identified = pd.read_csv(tmp_path / "fig" / "results.csv")
+    assert f"{int((identified.status == 'ok').sum())} cycles identified" in text
+    assert (tmp_path / "fig" / "parameters.png").exists() and (tmp_path / "fig" / "convergence.png").exists()
     png = tmp_path / "fig" / "pipeline.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert str(png) in text
@@ -217,3 +221,61 @@ def test_readme_python_example_runs(tmp_path, monkeypatch, capsys):
     for block in blocks:
         exec(compile(block, "README.md", "exec"), {"__name__": "readme"})
     assert "bouncing cycles" in capsys.readouterr().out
+
+
+@pytest.fixture(scope="module")
+def short_record(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("identify")
+    out = folder / "rec.csv"
+    assert main(["simulate", "--out", str(out), "--mass", "66", "--fb", "2.4", "--fh", "2.8", "--xi", "0.3",
+                 "--duration", "7", "--seed", "3"]) == 0
+    return out
+
+
+def test_identify_writes_results_sidecar_and_figures(short_record, tmp_path, capsys):
+    out = tmp_path / "id"
+    assert main(["identify", str(short_record), "--mass", "66", "--estimator", "ekf", "--max-passes", "3",
+                 "--seed", "9", "--out", str(out), "--truth", str(short_record.with_name("rec_truth.json")),
+                 "--quiet"]) == 0
+    table = pd.read_csv(out / "results.csv")
+    for column in ("cycle", "t_start", "t_end", "f_b", "f_h", "f_h_sd", "xi_h", "xi_h_sd", "blf_1", "blf_4", "a0",
+                   "k_h", "c_h", "passes", "converged", "log_likelihood", "estimator", "f_h_determined"):
+        assert column in table.columns
+    assert (table.loc[table.status == "ok", "passes"] <= 3).all()
+    sidecar = json.loads((out / "run.json").read_text())
+    assert sidecar["seed"] == 9 and sidecar["estimator"] == "ekf" and "version" in sidecar
+    assert (out / "parameters.png").stat().st_size > 10_000 and (out / "convergence.png").exists()
+    printed = capsys.readouterr().out
+    ok = table[table.status == "ok"]
+    assert f"{len(ok)} cycles identified" in printed and "truth" in printed
+
+
+def test_compare_runs_estimators_on_the_same_cycles(short_record, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", str(short_record), "--mass", "66", "--estimators", "ekf,ukf", "--max-passes", "2",
+                 "--out", str(out), "--truth", str(short_record.with_name("rec_truth.json")), "--quiet"]) == 0
+    combined = pd.read_csv(out / "compare.csv")
+    assert set(combined.estimator) == {"ekf", "ukf"}
+    cycles = {name: set(group.cycle) for name, group in combined.groupby("estimator")}
+    assert cycles["ekf"] == cycles["ukf"]
+    printed = capsys.readouterr().out
+    assert "|err| f_h" in printed and (out / "compare.png").exists()
+
+
+@pytest.mark.parametrize(
+    "extra,message",
+    [(["--estimator", "kalman"], "invalid choice: 'kalman'"), (["--particles", "0"], "--particles"),
+     (["--effect", "floor"], "unknown effect 'floor'"), (["--effect", "harmonics:size=2"], "unknown option 'size'"),
+     (["--mass", "-3"], "positive")],
+)
+def test_identify_bad_options_exit_2(short_record, tmp_path, capsys, extra, message):
+    argv = ["identify", str(short_record), "--mass", "66", "--out", str(tmp_path / "o"), "--quiet"] + extra
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and "Traceback" not in err[0]
+
+
+def test_compare_unknown_estimator_exit_2(short_record, tmp_path, capsys):
+    assert main(["compare", str(short_record), "--mass", "66", "--estimators", "ekf,kf", "--out",
+                 str(tmp_path / "c")]) == 2
+    assert "unknown 'kf'" in capsys.readouterr().err
