@@ -140,3 +140,42 @@ def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("
     fig.suptitle("Estimators compared on the same cycles (bars ±1 sd)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def plot_before_after(before, after, path=None, seconds: float = 2.0) -> Figure:
+    """The fit of two models of one record side by side: GRF, residual and residual spectrum.
+
+    Parameters
+    ----------
+    before, after : ModelCheck
+        :func:`smd_statespace.diagnostics.check_model` results without and with the added effects.
+    seconds : float
+        Length of the stretch of record shown in the time panels (s).
+    """
+    fig = Figure(figsize=(10.0, 7.2))
+    axes = fig.subplots(3, 1)
+    start = before.time[0]
+    window = before.time <= start + seconds
+    axes[0].plot(before.time[window], before.measured[window], color="k", lw=1.4, label="measured")
+    for check, label, color in ((before, "without", "tab:red"), (after, "with", "tab:blue")):
+        shown = check.time <= start + seconds
+        names = ", ".join(e.name for e in check.model.effects) or "base model"
+        axes[0].plot(check.time[shown], check.simulated[shown], color=color, lw=1.0,
+                     label=f"{label}: {names} (fit {check.fit_percent:.1f} %)")
+        axes[1].plot(check.time, check.residual, color=color, lw=0.6, alpha=0.8,
+                     label=f"{label}: RMS {check.residual_rms_bw:.2f} % BW")
+        frequency, power, _ = check.residual_spectrum()
+        axes[2].semilogy(frequency, power, color=color, lw=1.0, label=label)
+    axes[0].set_ylabel("dynamic GRF (N)")
+    axes[0].set_xlabel("time (s)")
+    axes[1].set_ylabel("residual (N)")
+    axes[1].set_xlabel("time (s)")
+    axes[2].set_ylabel("residual PSD (N²/Hz)")
+    axes[2].set_xlabel("frequency (Hz)")
+    axes[2].set_xlim(0, min(25.0, frequency[-1]))
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right")
+    fig.suptitle("Free simulation without and with the added effect(s)", fontsize=11, x=0.02, ha="left")
+    fig.tight_layout()
+    return _save(fig, path)
