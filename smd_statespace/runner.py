@@ -71,6 +71,9 @@ def summarise(model: SMDModel, result: FilterResult, mass: float) -> dict:
     derived = model.derived(mean, mass)
     out["k_h"], out["c_h"] = float(derived["k_h"]), float(derived["c_h"])
     out["log_likelihood"] = float(result.log_likelihood)
+    for counter in ("covariance_repairs", "resamples"):
+        if counter in result.diagnostics:
+            out[counter] = int(result.diagnostics[counter])
     return out
 
 
