@@ -611,12 +611,12 @@ def test_plot_returns_a_figure_and_writes_png(tmp_path):
     path = tmp_path / "steps.png"
     fig = result.plot(path)
     assert isinstance(fig, Figure)
-    assert len(fig.axes) == 5 * 2  # five steps, whole record and zoom
+    assert len(fig.axes) == 6 * 2  # five steps plus the part the high-pass removed, whole record and zoom
     assert all(ax.get_ylabel() for ax in fig.axes[::2])
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
     short = preprocess(com_motion_record(duration=2.0)[0], edge_margin=0.0)
-    assert len(short.plot().axes) == 4  # too few cycles to zoom: one column
+    assert len(short.plot().axes) == 5  # too few cycles to zoom: one column
 
 
 def test_preprocess_errors_name_the_record():
