@@ -12,6 +12,8 @@ name                what it adds
 =================== ==========================================================
 ``harmonics``       Fourier harmonics ``n+1 ... n+count`` of the force (Eq. 4)
 ``cubic_stiffness`` a hardening (``beta_3 > 0``) or softening leg spring
+``floor_mode``      a vibrating floor under the person (Section 6): measured
+                    floor motion, or one estimated floor mode
 =================== ==========================================================
 
 Effects are looked up by name with :func:`make_effect`, which also parses the
@@ -24,7 +26,7 @@ import numpy as np
 
 from .errors import OptionError
 from .io import G
-from .model import F_H, TWO_PI, U, Effect, Slot
+from .model import F_H, TWO_PI, U, XI_H, Effect, Slot
 
 
 class Harmonics(Effect):
@@ -119,7 +121,265 @@ class CubicStiffness(Effect):
         return f"CubicStiffness(beta_range={self.beta_range})"
 
 
-EFFECTS = {effect.name: effect for effect in (Harmonics, CubicStiffness)}
+class FloorMode(Effect):
+    """The person bounces on a vibrating floor (human-structure interaction, Section 6).
+
+    The leg spring and damper act on the COM motion relative to the floor
+    displacement ``z`` (m, upward)::
+
+        u'' = -omega_h^2 (u - z) - 2 xi_h omega_h (u' - z') + F_bio / M_h
+
+    so the effect adds ``omega_h^2 z + 2 xi_h omega_h z'`` to the acceleration
+    of Eq. 10. ``u''`` stays the absolute COM acceleration, which the GRF
+    measures through Eq. 3. Where ``z`` comes from depends on ``source``:
+
+    ``"measured"`` (default)
+        The record has a ``floor_acc`` column; its high-passed, integrated
+        velocity and displacement (:func:`smd_statespace.signals.preprocess`)
+        are exogenous inputs (``requires = ("floor_disp", "floor_vel")``). No
+        slots are added.
+    ``"modal"``
+        No floor measurement: the floor is one modal oscillator whose state
+        and parameters are estimated with the person's::
+
+            z'' = -omega_f^2 z - 2 xi_f omega_f z' - mass_ratio u''
+
+        i.e. ``m_f z'' + c_f z' + k_f z = -M_h u''`` divided by the modal mass
+        ``m_f = M_h / mass_ratio``: the floor is driven by the dynamic GRF.
+        Slots ``z`` (m), ``z_dot`` (m/s), then the parameters ``f_f`` (Hz),
+        ``xi_f`` (-) and ``mass_ratio`` (-), all three non-linear.
+
+    =============== ================ =========================================
+    symbol          slot / option    meaning (unit)
+    =============== ================ =========================================
+    ``z``           ``"z"``          floor displacement at the person (m)
+    ``z'``          ``"z_dot"``      floor velocity (m/s)
+    ``f_f``         ``"f_f"``        floor modal frequency (Hz)
+    ``xi_f``        ``"xi_f"``       floor modal damping ratio (-)
+    ``M_h / m_f``   ``"mass_ratio"`` person mass over floor modal mass (-)
+    =============== ================ =========================================
+
+    Parameters
+    ----------
+    source : {"measured", "modal"}
+        Where the floor motion comes from (see above).
+        :meth:`for_record` picks it from the record.
+    frequency : float, optional
+        ``"modal"`` only: a seed of the floor frequency (Hz), e.g. a peak of
+        the residual spectrum. The prior of ``f_f`` is then uniform on
+        ``frequency * (1 -+ frequency_spread)``.
+    frequency_spread : float, optional
+        ``"modal"`` only: relative half-width of that prior (default 0.15).
+    frequency_range : (float, float), optional
+        ``"modal"`` only: the prior range of ``f_f`` (Hz) given directly;
+        default 2-20 Hz when no ``frequency`` is given.
+    damping_range : (float, float), optional
+        ``"modal"`` only: prior range of ``xi_f`` (default 0.001-0.05).
+    mass_ratio_range : (float, float), optional
+        ``"modal"`` only: prior range of ``M_h / m_f`` (default 0.001-0.05;
+        one 70 kg person on the article's plate, 8583 kg: 0.008).
+    displacement, velocity : float, optional
+        ``"modal"`` only: nominal magnitudes of ``z`` (m, default 1e-3) and
+        ``z'`` (m/s, default 1e-2): the prior spread of the unobserved floor
+        state and, times ``process_noise``, its process noise per step. They
+        are fixed, not scaled by the person's data, because the floor moves
+        one or two orders of magnitude less than the COM.
+
+    Attributes
+    ----------
+    requires : tuple of str
+        Exogenous signals needed: ``("floor_disp", "floor_vel")`` when
+        measured, none when modal.
+    requires_columns : tuple of str
+        Record columns those signals come from: ``("floor_acc",)`` when measured.
+    slot_names : tuple of str
+        Names of the slots the ``"modal"`` source adds, in state order.
+
+    Examples
+    --------
+    >>> make_effect("floor_mode")
+    FloorMode(source='measured')
+    >>> make_effect("floor_mode:source=modal,frequency=3.48").slot_names
+    ('z', 'z_dot', 'f_f', 'xi_f', 'mass_ratio')
+    """
+
+    name = "floor_mode"
+    SOURCES = ("measured", "modal")
+    MODAL_DEFAULTS = {
+        "frequency_spread": 0.15,
+        "frequency_range": (2.0, 20.0),
+        "damping_range": (0.001, 0.05),
+        "mass_ratio_range": (0.001, 0.05),
+        "displacement": 1e-3,
+        "velocity": 1e-2,
+    }
+    slot_names = ("z", "z_dot", "f_f", "xi_f", "mass_ratio")
+
+    def __init__(self, source="measured", *, frequency=None, frequency_spread=None, frequency_range=None,
+                 damping_range=None, mass_ratio_range=None, displacement=None, velocity=None, **unknown):
+        where = "floor_mode"
+        if unknown:
+            valid = ["source", "frequency"] + list(self.MODAL_DEFAULTS)
+            raise OptionError(
+                f"effect {where!r}: unknown option {', '.join(map(repr, unknown))}; valid: {', '.join(valid)}"
+            )
+        if source not in self.SOURCES:
+            raise OptionError(
+                f"{where}: source {source!r} is unknown; choose 'measured' (the record has a floor_acc column) "
+                "or 'modal' (estimate one floor mode)"
+            )
+        self.source = source
+        modal = {"frequency": frequency, "frequency_spread": frequency_spread, "frequency_range": frequency_range,
+                 "damping_range": damping_range, "mass_ratio_range": mass_ratio_range,
+                 "displacement": displacement, "velocity": velocity}
+        given = [key for key, value in modal.items() if value is not None]
+        if source == "measured":
+            if given:
+                raise OptionError(
+                    f"{where}: option {given[0]!r} applies to source='modal' only; the measured floor has no "
+                    "parameters to estimate"
+                )
+            self.requires = ("floor_disp", "floor_vel")
+            self.requires_columns = ("floor_acc",)
+            self.given = {}
+            return
+        self.requires = ()
+        self.requires_columns = ()
+        self.given = {key: modal[key] for key in given}
+        if frequency is not None and frequency_range is not None:
+            raise OptionError(f"{where}: give frequency (a seed) or frequency_range, not both")
+        if frequency is None and frequency_spread is not None:
+            raise OptionError(f"{where}: frequency_spread needs a seed frequency")
+        defaults = self.MODAL_DEFAULTS
+        if frequency is not None:
+            frequency = _positive(frequency, "frequency (Hz)", where)
+            spread = _positive(defaults["frequency_spread"] if frequency_spread is None else frequency_spread,
+                               "frequency_spread", where)
+            if spread >= 1.0:
+                raise OptionError(f"{where}: frequency_spread must be a fraction below 1, got {spread!r}")
+            frequency_range = (frequency * (1.0 - spread), frequency * (1.0 + spread))
+        self.frequency = frequency
+        self.frequency_range = _positive_range(frequency_range or defaults["frequency_range"], "frequency_range", where)
+        self.damping_range = _positive_range(damping_range or defaults["damping_range"], "damping_range", where)
+        self.mass_ratio_range = _positive_range(mass_ratio_range or defaults["mass_ratio_range"],
+                                                "mass_ratio_range", where)
+        self.displacement = _positive(defaults["displacement"] if displacement is None else displacement,
+                                      "displacement (m)", where)
+        self.velocity = _positive(defaults["velocity"] if velocity is None else velocity, "velocity (m/s)", where)
+
+    @classmethod
+    def for_record(cls, record, **options) -> "FloorMode":
+        """The measured floor when ``record`` has a floor acceleration, else the estimated mode.
+
+        ``record`` is a :class:`~smd_statespace.io.Record` or a
+        :class:`~smd_statespace.signals.Preprocessed` (anything with a
+        ``floor_acc`` attribute); ``options`` are the ``"modal"`` options and
+        are ignored when the floor is measured.
+        """
+        if getattr(record, "floor_acc", None) is not None:
+            return cls("measured")
+        return cls("modal", **options)
+
+    @property
+    def modal(self) -> bool:
+        """Whether the floor mode is estimated (``source="modal"``)."""
+        return self.source == "modal"
+
+    def slots(self, model):
+        if not self.modal:
+            return ()
+        f_lo, f_hi = self.frequency_range
+        d_lo, d_hi = self.damping_range
+        m_lo, m_hi = self.mass_ratio_range
+        return (
+            Slot("z", "dynamic", "m", nominal=self.displacement, description="floor displacement at the person"),
+            Slot("z_dot", "dynamic", "m/s", nominal=self.velocity, description="floor velocity at the person"),
+            Slot("f_f", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
+                 description="floor modal frequency", linear=False),
+            Slot("xi_f", "parameter", "-", d_lo, d_hi, nominal=0.5 * (d_lo + d_hi),
+                 description="floor modal damping ratio", linear=False),
+            Slot("mass_ratio", "parameter", "-", m_lo, m_hi, nominal=0.5 * (m_lo + m_hi),
+                 description="person mass over floor modal mass", linear=False),
+        )
+
+    def floor_motion(self, model, x, t, inputs):
+        """Floor displacement ``z`` (m) and velocity ``z'`` (m/s) seen by state(s) ``x`` at ``t``."""
+        if self.modal:
+            return x[..., model.index("z")], x[..., model.index("z_dot")]
+        return inputs.signal("floor_disp", t), inputs.signal("floor_vel", t)
+
+    def acceleration(self, model, x, t, inputs):
+        omega = TWO_PI * x[..., F_H]
+        z, z_dot = self.floor_motion(model, x, t, inputs)
+        return omega**2 * z + 2.0 * x[..., XI_H] * omega * z_dot  # Section 6: spring and damper on u - z
+
+    def acceleration_jacobian(self, model, x, t, inputs):
+        omega = TWO_PI * x[..., F_H]
+        xi = x[..., XI_H]
+        z, z_dot = self.floor_motion(model, x, t, inputs)
+        jac = np.zeros(x.shape)
+        jac[..., F_H] = TWO_PI * (2.0 * omega * z + 2.0 * xi * z_dot)
+        jac[..., XI_H] = 2.0 * omega * z_dot
+        if self.modal:
+            jac[..., model.index("z")] = omega**2
+            jac[..., model.index("z_dot")] = 2.0 * xi * omega
+        return jac
+
+    def slot_rates(self, model, x, t, inputs, acc):
+        rates = np.zeros(x.shape[:-1] + (len(self.slot_names) if self.modal else 0,))
+        if not self.modal:
+            return rates
+        z, z_dot = x[..., model.index("z")], x[..., model.index("z_dot")]
+        omega_f = TWO_PI * x[..., model.index("f_f")]
+        xi_f = x[..., model.index("xi_f")]
+        rates[..., 0] = z_dot
+        rates[..., 1] = -(omega_f**2) * z - 2.0 * xi_f * omega_f * z_dot - x[..., model.index("mass_ratio")] * acc
+        return rates
+
+    def slot_rates_jacobian(self, model, x, t, inputs, acc, acc_jacobian):
+        width = len(self.slot_names) if self.modal else 0
+        jac = np.zeros(x.shape[:-1] + (width, x.shape[-1]))
+        if not self.modal:
+            return jac
+        i_z, i_v, i_f, i_xi, i_mu = (model.index(name) for name in self.slot_names)
+        z, z_dot = x[..., i_z], x[..., i_v]
+        omega_f, xi_f, mu = TWO_PI * x[..., i_f], x[..., i_xi], x[..., i_mu]
+        jac[..., 0, i_v] = 1.0
+        row = -mu[..., None] * acc_jacobian
+        row[..., i_z] += -(omega_f**2)
+        row[..., i_v] += -2.0 * xi_f * omega_f
+        row[..., i_f] += -TWO_PI * (2.0 * omega_f * z + 2.0 * xi_f * z_dot)
+        row[..., i_xi] += -2.0 * omega_f * z_dot
+        row[..., i_mu] += -acc
+        jac[..., 1, :] = row
+        return jac
+
+    def __repr__(self):
+        options = "".join(f", {key}={value!r}" for key, value in self.given.items())
+        return f"FloorMode(source={self.source!r}{options})"
+
+
+def _positive(value, label, where):
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{where}: {label} must be a number, got {value!r}") from None
+    if not (np.isfinite(number) and number > 0):
+        raise OptionError(f"{where}: {label} must be a positive number, got {value!r}")
+    return number
+
+
+def _positive_range(value, label, where):
+    try:
+        low, high = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{where}: {label} must be a pair low/high, got {value!r}") from None
+    if not (np.isfinite(low) and np.isfinite(high) and 0 < low < high):
+        raise OptionError(f"{where}: {label} must satisfy 0 < low < high, got {value!r}")
+    return low, high
+
+
+EFFECTS = {effect.name: effect for effect in (Harmonics, CubicStiffness, FloorMode)}
 """Registry of effects by name; :func:`register_effect` adds user-written ones."""
 
 
