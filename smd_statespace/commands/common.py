@@ -24,26 +24,25 @@ def _fail(message) -> int:
     return 2
 
 
-def _positive(text: str) -> float:
-    """argparse type: a finite number > 0."""
+def _number(text: str, accept, requirement: str) -> float:
+    """A finite number for which ``accept(value)`` holds, or an argparse type error naming ``requirement``."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
+    if not (math.isfinite(value) and accept(value)):
+        raise argparse.ArgumentTypeError(f"must be {requirement}, got {text!r}")
     return value
+
+
+def _positive(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    return _number(text, lambda value: value > 0, "a positive number")
 
 
 def _nonnegative(text: str) -> float:
     """argparse type: a finite number >= 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"must be zero or a positive number, got {text!r}")
-    return value
+    return _number(text, lambda value: value >= 0, "zero or a positive number")
 
 
 def _seed(text: str) -> int:

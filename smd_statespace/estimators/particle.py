@@ -48,6 +48,15 @@ def effective_sample_size(weights: np.ndarray) -> float:
     return 1.0 / float(np.sum(weights**2))
 
 
+def check_particle_options(n_particles, ess_threshold) -> tuple[int, float]:
+    """Validated ``(n_particles, ess_threshold)`` of a particle filter."""
+    if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 2:
+        raise OptionError(f"n_particles must be a whole number >= 2, got {n_particles!r}")
+    if not 0.0 < float(ess_threshold) <= 1.0:
+        raise OptionError(f"ess_threshold must be in (0, 1], got {ess_threshold!r}")
+    return int(n_particles), float(ess_threshold)
+
+
 def reflect(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """Fold values back into ``[low, high]`` per column (infinite bounds leave a column alone)."""
     finite = np.isfinite(low) & np.isfinite(high)
@@ -86,12 +95,7 @@ class ParticleFilter(Estimator):
 
     def __init__(self, n_particles: int = 5000, ess_threshold: float = 0.5,
                  process_noise_std=None, observation_noise_std=None):
-        if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 2:
-            raise OptionError(f"n_particles must be a whole number >= 2, got {n_particles!r}")
-        if not 0.0 < float(ess_threshold) <= 1.0:
-            raise OptionError(f"ess_threshold must be in (0, 1], got {ess_threshold!r}")
-        self.n_particles = int(n_particles)
-        self.ess_threshold = float(ess_threshold)
+        self.n_particles, self.ess_threshold = check_particle_options(n_particles, ess_threshold)
         self.process_noise_std = process_noise_std
         self.observation_noise_std = observation_noise_std
 

@@ -28,7 +28,7 @@ from ..model import SMDModel
 from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, ParticleStart, dynamic_mask, prepare,
                    register_estimator)
 from .linear import ConditionalKalman, mixture_moments, normalised, predictive_mixture
-from .particle import effective_sample_size, reflect, systematic_resample
+from .particle import check_particle_options, effective_sample_size, reflect, systematic_resample
 
 
 @register_estimator
@@ -57,12 +57,7 @@ class RaoBlackwellisedFilter(Estimator):
 
     def __init__(self, n_particles: int = 300, ess_threshold: float = 0.5,
                  process_noise_std=None, observation_noise_std=None):
-        if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 2:
-            raise OptionError(f"n_particles must be a whole number >= 2, got {n_particles!r}")
-        if not 0.0 < float(ess_threshold) <= 1.0:
-            raise OptionError(f"ess_threshold must be in (0, 1], got {ess_threshold!r}")
-        self.n_particles = int(n_particles)
-        self.ess_threshold = float(ess_threshold)
+        self.n_particles, self.ess_threshold = check_particle_options(n_particles, ess_threshold)
         self.process_noise_std = process_noise_std
         self.observation_noise_std = observation_noise_std
 
