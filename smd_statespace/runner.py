@@ -113,6 +113,7 @@ def identify_cycle(model: SMDModel, estimator, data, seed, record_key: int, mass
         row.update(passes=len(history), converged=done, status="ok", reason="")
     except EstimatorFailure as failure:
         row.update(passes=len(history) + 1, converged=False, status="failed", reason=str(failure))
+        result = None  # an earlier pass's result must not stand in for the failed cycle
     row["seconds"] = time.perf_counter() - started
     return CycleOutcome(row=row, history=history, result=result)
 

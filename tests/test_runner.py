@@ -126,3 +126,17 @@ def test_grid_runs_one_pass(record):
 def test_bad_runner_options(kwargs, pattern):
     with pytest.raises(OptionError, match=pattern):
         CycleRunner(**kwargs)
+
+
+def test_failed_cycle_leaves_no_stale_result(record):
+    class FailsOnSecondPass(ScriptedEstimator):
+        def run(self, model, data, start=None, rng=None, fixed=None):
+            if start is not None and data.index == self.fail_cycle:
+                raise EstimatorFailure(f"cycle {data.index}: failed on pass 2")
+            return super().run(model, data, start, rng, fixed)
+
+    bad = record.valid_cycles[1].index
+    runner = CycleRunner(estimator=FailsOnSecondPass(fail_cycle=bad), progress=False)
+    table = runner.run(record)
+    assert table.set_index("cycle").loc[bad, "status"] == "failed"
+    assert bad not in runner.results_
