@@ -25,7 +25,7 @@ import os
 import sys
 
 from . import __version__
-from .commands import compare, demo, identify, simulate
+from .commands import compare, demo, diagnose, identify, simulate
 from .commands.common import PROG
 from .errors import SMDInputError
 
@@ -69,6 +69,7 @@ COMMANDS = [
     (demo.add_demo, demo.run_demo),
     (identify.add_identify, identify.run_identify),
     (compare.add_compare, compare.run_compare),
+    (diagnose.add_diagnose, diagnose.run_diagnose),
 ]
 """``(add, run)`` pairs, one per subcommand, in the order ``--help`` lists them."""
 
