@@ -133,7 +133,9 @@ def _floor_candidate(base: ModelCheck):
     if base.preprocessed.floor_acc is not None:
         return make_effect("floor_mode:source=measured")
     _, _, peaks = base.residual_spectrum()
-    other = peaks[peaks["label"] == "non-harmonic"]
+    # Lines at (k + 1/2) f_b come from cycle-to-cycle variation of the force, not from a floor.
+    half = (peaks["f_over_fb"] % 1.0 - 0.5).abs() < 0.1
+    other = peaks[(peaks["label"] == "non-harmonic") & ~half]
     if other.empty:
         return None
     frequency = float(other.sort_values("power", ascending=False)["frequency"].iloc[0])
