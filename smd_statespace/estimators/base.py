@@ -74,9 +74,12 @@ def cycle_data(model: SMDModel, preprocessed, cycle) -> CycleData:
     signals = preprocessed.exogenous(cycle)
     missing = [name for name in model.requires if name not in signals]
     if missing:
+        needing = [e for e in model.effects if missing[0] in e.requires]
+        columns = [c for e in needing for c in getattr(e, "requires_columns", ())]
+        column = f"a {columns[0]!r} column, which the record lacks" if columns else "a column the record lacks"
         raise OptionError(
-            f"{getattr(preprocessed, 'source', 'record')}: the model's effects need signal {missing[0]!r}, "
-            "which comes from a 'floor_acc' column the record lacks"
+            f"{getattr(preprocessed, 'source', 'record')}: effect {needing[0].name!r} needs signal {missing[0]!r} "
+            f"from {column}"
         )
     inputs = CycleInputs(f_b=cycle.f_b, t0=float(t[0]), time=t, signals={k: signals[k] for k in model.requires})
     return CycleData(t=t, y=y, inputs=inputs, index=cycle.index)
