@@ -376,8 +376,12 @@ class FreeState:
         return full
 
 
-class GaussianTrace:
-    """Per-sample record of a Kalman-type pass, turned into a :class:`FilterResult`."""
+class Trace:
+    """Per-sample arrays of one pass (means, sds, innovations), turned into a :class:`FilterResult`.
+
+    Estimators write ``mean[k]``, ``std[k]``, ``innovations[k]``,
+    ``innovation_cov[k]`` and add to ``log_likelihood`` as they go.
+    """
 
     def __init__(self, model: SMDModel, data: CycleData):
         m = len(data)
@@ -386,6 +390,28 @@ class GaussianTrace:
         self.innovations = np.empty((m, model.n_obs))
         self.innovation_cov = np.empty((m, model.n_obs, model.n_obs))
         self.log_likelihood = 0.0
+
+    def result(self, name, model, data, setup, restart, diagnostics) -> FilterResult:
+        """The pass as a :class:`FilterResult` (raising :class:`EstimatorFailure` if anything is non-finite)."""
+        if not (np.all(np.isfinite(self.mean)) and np.isfinite(self.log_likelihood)):
+            raise EstimatorFailure(f"cycle {data.index}: the filter diverged (non-finite state or likelihood)")
+        return FilterResult(
+            estimator=name,
+            state_names=model.state_names,
+            t=data.t,
+            mean=self.mean,
+            std=self.std,
+            innovations=self.innovations,
+            innovation_cov=self.innovation_cov,
+            log_likelihood=float(self.log_likelihood),
+            restart=restart,
+            prior_std=setup.prior_std,
+            diagnostics=diagnostics,
+        )
+
+
+class GaussianTrace(Trace):
+    """The trace of a Kalman-type pass: records a Gaussian state and innovation per sample."""
 
     def record(self, k, free_state: FreeState, x, P, y, S):
         """Store the filtered free-state mean ``x``, covariance ``P``, innovation ``y`` and its covariance ``S``."""
@@ -401,21 +427,6 @@ class GaussianTrace:
         if sign <= 0:
             raise EstimatorFailure(f"innovation covariance is not positive definite at sample {k}")
         self.log_likelihood += -0.5 * (y @ np.linalg.solve(S, y) + log_det + len(y) * np.log(2.0 * np.pi))
-
-    def result(self, name, model, data, setup, restart, diagnostics) -> FilterResult:
-        return FilterResult(
-            estimator=name,
-            state_names=model.state_names,
-            t=data.t,
-            mean=self.mean,
-            std=self.std,
-            innovations=self.innovations,
-            innovation_cov=self.innovation_cov,
-            log_likelihood=float(self.log_likelihood),
-            restart=restart,
-            prior_std=setup.prior_std,
-            diagnostics=diagnostics,
-        )
 
 
 class CovarianceGuard:

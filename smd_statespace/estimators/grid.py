@@ -26,8 +26,8 @@ from scipy.special import logsumexp
 
 from ..errors import OptionError
 from ..model import SMDModel
-from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, GaussianStart, gaussian_start, prepare,
-                   register_estimator)
+from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, GaussianStart, Trace, gaussian_start,
+                   prepare, register_estimator)
 from .linear import ConditionalKalman, mixture_covariance, mixture_moments, normalised, predictive_mixture
 
 
@@ -94,43 +94,30 @@ class GridReference(Estimator):
         kalman = ConditionalKalman(model, setup, linear)
         m = len(data)
         log_lik = np.zeros(n_grid)
-        means = np.empty((m, model.n_state))
-        stds = np.empty((m, model.n_state))
-        innovations = np.empty((m, model.n_obs))
-        innovation_cov = np.empty((m, model.n_obs, model.n_obs))
+        trace = Trace(model, data)
         with np.errstate(over="ignore", invalid="ignore"):
             for k in range(m):
                 if k > 0:
                     x, P = kalman.predict(x, P, data.t[k - 1], data.t[k] - data.t[k - 1], data.inputs)
                 predicted, S, H = kalman.predict_observation(x, P, data.t[k], data.inputs)
                 # Predictive mixture over the grid, weighted by the posterior so far.
-                predicted_mean, innovation_cov[k] = predictive_mixture(normalised(log_lik), predicted, S)
-                innovations[k] = data.y[k] - predicted_mean
+                predicted_mean, trace.innovation_cov[k] = predictive_mixture(normalised(log_lik), predicted, S)
+                trace.innovations[k] = data.y[k] - predicted_mean
                 try:
                     x, P, log_density = kalman.update(x, P, data.y[k], predicted, S, H)
                 except np.linalg.LinAlgError:
                     raise EstimatorFailure(
                         f"cycle {data.index}: innovation covariance not positive definite at sample {k}") from None
                 log_lik += log_density
-                means[k], stds[k] = mixture_moments(normalised(log_lik), x, P, linear)
-        if not (np.all(np.isfinite(log_lik)) and np.all(np.isfinite(means))):
+                trace.mean[k], trace.std[k] = mixture_moments(normalised(log_lik), x, P, linear)
+        if not np.all(np.isfinite(log_lik)):
             raise EstimatorFailure(f"cycle {data.index}: the grid Kalman filters diverged (non-finite likelihood)")
-        total = float(logsumexp(log_lik) - np.log(n_grid))
+        trace.log_likelihood = float(logsumexp(log_lik) - np.log(n_grid))
         posterior = normalised(log_lik)
         self.f_h_grid_, self.xi_h_grid_ = f_axis, xi_axis
         self.posterior_ = posterior.reshape(f_grid.shape)
         self.log_likelihood_grid_ = log_lik.reshape(f_grid.shape)
-        return FilterResult(
-            estimator=self.name,
-            state_names=model.state_names,
-            t=data.t,
-            mean=means,
-            std=stds,
-            innovations=innovations,
-            innovation_cov=innovation_cov,
-            log_likelihood=total,
-            restart=GaussianStart(means[-1], mixture_covariance(posterior, x, P, linear), carry_over=True),
-            prior_std=setup.prior_std,
-            diagnostics={"f_h_grid": f_axis, "xi_h_grid": xi_axis, "posterior": self.posterior_,
-                         "grid_points": n_grid},
-        )
+        restart = GaussianStart(trace.mean[-1], mixture_covariance(posterior, x, P, linear), carry_over=True)
+        return trace.result(self.name, model, data, setup, restart,
+                            {"f_h_grid": f_axis, "xi_h_grid": xi_axis, "posterior": self.posterior_,
+                             "grid_points": n_grid})

@@ -23,8 +23,8 @@ from scipy.special import logsumexp
 
 from ..errors import OptionError
 from ..model import SMDModel
-from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, ParticleStart, dynamic_mask, prepare,
-                   register_estimator)
+from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, ParticleStart, Trace, dynamic_mask,
+                   prepare, register_estimator)
 
 LOG_2PI = np.log(2.0 * np.pi)
 
@@ -55,6 +55,21 @@ def check_particle_options(n_particles, ess_threshold) -> tuple[int, float]:
     if not 0.0 < float(ess_threshold) <= 1.0:
         raise OptionError(f"ess_threshold must be in (0, 1], got {ess_threshold!r}")
     return int(n_particles), float(ess_threshold)
+
+
+def reweight(log_weights: np.ndarray, log_likelihood: np.ndarray, data, k: int):
+    """Multiply normalised weights by the likelihoods (in logs); return the new ones and ``log p(y_k | y_<k)``.
+
+    Non-finite likelihoods count as zero. Raises :class:`EstimatorFailure` when every weight vanishes.
+    """
+    log_weights = log_weights + np.where(np.isfinite(log_likelihood), log_likelihood, -np.inf)
+    increment = logsumexp(log_weights)
+    if not np.isfinite(increment):
+        raise EstimatorFailure(
+            f"cycle {data.index}: all particle weights vanished at sample {k} (t = {data.t[k]:.3f} s); "
+            "the observation is far outside the cloud"
+        )
+    return log_weights - increment, float(increment)
 
 
 def reflect(values: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -132,13 +147,9 @@ class ParticleFilter(Estimator):
         q = setup.q_std[noisy]
         r = setup.r_std
         log_norm = -0.5 * model.n_obs * LOG_2PI - np.sum(np.log(r))
-        mean = np.empty((m, model.n_state))
-        std = np.empty((m, model.n_state))
-        innovations = np.empty((m, model.n_obs))
-        innovation_cov = np.empty((m, model.n_obs, model.n_obs))
+        trace = Trace(model, data)
         ess_trace = np.empty(m)
         resamples = 0
-        total = 0.0
         with np.errstate(over="ignore", invalid="ignore"):
             for k in range(m):
                 if k > 0:
@@ -149,41 +160,19 @@ class ParticleFilter(Estimator):
                 weights = np.exp(log_weights)
                 predicted_mean = weights @ predicted
                 spread = predicted - predicted_mean
-                innovations[k] = data.y[k] - predicted_mean
-                innovation_cov[k] = (weights[:, None] * spread).T @ spread + np.diag(r**2)
+                trace.innovations[k] = data.y[k] - predicted_mean
+                trace.innovation_cov[k] = (weights[:, None] * spread).T @ spread + np.diag(r**2)
                 residual = (data.y[k] - predicted) / r
-                log_likelihood = log_norm - 0.5 * np.sum(residual**2, axis=1)
-                log_likelihood[~np.isfinite(log_likelihood)] = -np.inf
-                log_weights = log_weights + log_likelihood
-                increment = logsumexp(log_weights)
-                if not np.isfinite(increment):
-                    raise EstimatorFailure(
-                        f"cycle {data.index}: all particle weights vanished at sample {k} "
-                        f"(t = {data.t[k]:.3f} s); the observation is far outside the cloud"
-                    )
-                total += increment
-                log_weights -= increment
+                log_weights, increment = reweight(log_weights, log_norm - 0.5 * np.sum(residual**2, axis=1), data, k)
+                trace.log_likelihood += increment
                 weights = np.exp(log_weights)
-                mean[k] = weights @ particles
-                std[k] = np.sqrt(np.maximum(weights @ (particles - mean[k]) ** 2, 0.0))
+                trace.mean[k] = weights @ particles
+                trace.std[k] = np.sqrt(np.maximum(weights @ (particles - trace.mean[k]) ** 2, 0.0))
                 ess_trace[k] = effective_sample_size(weights)
                 if ess_trace[k] < self.ess_threshold * n and k < m - 1:
                     particles = particles[systematic_resample(weights, rng)]
                     log_weights = np.full(n, -np.log(n))
                     resamples += 1
-        if not (np.all(np.isfinite(mean)) and np.isfinite(total)):
-            raise EstimatorFailure(f"cycle {data.index}: the particle cloud diverged (non-finite state)")
         self.particles_, self.log_weights_ = particles, log_weights
-        return FilterResult(
-            estimator=self.name,
-            state_names=model.state_names,
-            t=data.t,
-            mean=mean,
-            std=std,
-            innovations=innovations,
-            innovation_cov=innovation_cov,
-            log_likelihood=float(total),
-            restart=ParticleStart(particles, log_weights),
-            prior_std=setup.prior_std,
-            diagnostics={"ess": ess_trace, "resamples": resamples, "n_particles": n},
-        )
+        return trace.result(self.name, model, data, setup, ParticleStart(particles, log_weights),
+                            {"ess": ess_trace, "resamples": resamples, "n_particles": n})

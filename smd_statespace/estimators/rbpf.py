@@ -21,14 +21,13 @@ their filters) when the effective sample size drops.
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from ..errors import OptionError
 from ..model import SMDModel
-from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, ParticleStart, dynamic_mask, prepare,
-                   register_estimator)
+from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, ParticleStart, Trace, dynamic_mask,
+                   prepare, register_estimator)
 from .linear import ConditionalKalman, mixture_moments, normalised, predictive_mixture
-from .particle import check_particle_options, effective_sample_size, reflect, systematic_resample
+from .particle import check_particle_options, effective_sample_size, reflect, reweight, systematic_resample
 
 
 @register_estimator
@@ -93,13 +92,9 @@ class RaoBlackwellisedFilter(Estimator):
         kalman = ConditionalKalman(model, setup, linear)
         n, m = self.n_particles, len(data)
         q = setup.q_std[nonlinear]
-        mean = np.empty((m, model.n_state))
-        std = np.empty((m, model.n_state))
-        innovations = np.empty((m, model.n_obs))
-        innovation_cov = np.empty((m, model.n_obs, model.n_obs))
+        trace = Trace(model, data)
         ess_trace = np.empty(m)
         resamples = 0
-        total = 0.0
         with np.errstate(over="ignore", invalid="ignore"):
             for k in range(m):
                 if k > 0:
@@ -107,42 +102,23 @@ class RaoBlackwellisedFilter(Estimator):
                     x = reflect(x, setup.low, setup.high)
                     x, P = kalman.predict(x, P, data.t[k - 1], data.t[k] - data.t[k - 1], data.inputs)
                 predicted, S, H = kalman.predict_observation(x, P, data.t[k], data.inputs)
-                predicted_mean, innovation_cov[k] = predictive_mixture(np.exp(log_weights), predicted, S)
-                innovations[k] = data.y[k] - predicted_mean
+                predicted_mean, trace.innovation_cov[k] = predictive_mixture(np.exp(log_weights), predicted, S)
+                trace.innovations[k] = data.y[k] - predicted_mean
                 try:
                     x, P, log_density = kalman.update(x, P, data.y[k], predicted, S, H)
                 except np.linalg.LinAlgError:
                     raise EstimatorFailure(
                         f"cycle {data.index}: innovation covariance not positive definite at sample {k}") from None
-                log_density[~np.isfinite(log_density)] = -np.inf
-                log_weights = log_weights + log_density
-                increment = logsumexp(log_weights)
-                if not np.isfinite(increment):
-                    raise EstimatorFailure(
-                        f"cycle {data.index}: all particle weights vanished at sample {k} (t = {data.t[k]:.3f} s)")
-                total += increment
-                log_weights -= increment
+                log_weights, increment = reweight(log_weights, log_density, data, k)
+                trace.log_likelihood += increment
                 weights = np.exp(log_weights)
-                mean[k], std[k] = mixture_moments(weights, x, P, linear)
+                trace.mean[k], trace.std[k] = mixture_moments(weights, x, P, linear)
                 ess_trace[k] = effective_sample_size(weights)
                 if ess_trace[k] < self.ess_threshold * n and k < m - 1:
                     index = systematic_resample(weights, rng)
                     x, P = x[index], P[index]
                     log_weights = np.full(n, -np.log(n))
                     resamples += 1
-        if not (np.all(np.isfinite(mean)) and np.isfinite(total)):
-            raise EstimatorFailure(f"cycle {data.index}: the filter diverged (non-finite state)")
         self.particles_, self.covariances_, self.log_weights_ = x, P, log_weights
-        return FilterResult(
-            estimator=self.name,
-            state_names=model.state_names,
-            t=data.t,
-            mean=mean,
-            std=std,
-            innovations=innovations,
-            innovation_cov=innovation_cov,
-            log_likelihood=float(total),
-            restart=ParticleStart(x, log_weights, P),
-            prior_std=setup.prior_std,
-            diagnostics={"ess": ess_trace, "resamples": resamples, "n_particles": n},
-        )
+        return trace.result(self.name, model, data, setup, ParticleStart(x, log_weights, P),
+                            {"ess": ess_trace, "resamples": resamples, "n_particles": n})
