@@ -273,3 +273,12 @@ def test_bad_estimator_options():
         get_estimator("pf", n_particles=-5)
     with pytest.raises(OptionError, match="unexpected keyword"):
         get_estimator("ukf", particles=5)
+
+
+def test_vectorised_ukf_equals_filterpy_loop():
+    model, data, _ = well_excited_cycle(samples=30)
+    looped = get_estimator("ukf", vectorised=False).run(model, data)
+    batched = get_estimator("ukf").run(model, data)
+    np.testing.assert_allclose(batched.mean, looped.mean, rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(batched.std, looped.std, rtol=1e-10, atol=1e-14)
+    assert batched.log_likelihood == pytest.approx(looped.log_likelihood, rel=1e-12)

@@ -20,6 +20,18 @@ from .base import (CycleData, CovarianceGuard, Estimator, FreeState, GaussianSta
                    prepare, register_estimator)
 
 
+class _BatchUKF(UnscentedKalmanFilter):
+    """filterpy's UKF whose process sigma points move in one vectorised call of ``fx``.
+
+    filterpy calls ``fx`` once per sigma point in a Python loop; the model's
+    transition takes all ``2n + 1`` points at once. Nothing else differs.
+    """
+
+    def compute_process_sigmas(self, dt, fx=None, **fx_args):
+        fx = self.fx if fx is None else fx
+        self.sigmas_f = fx(self.points_fn.sigma_points(self.x, self.P), dt, **fx_args)
+
+
 @register_estimator
 class UnscentedFilter(Estimator):
     """filterpy's UKF with the model's transition and observation.
@@ -28,6 +40,9 @@ class UnscentedFilter(Estimator):
     ----------
     alpha, beta, kappa : float
         ``MerweScaledSigmaPoints`` parameters; ``kappa=None`` means ``3 - n``.
+    vectorised : bool
+        Move all sigma points in one call of the model's transition (default)
+        instead of filterpy's loop over them; the numbers are the same.
     process_noise_std, observation_noise_std : array_like, optional
         Override the model's default noise levels.
 
@@ -39,8 +54,9 @@ class UnscentedFilter(Estimator):
 
     name = "ukf"
 
-    def __init__(self, alpha: float = 1.0, beta: float = 2.0, kappa: float | None = None,
+    def __init__(self, alpha: float = 1.0, beta: float = 2.0, kappa: float | None = None, vectorised: bool = True,
                  process_noise_std=None, observation_noise_std=None):
+        self.vectorised = bool(vectorised)
         self.alpha = float(alpha)
         self.beta = float(beta)
         self.kappa = kappa
@@ -57,12 +73,12 @@ class UnscentedFilter(Estimator):
         points = MerweScaledSigmaPoints(n, alpha=self.alpha, beta=self.beta, kappa=kappa, sqrt_method=guard.sqrt)
 
         def fx(z, dt, t):
-            return model.transition(free_state.embed(z), t, dt, data.inputs)[free_state.free]
+            return model.transition(free_state.embed(z), t, dt, data.inputs)[..., free_state.free]
 
         def hx(z, t):
             return model.observe(free_state.embed(z), t, data.inputs)
 
-        ukf = UnscentedKalmanFilter(dim_x=n, dim_z=model.n_obs, dt=data.dt, hx=hx, fx=fx, points=points,
+        ukf = (_BatchUKF if self.vectorised else UnscentedKalmanFilter)(dim_x=n, dim_z=model.n_obs, dt=data.dt, hx=hx, fx=fx, points=points,
                                     sqrt_fn=guard.sqrt)
         ukf.x = mean[free_state.free]
         ukf.P = cov[np.ix_(free_state.free, free_state.free)]
