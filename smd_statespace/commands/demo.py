@@ -188,8 +188,8 @@ def demo_next_steps() -> str:
         "  smd-statespace identify REC.csv --mass KG [--estimator pf|rbpf|ukf|ekf|grid]  your own record",
         "  smd-statespace compare REC.csv --mass KG --truth T.json   estimators side by side",
         "  smd-statespace simulate --out REC.csv ...                   synthetic records with known truth",
-        "  Model diagnosis (residuals, spectra, missing effects such as a vibrating floor or a",
-        "  nonlinear leg spring) and population statistics (Section 5) are the next stages.",
+        "  smd-statespace diagnose REC.csv --mass KG [--json R.json]   where the model fails, which effect is missing",
+        "  Population statistics (Section 5) and the floor study (Section 6) are the next stages.",
     ])
 
 
