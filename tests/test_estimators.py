@@ -282,3 +282,11 @@ def test_vectorised_ukf_equals_filterpy_loop():
     np.testing.assert_allclose(batched.mean, looped.mean, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(batched.std, looped.std, rtol=1e-10, atol=1e-14)
     assert batched.log_likelihood == pytest.approx(looped.log_likelihood, rel=1e-12)
+
+
+@pytest.mark.parametrize("name", ["pf", "ukf", "ekf", "grid", "rbpf"])
+def test_cycle_too_short_for_the_model_is_a_clear_error(name):
+    model, data, _ = well_excited_cycle(samples=20)
+    short = CycleData(t=data.t[:2], y=data.y[:2], inputs=data.inputs, index=7)
+    with pytest.raises(CycleError, match="cycle 7: 2 samples; an estimator needs at least 3"):
+        get_estimator(name, **({"n_particles": 20} if "pf" in name else {})).run(model, short)
