@@ -45,15 +45,20 @@ def _nonnegative(text: str) -> float:
     return _number(text, lambda value: value >= 0, "zero or a positive number")
 
 
-def _seed(text: str) -> int:
-    """argparse type: a non-negative integer seed."""
+def _whole(text: str, minimum: int, requirement: str) -> int:
+    """A whole number >= ``minimum``, or an argparse type error naming ``requirement``."""
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a non-negative whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be a non-negative whole number, got {text!r}")
+        raise argparse.ArgumentTypeError(f"must be {requirement}, got {text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"must be {requirement}, got {text!r}")
     return value
+
+
+def _seed(text: str) -> int:
+    """argparse type: a non-negative integer seed."""
+    return _whole(text, 0, "a non-negative whole number")
 
 
 def _numbers(text: str) -> tuple[float, ...]:
@@ -144,13 +149,7 @@ def load_record(path, mass):
 
 def _count(text: str) -> int:
     """argparse type: a whole number >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got {text!r}")
-    return value
+    return _whole(text, 1, "a whole number >= 1")
 
 
 def add_record_arguments(parser):
