@@ -107,6 +107,7 @@ EFFECTS = {
         "damping": article.TABLE3[0].damping,
         "modal_mass": article.TABLE3[0].modal_mass,
         "noise": None,
+        "ambient": 0.0,
     },
     "harmonics": {"blf": (0.04, 0.03), "phases": None},
     "cubic_stiffness": {"beta": 400.0},
@@ -144,6 +145,16 @@ EFFECTS = {
     30 s records; seed 1 builds up from 0.44 to 1.07 m/s^2. Drop the first
     ~15 s, or set ``fb_variation=0``, where a stationary floor response
     matters.
+
+    ``ambient`` (m/s^2, default 0) adds what other occupants, walkers or
+    machines do to the floor: a random excitation of the mode, white in the
+    band ``0.5 f_f``-``1.5 f_f`` (a random-phase multisine with lines
+    ``1 / duration`` apart, so it is smooth for the ODE solver), scaled so
+    that the floor alone (no person on it) would vibrate with this RMS
+    acceleration. A person bouncing on a floor vibrating only at the
+    bouncing harmonics cannot tell it from a rigid floor through the GRF
+    (the per-cycle Fourier force absorbs a periodic floor motion); the
+    ambient vibration is not periodic in the bouncing cycle, so it shows.
 ``harmonics``
     Force harmonics ``n+1, n+2, ...`` with amplitudes ``blf`` (g) and optional
     ``phases`` (rad; default: the same GRF-shape rule as the base harmonics).
@@ -354,6 +365,8 @@ def _check_effects(effects, allowed=tuple(EFFECTS), where="simulate_bouncing"):
             )
             if merged["noise"] is not None:
                 merged["noise"] = _number(merged["noise"], f"{label} 'noise'", nonnegative=True, where=where)
+            merged["ambient"] = _number(merged["ambient"], f"{label} 'ambient' (m/s^2)", nonnegative=True,
+                                        where=where)
         elif name == "harmonics":
             blf = _vector(merged["blf"], f"{label} 'blf'", nonnegative=True, where=where)
             merged["blf"] = tuple(float(v) for v in blf)
@@ -385,13 +398,14 @@ class _System:
     xi_h: float
     beta: float = 0.0
     floor: tuple | None = None  # (omega_f, xi_f, mass_ratio M_h / m_f)
+    floor_excitation: object = None  # _Multisine: external floor acceleration (m/s^2), or None
 
     @property
     def n_state(self):
         return 2 if self.floor is None else 4
 
-    def accelerations(self, x, force_g):
-        """Return ``(u'', z'')`` for states ``x`` (shape (n_state, ...)) and input ``g F``."""
+    def accelerations(self, x, force_g, excitation=0.0):
+        """Return ``(u'', z'')`` for states ``x`` (shape (n_state, ...)), input ``g F`` and floor excitation."""
         if self.floor is None:
             relative, relative_rate = x[0], x[1]
         else:
@@ -402,12 +416,13 @@ class _System:
         if self.floor is None:
             return u_ddot, None
         omega_f, xi_f, mass_ratio = self.floor
-        z_ddot = -(omega_f**2) * x[2] - 2.0 * xi_f * omega_f * x[3] - mass_ratio * u_ddot
+        z_ddot = -(omega_f**2) * x[2] - 2.0 * xi_f * omega_f * x[3] - mass_ratio * u_ddot + excitation
         return u_ddot, z_ddot
 
     def rhs(self, t, x, force):
         """Time derivative of the state ``x`` (shape (n_state,)) at time ``t`` (s)."""
-        u_ddot, z_ddot = self.accelerations(x.tolist(), G * force.scalar(t))
+        excitation = 0.0 if self.floor_excitation is None else self.floor_excitation.scalar(t)
+        u_ddot, z_ddot = self.accelerations(x.tolist(), G * force.scalar(t), excitation)
         if self.floor is None:
             return np.array([x[1], u_ddot])
         return np.array([x[1], u_ddot, x[3], z_ddot])
@@ -452,6 +467,52 @@ class _CycleForce:
         """Force (g) at times ``t`` (s), any shape."""
         angle = np.multiply.outer(self.orders, self.omega * (np.asarray(t, dtype=float) - self.t_start))
         return self.a0 + self.a @ np.cos(angle) + self.b @ np.sin(angle)  # Eq. 4
+
+
+class _Multisine:
+    """A smooth random signal: ``sum_j A_j cos(2 pi f_j t + phi_j)`` (m/s^2)."""
+
+    def __init__(self, frequencies, amplitudes, phases):
+        self.omega = 2.0 * np.pi * np.asarray(frequencies, dtype=float)
+        self.amplitudes = np.asarray(amplitudes, dtype=float)
+        self.phases = np.asarray(phases, dtype=float)
+
+    def scalar(self, t):
+        """Value at one time ``t`` (s)."""
+        return float(self.amplitudes @ np.cos(self.omega * t + self.phases))
+
+    def __call__(self, t):
+        """Values at times ``t`` (s), shape (T,)."""
+        return self.amplitudes @ np.cos(np.multiply.outer(self.omega, np.asarray(t, dtype=float))
+                                        + self.phases[:, None])
+
+
+def ambient_floor_excitation(rms, f_f, xi_f, duration, phases):
+    """External floor acceleration that makes the bare floor vibrate with RMS acceleration ``rms``.
+
+    White in the band ``0.5 f_f``-``1.5 f_f``: lines ``1 / duration`` apart
+    with the given random ``phases`` (rad, one per line, drawn by the caller;
+    :func:`ambient_line_count` says how many). The amplitude makes the
+    steady-state acceleration of the floor mode alone,
+    ``z'' = -w_f^2 z - 2 xi_f w_f z' + e(t)``, have RMS ``rms`` (m/s^2).
+
+    Returns
+    -------
+    _Multisine or None
+        None when ``rms`` is 0.
+    """
+    if rms == 0.0:
+        return None
+    frequencies = 0.5 * f_f + np.arange(len(phases)) / duration
+    omega, omega_f = 2.0 * np.pi * frequencies, 2.0 * np.pi * f_f
+    gain = omega**2 / np.abs(omega_f**2 - omega**2 + 2j * xi_f * omega_f * omega)  # |z''| per unit e
+    amplitude = rms / np.sqrt(0.5 * np.sum(gain**2))
+    return _Multisine(frequencies, np.full(frequencies.size, amplitude), phases)
+
+
+def ambient_line_count(f_f, duration):
+    """Number of lines of :func:`ambient_floor_excitation` (band ``f_f`` wide, ``1 / duration`` apart)."""
+    return int(np.floor(f_f * duration)) + 1
 
 
 def _cycle_coefficients(cycles):
@@ -529,16 +590,19 @@ def _periodic_state(system, force, period, t_start):
     return guess
 
 
-def _build_system(f_h, xi_h, mass, effects):
+def _build_system(f_h, xi_h, mass, effects, floor_excitation=None):
     floor = None
     if "floor_mode" in effects:
         params = effects["floor_mode"]
         floor = (2.0 * np.pi * params["frequency"], params["damping"], mass / params["modal_mass"])
+    elif floor_excitation is not None:
+        raise OptionError("integrate_response: floor_excitation needs the floor_mode effect")
     beta = effects["cubic_stiffness"]["beta"] if "cubic_stiffness" in effects else 0.0
-    return _System(omega_h=2.0 * np.pi * f_h, xi_h=xi_h, beta=beta, floor=floor)
+    return _System(omega_h=2.0 * np.pi * f_h, xi_h=xi_h, beta=beta, floor=floor, floor_excitation=floor_excitation)
 
 
-def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial_state=None):
+def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial_state=None,
+                       floor_excitation=None):
     """Integrate the SMD model (Eq. 2) under a piecewise-constant cycle force.
 
     The low-level engine of :func:`simulate_bouncing`, for user-defined forces
@@ -567,6 +631,12 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
         ``[u, u']`` (m, m/s), or ``[u, u', z, z']`` with a floor, at
         ``t_start[0]``. Default: the periodic steady state of the first
         cycle's force (no start-up transient).
+    floor_excitation : callable, optional
+        External acceleration of the floor mode (m/s^2) from other sources,
+        ``e(t)`` added to ``z''`` (needs ``floor_mode``); an object with
+        ``scalar(t)`` and vectorised ``__call__(t)`` such as
+        :func:`ambient_floor_excitation` returns. The default start state
+        ignores it.
 
     Returns
     -------
@@ -598,7 +668,7 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
         )
     if np.any(t_end <= t_start) or np.any(np.abs(t_start[1:] - t_end[:-1]) > 1e-9):
         raise OptionError(f"{where}: cycles must have t_end > t_start and be contiguous (t_start[j+1] == t_end[j])")
-    system = _build_system(f_h, xi_h, mass, effects)
+    system = _build_system(f_h, xi_h, mass, effects, floor_excitation)
     _, a, b = _cycle_coefficients(cycles)
     f_b = cycles["f_b"].to_numpy(dtype=float)
     a0 = cycles["a0"].to_numpy(dtype=float)
@@ -629,7 +699,8 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
     for j in np.unique(cycle_index):
         mask = cycle_index == j
         force_g[mask] = G * forces[j](time[mask])
-    u_ddot, z_ddot = system.accelerations(states, force_g)
+    excitation = 0.0 if floor_excitation is None else floor_excitation(time)
+    u_ddot, z_ddot = system.accelerations(states, force_g, excitation)
     frame = {
         "time": time,
         "cycle": cycle_index,
@@ -901,7 +972,14 @@ def simulate_bouncing(
     cycles = pd.DataFrame(columns)
 
     dynamics = {name: params for name, params in effects.items() if name != "harmonics"}
-    states = integrate_response(cycles, time, f_h, xi_h, mass=mass, effects=dynamics)
+    excitation = None
+    if "floor_mode" in effects:
+        floor = effects["floor_mode"]
+        # Drawn last, so that the ambient floor vibration leaves every other random number unchanged.
+        ambient_phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(floor["frequency"], duration))
+        excitation = ambient_floor_excitation(floor["ambient"], floor["frequency"], floor["damping"], duration,
+                                              ambient_phases)
+    states = integrate_response(cycles, time, f_h, xi_h, mass=mass, effects=dynamics, floor_excitation=excitation)
 
     weight = mass * G
     force = mass * (G + states["u_ddot"].to_numpy()) + noise * weight * grf_noise  # Eq. 3
