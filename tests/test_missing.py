@@ -5,7 +5,9 @@ import json
 import pytest
 
 from smd_statespace.cli import main
-from smd_statespace.missing import diagnose
+from smd_statespace.io import make_record
+from smd_statespace.diagnostics import check_model
+from smd_statespace.missing import default_candidates, diagnose
 from smd_statespace.signals import preprocess
 from smd_statespace.simulate import simulate_bouncing
 
@@ -27,11 +29,70 @@ def test_hidden_harmonics_are_found_and_adding_them_lowers_the_residual(seed, f_
     assert set(report["missing_effects"][0]["params"]) >= {"a5", "b5", "a6", "b6"}
 
 
-@pytest.mark.parametrize("seed,f_b,f_h,xi_h", [(41, 1.8, 2.2, 0.35), (42, 2.9, 3.3, 0.25)])
+def check_found(result, name):
+    """``name`` ranked first, residual down by a third or more, its serial structure at least halved."""
+    assert not result.adequate, result.table()
+    best = result.missing[0]
+    assert best.name == name, result.table()
+    assert best.check.residual_rms < (2 / 3) * result.base.residual_rms
+    # Ljung-Box statistic per df of the free-simulation residual: 1.2-1.9 on the clean records below.
+    assert result.base.serial_correlation_ratio() > 2 * best.check.serial_correlation_ratio()
+    assert result.report()["missing_effects"][0]["effect"] == name
+    return best
+
+
+# A cubic spring leaves harmonics above n f_b only where the COM moves far: low f_b, strong nonlinearity
+# (below about f_b 1.8 Hz with beta 1000 1/m^2; at the simulator's default 400 1/m^2 and 2 Hz the force
+# absorbs it, see smd_statespace.missing).
+@pytest.mark.parametrize("seed,f_b,f_h,beta", [(1, 1.6, 1.92, 1500.0), (12, 1.5, 1.8, 1200.0)])
+def test_hidden_cubic_stiffness_is_found(seed, f_b, f_h, beta):
+    result = diagnose(record(seed, f_b, f_h, 0.3, {"cubic_stiffness": {"beta": beta}}), max_passes=3)
+    best = check_found(result, "cubic_stiffness")
+    assert best.check.serial_correlation_ratio() < 2.0  # as white as on a clean record
+    assert best.check.table["beta_3"].median() > 0  # hardening, as simulated
+
+
+# A floor vibrating above n f_b (here from other occupants, 1 m/s^2) reaches the GRF through the legs.
+# With a floor accelerometer. Without one, the modal candidate is seeded at the right line (8.16 Hz for 8.2 Hz)
+# and its linearised fit explains as much, but the filter does not track the floor's ambient vibration from
+# the GRF alone (residual -4 %): not yet found, see test_floor_without_accelerometer_is_seeded_at_its_line.
+@pytest.mark.parametrize("seed,f_b,f_f", [(9, 1.7, 9.5), (5, 1.5, 8.2)])
+def test_hidden_floor_mode_is_found(seed, f_b, f_f):
+    synthetic = simulate_bouncing(mass=72.0, f_b=f_b, f_h=1.2 * f_b, xi_h=0.3, duration=12.0, seed=seed,
+                                  effects={"floor_mode": {"frequency": f_f, "ambient": 1.0}})
+    result = diagnose(preprocess(synthetic.record), max_passes=3)
+    best = check_found(result, "floor_mode")
+    assert best.effect.source == "measured"
+
+
+def test_floor_without_accelerometer_is_seeded_at_its_line():
+    synthetic = simulate_bouncing(mass=72.0, f_b=1.5, f_h=1.8, xi_h=0.3, duration=12.0, seed=5,
+                                  effects={"floor_mode": {"frequency": 8.2, "ambient": 1.0}})
+    rec = synthetic.record
+    base = check_model(preprocess(make_record(rec.time, rec.force, rec.mass, source="no accelerometer")),
+                       max_passes=3)
+    (effect,) = [e for e in default_candidates(base.model, base) if e.name == "floor_mode"]
+    assert effect.source == "modal" and abs(effect.frequency - 8.2) < 0.1
+
+
+def test_floor_at_the_bouncing_harmonics_is_absorbed_and_said_so():
+    # The article's set-up: plate mode 1 (3.48 Hz) driven by the 2nd harmonic at 1.75 Hz, no other source.
+    synthetic = simulate_bouncing(mass=72.0, f_b=1.75, f_h=1.8, xi_h=0.33, duration=12.0, seed=6,
+                                  effects={"floor_mode": {}})
+    result = diagnose(preprocess(synthetic.record), max_passes=3)
+    assert result.adequate, result.table()
+    (note,) = result.report()["notes"]
+    assert note.startswith("floor_mode: the measured floor moves") and "absorbed" in note
+    coupling = float(note.split("is ")[1].split(" %")[0])
+    assert coupling > 1.0  # % BW: the floor matters physically, yet the residual cannot show it
+
+
+@pytest.mark.parametrize("seed,f_b,f_h,xi_h", [(41, 1.8, 2.2, 0.35), (42, 2.9, 3.3, 0.25), (43, 2.3, 2.0, 0.4)])
 def test_clean_records_are_adequate(seed, f_b, f_h, xi_h):
     result = diagnose(record(seed, f_b, f_h, xi_h), max_passes=3)
     assert result.adequate, result.table()
     assert result.report()["missing_effects"] == []
+    assert result.base.serial_correlation_ratio() < 2.0
 
 
 def test_diagnose_cli_json_and_before_after(tmp_path, capsys):
@@ -43,7 +104,7 @@ def test_diagnose_cli_json_and_before_after(tmp_path, capsys):
                  "--json", str(report_path)]) == 0
     report = json.loads(report_path.read_text())
     assert set(report) == {"fit_percent", "residual_rms", "whiteness_pvalue", "effects_in_model", "adequate",
-                           "missing_effects"}
+                           "missing_effects", "notes"}
     assert report["adequate"] is False and report["missing_effects"][0]["effect"] == "harmonics"
     assert (tmp_path / "d" / "diagnostics.png").exists() and (tmp_path / "d" / "fit.png").exists()
     capsys.readouterr()

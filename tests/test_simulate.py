@@ -481,3 +481,19 @@ def test_integrate_response_rejects_bad_inputs():
         integrate_response(cycles, np.arange(-1, 1, 0.01), f_h=2.0, xi_h=0.1)
     with pytest.raises(OptionError, match="harmonics"):
         integrate_response(cycles, np.arange(0, 1, 0.01), f_h=2.0, xi_h=0.1, effects={"harmonics": {}})
+
+
+def test_ambient_floor_vibration_has_the_requested_rms_and_leaves_the_rest_unchanged():
+    # A floor far heavier than the person: its vibration is the ambient excitation's alone.
+    target = 0.3
+    heavy = {"floor_mode": {"ambient": target, "modal_mass": 1e9}}
+    sim = simulate_bouncing(duration=60.0, seed=3, noise=0.0, effects=heavy)
+    z_ddot = sim.states["z_ddot"].to_numpy()
+    assert np.sqrt(np.mean(z_ddot[z_ddot.size // 2:] ** 2)) == pytest.approx(target, rel=0.1)
+    # Same seed with and without ambient vibration: the same force cycles and noise draws.
+    quiet = simulate_bouncing(duration=5.0, seed=4, effects={"floor_mode": {}})
+    lively = simulate_bouncing(duration=5.0, seed=4, effects={"floor_mode": {"ambient": 0.5}})
+    pd.testing.assert_frame_equal(quiet.cycles, lively.cycles)
+    assert not np.allclose(quiet.record.floor_acc, lively.record.floor_acc)
+    with pytest.raises(OptionError, match="ambient"):
+        simulate_bouncing(duration=5.0, effects={"floor_mode": {"ambient": -1.0}})

@@ -29,14 +29,15 @@ def add_diagnose(subparsers):
     add_run_arguments(parser)
     parser.add_argument("--json", metavar="FILE", help="write the report as JSON")
     parser.add_argument("--alpha", type=float, default=0.01, metavar="P",
-                        help="significance level of the likelihood-ratio tests (default 0.01, Bonferroni-corrected)")
+                        help="significance level of the candidates' F-tests (default 0.01, Bonferroni-corrected)")
     return parser
 
 
 def _fit_line(check) -> str:
     return (f"fit {check.fit_percent:.1f} % (one-step {check.fit_percent_one_step:.1f} %), residual RMS "
             f"{check.residual_rms:.2f} N = {check.residual_rms_bw:.2f} % body weight, "
-            f"whiteness p = {check.whiteness_pvalue():.3g}")
+            f"residual serial correlation {check.serial_correlation_ratio():.2f} per df "
+            f"(Ljung-Box p = {check.whiteness_pvalue(series='residual'):.3g})")
 
 
 def before_after(before, after) -> pd.DataFrame:
@@ -45,7 +46,8 @@ def before_after(before, after) -> pd.DataFrame:
     for label, check in (("without", before), ("with", after)):
         rows[label] = {"fit_%": check.fit_percent, "one_step_fit_%": check.fit_percent_one_step,
                        "residual_rms_N": check.residual_rms, "residual_rms_%BW": check.residual_rms_bw,
-                       "whiteness_p": check.whiteness_pvalue(), "log_likelihood": check.log_likelihood}
+                       "serial_ratio": check.serial_correlation_ratio(),
+                       "whiteness_p": check.whiteness_pvalue(series="residual"), "log_likelihood": check.log_likelihood}
     return pd.DataFrame(rows)
 
 
@@ -84,6 +86,8 @@ def run_diagnose(args) -> int:
         best = result.missing[0]
         print(f"\nverdict: missing effect '{best.name}': {best.evidence}")
         print(f"next: smd-statespace diagnose {args.record} --mass {args.mass:g} --effect {best.name}")
+    for note in result.notes:
+        print(f"note: {note}")
     base.plot_diagnostics(directory / "diagnostics.png")
     base.plot_fit(directory / "fit.png")
     written = [directory / "diagnostics.png", directory / "fit.png"]

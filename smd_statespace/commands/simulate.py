@@ -39,7 +39,8 @@ def add_simulate(subparsers):
                         help="cycle-to-cycle relative SD of the force harmonics (default 0.10)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="physical effect, repeatable: floor_mode, harmonics, cubic_stiffness "
-                             "(e.g. floor_mode:frequency=3.48 or harmonics:blf=0.04/0.03)")
+                             "(e.g. floor_mode:frequency=3.48, floor_mode:frequency=9.5,ambient=1.0 or "
+                             "harmonics:blf=0.04/0.03)")
     return parser
 
 
