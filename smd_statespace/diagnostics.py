@@ -432,7 +432,7 @@ class ModelCheck:
             integrals of the measured acceleration, so their errors are
             not independent, and its observation noise is set at 10 % of the
             RMS, far above a force plate's), so a missing effect is judged on
-            the residual, whose ``lb_stat / lags`` is about 1.2-1.5 on records
+            the residual, whose ``lb_stat / lags`` is about 1.2-1.9 on records
             without a missing effect and 7-10 with one (measured, see
             :mod:`smd_statespace.missing`).
 

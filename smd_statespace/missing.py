@@ -195,7 +195,7 @@ def _judge(base: ModelCheck, check: ModelCheck, effect, n_candidates: int, alpha
         f_statistic = (rss - rss_with) / tested / (rss_with / dof)
         pvalue = float(stats.f.sf(f_statistic, tested, dof))
         lr = n * np.log(rss / rss_with)
-    else:  # no added dimension, or the refit checked other cycles: no nested test
+    else:  # fewer dimensions than the base, or the refit checked other cycles: no nested test
         f_statistic, pvalue, lr = float("nan"), 1.0, 0.0
     score = lr - extra * np.log(n)
     filter_lr = 2.0 * (check.log_likelihood - base.log_likelihood)
@@ -223,10 +223,11 @@ def _floor_notes(base: ModelCheck, judged) -> list:
     if size == 0.0:
         return []
     left = float(np.sqrt(np.mean(base.remove_absorbable(coupling) ** 2)))
+    absorbed = 1.0 - left / size
     note = (f"floor_mode: the measured floor moves; its coupling M_h (w_h^2 z + 2 xi_h w_h z') is "
-            f"{100 * size / base.weight:.2f} % BW RMS, {100 * (1 - left / size):.0f} % of it absorbed by the "
-            f"per-cycle force (it lies below n f_b = {base.model.n_harmonics * base.f_b:.1f} Hz), so the residual "
-            "cannot test it")
+            f"{100 * size / base.weight:.2f} % BW RMS, {100 * absorbed:.0f} % of it absorbed by the per-cycle force")
+    if absorbed >= 0.9:
+        note += f" (it lies below n f_b = {base.model.n_harmonics * base.f_b:.1f} Hz), so the residual cannot test it"
     with_floor = next((c.check for c in judged if c.name == "floor_mode"), None)
     if with_floor is not None:
         medians = [(check.table.loc[check.table["status"] == "ok", ["f_h", "xi_h"]].median()) for check in
