@@ -15,6 +15,8 @@ command      what it does
 ``simulate`` write a synthetic GRF record (Eq. 2-4) and the truth behind it
 ``demo``     the pipeline on the shipped sample: record, cycles, COM signals
              (Eq. 3), the augmented-state model (Eq. 7-16) and a figure
+``stats``    population statistics of many identified cycles: bands, Eq. 19
+             skew-normal fits in the layout of Table 2, trends (Section 5)
 ============ ================================================================
 """
 
@@ -25,7 +27,7 @@ import os
 import sys
 
 from . import __version__
-from .commands import compare, demo, diagnose, identify, simulate
+from .commands import compare, demo, diagnose, identify, simulate, stats
 from .commands.common import PROG
 from .errors import SMDInputError
 
@@ -70,6 +72,7 @@ COMMANDS = [
     (identify.add_identify, identify.run_identify),
     (compare.add_compare, compare.run_compare),
     (diagnose.add_diagnose, diagnose.run_diagnose),
+    (stats.add_stats, stats.run_stats),
 ]
 """``(add, run)`` pairs, one per subcommand, in the order ``--help`` lists them."""
 

@@ -294,7 +294,7 @@ def _flags(values: pd.Series, source: str, column: str) -> np.ndarray:
     bad = ~(true | text.isin(_FALSE).to_numpy() | missing)
     if bad.any():
         row = int(np.argmax(bad))
-        raise RecordError(f"{source}: column {column!r}, row {row + 1}: {values.iloc[row]!r} is not True or False")
+        raise RecordError(f"{source}: column {column!r}, data row {row + 1}: {values.iloc[row]!r} is not True or False")
     return true
 
 
@@ -304,7 +304,7 @@ def _numeric(values: pd.Series, source: str, column: str) -> np.ndarray:
     bad = numbers.isna() & values.notna() & (values.astype(str).str.strip() != "")
     if bad.any():
         row = int(np.argmax(bad.to_numpy()))
-        raise RecordError(f"{source}: column {column!r}, row {row + 1}: {values.iloc[row]!r} is not a number")
+        raise RecordError(f"{source}: column {column!r}, data row {row + 1}: {values.iloc[row]!r} is not a number")
     return numbers.to_numpy(dtype=float)
 
 
@@ -434,6 +434,11 @@ def _minimise(x, theta, a_max: float, max_iter: int = 100):
     ``(m, log s)`` alone. Returns ``(theta, nll, converged)``: converged rows have a (projected)
     gradient under 1e-3 of the curvature's standard deviation in every coordinate.
     """
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore", under="ignore"):  # bad trials are rejected
+        return _newton(x, theta, a_max, max_iter)
+
+
+def _newton(x, theta, a_max, max_iter):
     theta = np.array(theta, dtype=float)
     theta[:, 2] = np.clip(theta[:, 2], -a_max, a_max)
     nll, grad, hess = _skewnorm_nll(x, theta)
@@ -841,6 +846,15 @@ class TrendResult:
         return "\n".join(lines)
 
 
+def _trend_shortfall(f: np.ndarray, degree: int) -> str:
+    """Why ``f`` cannot carry a polynomial trend of ``degree`` (empty when it can)."""
+    distinct = np.unique(f[np.isfinite(f)]).size
+    if f.size < degree + 3 or distinct < degree + 1:
+        return (f"too few cycles: need {degree + 3} at {degree + 1} or more distinct bouncing frequencies, "
+                f"got {f.size} at {distinct}")
+    return ""
+
+
 def fit_trend(f_b, values, degree: int, *, parameter: str = "f_h", n_bootstrap: int = 0, rng=None,
               confidence: float = 0.95, cov_type: str = "HC3") -> TrendResult:
     """Fit ``values`` as a polynomial of degree 1 or 2 in ``f_b`` by OLS (statsmodels).
@@ -877,9 +891,9 @@ def fit_trend(f_b, values, degree: int, *, parameter: str = "f_h", n_bootstrap: 
     y = np.asarray(values, dtype=float)
     keep = np.isfinite(f) & np.isfinite(y)
     f, y = f[keep], y[keep]
-    if f.size < degree + 3 or np.unique(f).size < degree + 1:
-        raise OptionError(f"{parameter} trend: need at least {degree + 3} cycles at {degree + 1} or more distinct "
-                          f"bouncing frequencies, got {f.size} at {np.unique(f).size}")
+    shortfall = _trend_shortfall(f, degree)
+    if shortfall:
+        raise OptionError(f"{parameter} trend: {shortfall}")
     design = np.vander(f, degree + 1, increasing=True)
     ols = sm.OLS(y, design).fit(cov_type=cov_type)
     alpha = 1.0 - confidence
@@ -936,7 +950,8 @@ class PopulationStats:
     trends : dict
         ``parameter -> TrendResult`` (or the reason it could not be fitted, a str).
     counts : dict
-        ``rows``, ``by_status`` (dict), ``ok``, ``outside_bands``, ``in_bands`` and ``sources``.
+        ``rows``, ``by_status`` (dict), ``ok``, ``outside_bands``, ``in_bands``, ``sources`` and
+        ``no_flags`` (parameter -> flag columns absent, with ``include_undetermined`` only).
     options : dict
         ``min_cycles``, ``n_bootstrap``, ``seed``, ``include_undetermined``, ``confidence``, ``a_max``.
     """
@@ -1022,7 +1037,11 @@ class PopulationStats:
         lines = []
         table = self.exclusions()
         for parameter, row in table.iterrows():
-            if self.options["include_undetermined"]:
+            missing_flags = self.counts.get("no_flags", {}).get(parameter)
+            if missing_flags:
+                text = (f"{parameter}: {int(row['used'])} cycles used, whether they determined it is unknown "
+                        f"(no {', '.join(missing_flags)} column)")
+            elif self.options["include_undetermined"]:
                 text = f"{parameter}: {int(row['used'])} cycles used, {int(row['undetermined'])} of them undetermined (included)"
             else:
                 text = f"{parameter}: {int(row['used'])} cycles used, {int(row['excluded'])} undetermined left out"
@@ -1153,7 +1172,7 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
                "include_undetermined": bool(include_undetermined), "confidence": float(confidence),
                "a_max": float(a_max), "cov_type": cov_type, "trend_degrees": degrees}
 
-    cells, trends = {}, {}
+    cells, trends, no_flags = {}, {}, {}
     f_b = table["f_b"].to_numpy()
     for p_index, parameter in enumerate(parameters):
         spec = PARAMETERS[parameter]
@@ -1161,8 +1180,10 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
         if include_undetermined:
             determined = np.ones(len(table), dtype=bool)
             for flag in spec.determined_by:
-                if flag in table:
-                    determined &= _flags(table[flag], "results", flag)
+                if flag in table and table[flag].notna().any():
+                    determined &= _flags(table[flag], ", ".join(sources_read), flag)
+                else:
+                    no_flags.setdefault(parameter, []).append(flag)
         else:
             determined = np.logical_and.reduce([table[flag].to_numpy(dtype=bool) for flag in spec.determined_by])
         in_band = band >= 0
@@ -1176,13 +1197,11 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
                 min_cycles=min_cycles, n_bootstrap=n_bootstrap, rng=np.random.default_rng(
                     _seed_sequence(seed, 0, p_index, b)), confidence=confidence, a_max=a_max)
         degree = int(degrees.get(parameter, 1))
-        try:
-            trends[parameter] = fit_trend(f_b[used], values[used], degree, parameter=parameter,
-                                          n_bootstrap=n_bootstrap, rng=np.random.default_rng(
-                                              _seed_sequence(seed, 1, p_index)),
-                                          confidence=confidence, cov_type=cov_type)
-        except OptionError as exc:
-            trends[parameter] = f"no trend: {exc}"
+        shortfall = _trend_shortfall(f_b[used], degree)
+        trends[parameter] = f"no trend ({shortfall})" if shortfall else fit_trend(
+            f_b[used], values[used], degree, parameter=parameter, n_bootstrap=n_bootstrap,
+            rng=np.random.default_rng(_seed_sequence(seed, 1, p_index)), confidence=confidence, cov_type=cov_type)
+    counts["no_flags"] = no_flags
     return PopulationStats(cycles=table, bands=bands, parameters=parameters, cells=cells, trends=trends,
                            counts=counts, options=options)
 

@@ -54,7 +54,6 @@ def plot_trends(stats, path=None) -> Figure:
     cycles = stats.cycles
     centres = stats.bands.centres
     low, high = stats.bands.intervals[0][0], stats.bands.intervals[-1][1]
-    grid = np.linspace(low, high, 200)
     for ax, parameter in zip(axes, parameters):
         used = cycles[cycles[f"used_{parameter}"]]
         points = used.iloc[:: max(1, math.ceil(len(used) / MAX_POINTS))]
@@ -68,9 +67,10 @@ def plot_trends(stats, path=None) -> Figure:
                     label="band mean ± sd", zorder=4)
         trend = stats.trends.get(parameter)
         if isinstance(trend, TrendResult):
-            mean, lo, hi = trend.predict(grid)
-            ax.fill_between(grid, lo, hi, color="tab:red", alpha=0.25, lw=0, zorder=3)
-            ax.plot(grid, mean, color="tab:red", lw=1.6, zorder=3,
+            fitted = np.linspace(*trend.f_b_range, 200)  # no extrapolation beyond the cycles fitted
+            mean, lo, hi = trend.predict(fitted)
+            ax.fill_between(fitted, lo, hi, color="tab:red", alpha=0.25, lw=0, zorder=3)
+            ax.plot(fitted, mean, color="tab:red", lw=1.6, zorder=3,
                     label=f"OLS trend, {trend.confidence:.0%} band of its mean")
             if trend.vertex is not None and low <= trend.vertex <= high:
                 ax.axvline(trend.vertex, color="tab:blue", ls="--", lw=1.0, zorder=2)
@@ -81,8 +81,16 @@ def plot_trends(stats, path=None) -> Figure:
             elif trend.vertex is not None:
                 ax.text(0.98, 0.95, f"{trend.vertex_kind} at {trend.vertex:.2f} Hz\n(outside the bands)",
                         transform=ax.transAxes, ha="right", va="top", fontsize=7, color="tab:blue")
+        elif trend is not None:
+            ax.text(0.5, 0.06, "no trend: too few cycles", transform=ax.transAxes, ha="center", va="bottom",
+                    fontsize=8, color="tab:red")
         # y-range from the bulk of the cycles, so that a few outliers do not flatten the panel
         values = used[PARAMETERS[parameter].column].to_numpy()
+        if not values.size:
+            ax.set_yticks([])
+            ax.text(0.5, 0.55, "no cycles" + ("" if stats.options["include_undetermined"] else
+                                              " that determined it"), transform=ax.transAxes, ha="center",
+                    va="center", fontsize=9, color="tab:red")
         if values.size:
             q_lo, q_hi = np.percentile(values, [0.5, 99.5])
             span = max(q_hi - q_lo, 1e-12)
@@ -173,14 +181,12 @@ def plot_histograms(stats, parameter: str, path=None, published: bool = True) ->
                     patch.set_height(patch.get_height() * inside.size / here.size)
         if cell.fit is not None:
             ax.plot(x, cell.fit.dist().pdf(x), color="tab:red", lw=1.6, label="fit (Eq. 19)")
-            text = f"n = {cell.n}\nm, s, a = {cell.cell(3)}"
+            text, color = f"n = {cell.n}\nm, s, a = {cell.cell(3)}", "k"
         else:
-            text = f"n = {cell.n}\n{cell.note}"
-            ax.text(0.5, 0.5, cell.note, transform=ax.transAxes, ha="center", va="center", fontsize=9,
-                    color="tab:red")
+            text, color = f"n = {cell.n}\n{cell.note}\n(not fitted)", "tab:red"
         if show_published:
             ax.plot(x, article.TABLE2[parameter][band].dist().pdf(x), "k--", lw=1.1, label="Table 2 (article)")
-        ax.text(0.98, 0.95, text, transform=ax.transAxes, ha="right", va="top", fontsize=7.5)
+        ax.text(0.98, 0.95, text, transform=ax.transAxes, ha="right", va="top", fontsize=7.5, color=color)
         ax.set_title(f"$f_b$ {stats.bands.labels[band]} Hz", fontsize=9)
         ax.set_yticks([])
         ax.grid(alpha=0.3, axis="x")
