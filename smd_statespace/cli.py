@@ -17,6 +17,10 @@ command      what it does
              (Eq. 3), the augmented-state model (Eq. 7-16) and a figure
 ``stats``    population statistics of many identified cycles: bands, Eq. 19
              skew-normal fits in the layout of Table 2, trends (Section 5)
+``crowd``    crowd load: N people drawn from Table 2, each one's GRF (SMD
+             model, rigid floor) and the total force, spectrum, figure
+``hsi``      human-structure interaction (Section 6): one person on the
+             Table 3 plate vs a rigid floor, identified, against Table 4
 ============ ================================================================
 """
 
@@ -27,7 +31,7 @@ import os
 import sys
 
 from . import __version__
-from .commands import compare, demo, diagnose, identify, simulate, stats
+from .commands import compare, crowd, demo, diagnose, hsi, identify, simulate, stats
 from .commands.common import PROG
 from .errors import SMDInputError
 
@@ -73,6 +77,8 @@ COMMANDS = [
     (compare.add_compare, compare.run_compare),
     (diagnose.add_diagnose, diagnose.run_diagnose),
     (stats.add_stats, stats.run_stats),
+    (crowd.add_crowd, crowd.run_crowd),
+    (hsi.add_hsi, hsi.run_hsi),
 ]
 """``(add, run)`` pairs, one per subcommand, in the order ``--help`` lists them."""
 

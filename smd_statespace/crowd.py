@@ -238,6 +238,10 @@ def draw_people(n, f_b, seed=None, table=None, bounds=None) -> pd.DataFrame:
         ``blf1, blf2, blf3`` (g), ``mass`` (kg), ``K_h`` (N/m), ``C_h`` (N s/m).
     """
     n = _check_count(n)
+    if article.band_of(f_b) is None:
+        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
+        raise OptionError(f"crowd: f_b = {f_b!r} Hz is outside the article's bands ({edges} Hz), "
+                          "the only ones Table 2 has fits for")
     root = _root(seed)
     fits = fit_table(table, f_b)
     rows = [sample_population(1, f_b, seed=person_seeds(root, i)[0], table=fits, bounds=bounds)
