@@ -1206,6 +1206,20 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
                            counts=counts, options=options)
 
 
+def _cdf_distance(first, second, points: int = 8001) -> float:
+    """Largest distance between two distribution functions (Kolmogorov-Smirnov distance, 0-1).
+
+    The functions are integrated from the densities by the trapezoid rule over +-10 standard
+    deviations of both (``skewnorm.cdf`` is two orders of magnitude slower); error below 1e-6.
+    """
+    low = min(first.mean() - 10 * first.std(), second.mean() - 10 * second.std())
+    high = max(first.mean() + 10 * first.std(), second.mean() + 10 * second.std())
+    grid = np.linspace(low, high, points)
+    difference = first.pdf(grid) - second.pdf(grid)
+    cumulative = np.concatenate([[0.0], np.cumsum(0.5 * (difference[1:] + difference[:-1]) * np.diff(grid))])
+    return float(np.max(np.abs(cumulative)))
+
+
 def compare_table2(stats: PopulationStats, published=None) -> pd.DataFrame:
     """The fitted skew-normal table beside the published Table 2, cell by cell.
 
@@ -1249,11 +1263,7 @@ def compare_table2(stats: PopulationStats, published=None) -> pd.DataFrame:
                 row.update({f"{k}_in_ci": None for k in ("m", "s", "a")})
             else:
                 row.update(m=fit.m, s=fit.s, a=fit.a, mean=fit.mean, sd=fit.sd)
-                dist = fit.dist()
-                low = min(dist.ppf(1e-4), pub_dist.ppf(1e-4))
-                high = max(dist.ppf(1 - 1e-4), pub_dist.ppf(1 - 1e-4))
-                grid = np.linspace(low, high, 2001)
-                row["ks"] = float(np.max(np.abs(dist.cdf(grid) - pub_dist.cdf(grid))))
+                row["ks"] = _cdf_distance(fit.dist(), pub_dist)
                 for k in ("m", "s", "a"):
                     row[f"{k}_in_ci"] = (None if fit.ci is None else
                                          bool(fit.ci[k][0] <= pub[k] <= fit.ci[k][1]))

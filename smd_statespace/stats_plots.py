@@ -164,8 +164,9 @@ def plot_histograms(stats, parameter: str, path=None, published: bool = True) ->
     show_published = published and stats.bands.is_article and parameter in article.TABLE2
     if show_published:
         for fit in article.TABLE2[parameter]:
-            x_lo = min(x_lo, fit.dist().ppf(0.005))
-            x_hi = max(x_hi, fit.dist().ppf(0.995))
+            dist = fit.dist()
+            x_lo = min(x_lo, dist.mean() - 2.5 * dist.std())
+            x_hi = max(x_hi, dist.mean() + 3.5 * dist.std())
     pad = 0.03 * (x_hi - x_lo)
     x = np.linspace(x_lo - pad, x_hi + pad, 400)
     for band, ax in enumerate(axes[:n_bands]):
@@ -173,12 +174,12 @@ def plot_histograms(stats, parameter: str, path=None, published: bool = True) ->
         here = used.loc[used["band"] == band, column].to_numpy()
         if here.size:
             inside = here[(here >= x[0]) & (here <= x[-1])]
-            bins = int(np.clip(np.sqrt(here.size), 5, 40))
-            ax.hist(inside, bins=bins, density=True, color="0.78", edgecolor="0.6", lw=0.5, label="cycles")
-            # density over the whole sample: rescale for the few values outside the drawn range
-            if inside.size and inside.size < here.size:
-                for patch in ax.patches:
-                    patch.set_height(patch.get_height() * inside.size / here.size)
+            if inside.size:
+                # density over the whole sample (values beyond the drawn range count in the total)
+                counts, edges = np.histogram(inside, bins=int(np.clip(np.sqrt(here.size), 5, 40)))
+                density = counts / (here.size * np.diff(edges))
+                ax.stairs(density, edges, fill=True, color="0.82", label="cycles")
+                ax.stairs(density, edges, color="0.55", lw=0.6)
         if cell.fit is not None:
             ax.plot(x, cell.fit.dist().pdf(x), color="tab:red", lw=1.6, label="fit (Eq. 19)")
             text, color = f"n = {cell.n}\nm, s, a = {cell.cell(3)}", "k"
