@@ -16,11 +16,15 @@ Two predictions of the dynamic GRF ``M_h u''`` (N, Eq. 3) are made:
 
 free simulation (:attr:`ModelCheck.simulated`)
     Each cycle is integrated with the model alone (:meth:`SMDModel.transition`,
-    no process noise, no measurement update) from the filtered state at its
-    first sample, with the cycle's identified parameters held at their
-    final-pass values. What the model cannot produce stays in the
-    residual ``measured - simulated``: this is the signal the missing-effect
-    diagnostics look at.
+    no process noise, no measurement update) with the cycle's identified
+    parameters held at their final-pass values, from the dynamic starting
+    state (``u``, ``u_dot``, an estimated floor's ``z``, ``z_dot``) that fits
+    the cycle best in the least-squares sense, as MATLAB's ``compare`` does
+    by default (``initial_state="filtered"`` starts from the filter's
+    estimate at the first sample instead: for a slot no channel measures,
+    such as an estimated floor's motion, that is only its prior). What the
+    model cannot produce stays in the residual ``measured - simulated``:
+    this is the signal the missing-effect diagnostics look at.
 one-step-ahead prediction (:attr:`ModelCheck.one_step`)
     The filter's prediction of each sample from all earlier ones
     (measurement minus innovation). The filter corrects the state at every
@@ -85,7 +89,13 @@ from .errors import OptionError
 from .io import G, Record
 from .model import TWO_PI
 
-__all__ = ["ModelCheck", "check_model", "fit_percent"]
+__all__ = ["ModelCheck", "check_model", "fit_percent", "INITIAL_STATES"]
+
+INITIAL_STATES = ("estimate", "filtered")
+"""Where each cycle's free simulation starts (``initial_state`` of :func:`check_model`):
+``"estimate"`` fits the dynamic slots' starting values to the cycle by least
+squares, as MATLAB's ``compare`` does by default; ``"filtered"`` takes the
+filter's estimate at the cycle's first sample."""
 
 HARMONIC_TOLERANCE = 0.05
 """A spectral peak within this fraction of ``f_b`` (or 1.5 frequency bins,
@@ -124,7 +134,8 @@ def _rms(x) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
 
-def check_model(preprocessed=None, model=None, estimator="ekf", runner=None, **runner_options) -> "ModelCheck":
+def check_model(preprocessed=None, model=None, estimator="ekf", runner=None, initial_state="estimate",
+                **runner_options) -> "ModelCheck":
     """Identify a record cycle by cycle (or take a finished run) and compare the model with it.
 
     Parameters
@@ -180,7 +191,7 @@ def check_model(preprocessed=None, model=None, estimator="ekf", runner=None, **r
             raise OptionError("check_model: with a finished runner, pass the Preprocessed it ran on (or nothing)")
         if preprocessed is not None and preprocessed is not runner.preprocessed_:
             raise OptionError("check_model: preprocessed is not the record the runner identified")
-    return ModelCheck(runner.table_, runner.model, runner.preprocessed_, runner.results_)
+    return ModelCheck(runner.table_, runner.model, runner.preprocessed_, runner.results_, initial_state)
 
 
 class ModelCheck:
@@ -246,9 +257,13 @@ class ModelCheck:
         The checked cycles, in record order.
     """
 
-    def __init__(self, table: pd.DataFrame, model, preprocessed, results: Mapping[int, object]):
+    def __init__(self, table: pd.DataFrame, model, preprocessed, results: Mapping[int, object],
+                 initial_state: str = "estimate"):
         from .estimators import cycle_data
 
+        if initial_state not in INITIAL_STATES:
+            raise OptionError(f"initial_state {initial_state!r} is unknown; choose {' or '.join(INITIAL_STATES)}")
+        self.initial_state = initial_state
         self.table = table
         self.model = model
         self.preprocessed = preprocessed
@@ -271,9 +286,11 @@ class ModelCheck:
             data = cycle_data(model, preprocessed, cycle)
             std = np.asarray(result.std)
             free = dynamic | np.any(std > 0, axis=0) if std.ndim == 2 and std.size else np.ones(model.n_state, bool)
-            states = self._free_simulation(result, data, dynamic)
-            predicted = model.observe(states, data.t, data.inputs)[:, channel]
             keep = slice(1, None) if cycle.start == previous_stop else slice(None)
+            states = self._free_simulation(result, data, dynamic)
+            if initial_state == "estimate":
+                states = self._fit_initial_state(states, data, dynamic, keep, channel)
+            predicted = model.observe(states, data.t, data.inputs)[:, channel]
             previous_stop = cycle.stop
             samples = np.arange(cycle.start, cycle.stop + 1)
             kept = samples[keep]
@@ -331,9 +348,13 @@ class ModelCheck:
         sample, parameters are the final-pass values (``final_mean``);
         :meth:`SMDModel.transition` without process noise.
         """
-        model = self.model
         x = np.array(result.final_mean, dtype=float)
         x[dynamic] = np.asarray(result.mean)[0, dynamic]
+        return self._simulate_from(x, data)
+
+    def _simulate_from(self, x, data):
+        """Integrate the model without noise from state ``x`` over the cycle's samples, shape (m, n_state)."""
+        model = self.model
         states = np.empty((len(data.t), model.n_state))
         states[0] = x
         with np.errstate(over="ignore", invalid="ignore"):
@@ -342,21 +363,48 @@ class ModelCheck:
                 states[k] = x
         return states
 
+    def _fit_initial_state(self, states, data, dynamic, keep, channel, iterations=2):
+        """Free simulation from the dynamic starting state that best fits the cycle (least squares).
+
+        The parameters stay at their identified values; only the dynamic
+        slots' starting values (``u``, ``u_dot``, an estimated floor's ``z``,
+        ``z_dot``, ...) change, by Gauss-Newton steps on the measured
+        ``u''`` of the cycle's kept samples, with the sensitivities
+        ``H_k F_{k-1} ... F_0`` of the model's own Jacobians. One step is
+        exact when the model is linear in those slots (every built-in
+        effect but ``cubic_stiffness``).
+        """
+        model = self.model
+        measured = data.y[keep, channel]
+        for _ in range(iterations):
+            sensitivity = self._path_sensitivity(states, data, channel)[keep][:, dynamic]
+            predicted = model.observe(states, data.t, data.inputs)[keep, channel]
+            step, *_ = np.linalg.lstsq(sensitivity, measured - predicted, rcond=None)
+            if not np.all(np.isfinite(step)):
+                return states
+            start = states[0].copy()
+            start[dynamic] += step
+            states = self._simulate_from(start, data)
+        return states
+
+    def _path_sensitivity(self, states, data, channel):
+        """Derivative of the simulated ``u''`` at every sample with respect to the starting state, (m, n_state)."""
+        model = self.model
+        with np.errstate(over="ignore", invalid="ignore"):
+            jacobians = np.array([model.transition_jacobian(states[k - 1], data.t[k - 1],
+                                                            data.t[k] - data.t[k - 1], data.inputs)
+                                  for k in range(1, len(data.t))]).reshape(-1, model.n_state, model.n_state)
+            observation = model.observation_jacobian(states, data.t, data.inputs)[:, channel, :]
+        # d y_k / d x_0 = H_k F_{k-1} ... F_0 (Eq. 11-16 linearised along the free simulation).
+        return _chain_sensitivity(jacobians, observation)
+
     @cached_property
     def _absorbable_bases(self):
         """Per cycle, an orthonormal basis of the output changes a re-fit of the cycle could make."""
-        model = self.model
-        channel = model.channels.index("u_ddot")
+        channel = self.model.channels.index("u_ddot")
         bases = []
         for piece in self._linear:
-            data, states = piece["data"], piece["states"]
-            with np.errstate(over="ignore", invalid="ignore"):
-                jacobians = np.array([model.transition_jacobian(states[k - 1], data.t[k - 1],
-                                                                data.t[k] - data.t[k - 1], data.inputs)
-                                      for k in range(1, len(data.t))]).reshape(-1, model.n_state, model.n_state)
-                observation = model.observation_jacobian(states, data.t, data.inputs)[:, channel, :]
-            # d y_k / d x_0 = H_k F_{k-1} ... F_0 (Eq. 11-16 linearised along the free simulation).
-            sensitivity = _chain_sensitivity(jacobians, observation)[:, piece["free"]]
+            sensitivity = self._path_sensitivity(piece["states"], piece["data"], channel)[:, piece["free"]]
             bases.append(_orthonormal_columns(sensitivity[piece["keep"]]))
         return bases
 
@@ -568,7 +616,8 @@ class ModelCheck:
         """
         return self._welch(self.measured, nperseg)
 
-    def residual_spectrum(self, nperseg=None, false_alarm=PEAK_FALSE_ALARM, tolerance=None, min_frequency=None):
+    def residual_spectrum(self, nperseg=None, false_alarm=PEAK_FALSE_ALARM, tolerance=None, min_frequency=None,
+                          values=None):
         """Welch spectrum of the free-simulation residual and its peaks above the noise floor.
 
         A missing force harmonic leaves a line at ``k f_b``; a floor mode
@@ -597,6 +646,10 @@ class ModelCheck:
             frequency bins.
         min_frequency : float, optional
             Lowest frequency searched for peaks (Hz); default the high-pass cut-off.
+        values : array_like, shape (T,), optional
+            Another series on the checked samples to analyse the same way
+            (default :attr:`residual`), e.g. the residual without its
+            phase-locked part (:meth:`phase_locked`).
 
         Returns
         -------
@@ -612,8 +665,11 @@ class ModelCheck:
             ``noise_floor``, ``threshold`` (N^2/Hz), ``f_b``, ``tolerance``
             (Hz) and ``resolution`` (Hz).
         """
-        freq, psd = self._welch(self.residual, nperseg)
-        n = len(self.residual)
+        series = self.residual if values is None else np.asarray(values, dtype=float)
+        if series.shape != self.residual.shape:
+            raise OptionError(f"values has shape {series.shape}; the check has {self.residual.shape}")
+        freq, psd = self._welch(series, nperseg)
+        n = len(series)
         segment = int(min(max(int(round(SEGMENT_CYCLES * self.fs / self.f_b)) if nperseg is None else nperseg, 16), n))
         resolution = float(freq[1] - freq[0])
         low = float(getattr(self.preprocessed, "cutoff", 0.5)) if min_frequency is None else float(min_frequency)
@@ -648,6 +704,38 @@ class ModelCheck:
         return freq, psd, peaks
 
     # -- structure of the residual -----------------------------------------
+
+    def phase_locked(self, values=None, orders=None) -> np.ndarray:
+        """The part of a series that repeats with the bouncing cycle (least squares over the whole record).
+
+        The series is regressed on ``1, cos(2 pi k p), sin(2 pi k p)``,
+        ``p`` the cycle phase (:attr:`phase`), with coefficients common to
+        every cycle. What the person does every cycle (a missing force
+        harmonic, a nonlinearity of the periodic motion) is phase-locked;
+        what another source does to the floor is not, whatever its
+        frequency, even at a multiple of ``f_b``.
+
+        Parameters
+        ----------
+        values : array_like, shape (T,), optional
+            Series on the checked samples (default :attr:`residual`, N).
+        orders : int, optional
+            Highest order ``k`` (default: up to the Nyquist frequency at the
+            median bouncing frequency).
+
+        Returns
+        -------
+        ndarray, shape (T,)
+            The fitted phase-locked part, in the series' unit.
+        """
+        series = self.residual if values is None else np.asarray(values, dtype=float)
+        if series.shape != self.residual.shape:
+            raise OptionError(f"values has shape {series.shape}; the check has {self.residual.shape}")
+        top = int(0.5 * self.fs / self.f_b) if orders is None else int(orders)
+        angle = TWO_PI * self.phase[:, None] * np.arange(1, max(top, 0) + 1)
+        design = np.column_stack([np.ones_like(self.phase), np.cos(angle), np.sin(angle)])
+        coefficients, *_ = np.linalg.lstsq(design, series, rcond=None)
+        return design @ coefficients
 
     def phase_profile(self, bins=24) -> pd.DataFrame:
         """Residual against the bouncing-cycle phase: where in the cycle the model fails.

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import article
 from .errors import OptionError
 from .io import G
 from .model import F_H, TWO_PI, U, XI_H, Effect, Slot
@@ -178,6 +179,14 @@ class FloorMode(Effect):
     mass_ratio_range : (float, float), optional
         ``"modal"`` only: prior range of ``M_h / m_f`` (default 0.001-0.05;
         one 70 kg person on the article's plate, 8583 kg: 0.008).
+    damping, mass_ratio : float, optional
+        ``"modal"`` only: a *known* mode. With ``frequency`` and ``damping``
+        (and ``mass_ratio``, default 0.008: 70 kg on mode 1 of the article's
+        plate) given, ``f_f``, ``xi_f`` and ``M_h / m_f`` are constants, as
+        from a modal test of the floor (the article's Table 3), and only the
+        floor's motion ``z``, ``z_dot`` is estimated. Fewer values per cycle
+        than an estimated mode: a floor mode is one frequency for the whole
+        record.
     displacement, velocity : float, optional
         ``"modal"`` only: nominal magnitudes of ``z`` (m, default 1e-3) and
         ``z'`` (m/s, default 1e-2): the prior spread of the unobserved floor
@@ -193,7 +202,10 @@ class FloorMode(Effect):
     requires_columns : tuple of str
         Record columns those signals come from: ``("floor_acc",)`` when measured.
     slot_names : tuple of str
-        Names of the slots the ``"modal"`` source adds, in state order.
+        Names of the slots the ``"modal"`` source adds, in state order
+        (``z``, ``z_dot`` only for a known mode).
+    known : bool
+        Whether the modal floor's ``f_f``, ``xi_f`` and mass ratio are given constants.
 
     Examples
     --------
@@ -201,6 +213,8 @@ class FloorMode(Effect):
     FloorMode(source='measured')
     >>> make_effect("floor_mode:source=modal,frequency=3.48").slot_names
     ('z', 'z_dot', 'f_f', 'xi_f', 'mass_ratio')
+    >>> make_effect("floor_mode:source=modal,frequency=3.48,damping=0.0037").slot_names
+    ('z', 'z_dot')
     """
 
     name = "floor_mode"
@@ -213,13 +227,17 @@ class FloorMode(Effect):
         "displacement": 1e-3,
         "velocity": 1e-2,
     }
+    KNOWN_MASS_RATIO = 70.0 / article.TABLE3[0].modal_mass
+    """Default ``M_h / m_f`` of a known mode: a 70 kg person on mode 1 of the article's plate (0.008)."""
     slot_names = ("z", "z_dot", "f_f", "xi_f", "mass_ratio")
+    known = False
 
     def __init__(self, source="measured", *, frequency=None, frequency_spread=None, frequency_range=None,
-                 damping_range=None, mass_ratio_range=None, displacement=None, velocity=None, **unknown):
+                 damping_range=None, mass_ratio_range=None, displacement=None, velocity=None, damping=None,
+                 mass_ratio=None, **unknown):
         where = "floor_mode"
         if unknown:
-            valid = ["source", "frequency"] + list(self.MODAL_DEFAULTS)
+            valid = ["source", "frequency", "damping", "mass_ratio"] + list(self.MODAL_DEFAULTS)
             raise OptionError(
                 f"effect {where!r}: unknown option {', '.join(map(repr, unknown))}; valid: {', '.join(valid)}"
             )
@@ -231,7 +249,7 @@ class FloorMode(Effect):
         self.source = source
         modal = {"frequency": frequency, "frequency_spread": frequency_spread, "frequency_range": frequency_range,
                  "damping_range": damping_range, "mass_ratio_range": mass_ratio_range,
-                 "displacement": displacement, "velocity": velocity}
+                 "displacement": displacement, "velocity": velocity, "damping": damping, "mass_ratio": mass_ratio}
         given = [key for key, value in modal.items() if value is not None]
         if source == "measured":
             if given:
@@ -251,6 +269,8 @@ class FloorMode(Effect):
         if frequency is None and frequency_spread is not None:
             raise OptionError(f"{where}: frequency_spread needs a seed frequency")
         defaults = self.MODAL_DEFAULTS
+        if damping is not None or mass_ratio is not None:
+            self._set_known(frequency, damping, mass_ratio, given, where)
         if frequency is not None:
             frequency = _positive(frequency, "frequency (Hz)", where)
             spread = _positive(defaults["frequency_spread"] if frequency_spread is None else frequency_spread,
@@ -266,6 +286,31 @@ class FloorMode(Effect):
         self.displacement = _positive(defaults["displacement"] if displacement is None else displacement,
                                       "displacement (m)", where)
         self.velocity = _positive(defaults["velocity"] if velocity is None else velocity, "velocity (m/s)", where)
+
+    def _set_known(self, frequency, damping, mass_ratio, given, where):
+        """Make this a known mode (constants ``f_f``, ``xi_f``, ``M_h / m_f``); check the options agree."""
+        if frequency is None or damping is None:
+            raise OptionError(f"{where}: a known mode needs both frequency (Hz) and damping (ratio); "
+                              f"got {', '.join(given)}")
+        clash = [key for key in ("frequency_spread", "frequency_range", "damping_range", "mass_ratio_range")
+                 if key in given]
+        if clash:
+            raise OptionError(f"{where}: {clash[0]} is a prior range of an estimated mode; a known mode "
+                              "(frequency, damping, mass_ratio given) has none")
+        damping = _positive(damping, "damping (ratio)", where)
+        if damping >= 1.0:
+            raise OptionError(f"{where}: damping must be a ratio below 1, got {damping!r}")
+        self.known = True
+        self.slot_names = ("z", "z_dot")
+        self.known_values = (float(frequency), damping,
+                             _positive(self.KNOWN_MASS_RATIO if mass_ratio is None else mass_ratio,
+                                       "mass_ratio", where))
+
+    def _modal_values(self, model, x):
+        """Floor frequency ``f_f`` (Hz), damping ratio ``xi_f`` and mass ratio of state(s) ``x``."""
+        if self.known:
+            return self.known_values
+        return tuple(x[..., model.index(name)] for name in ("f_f", "xi_f", "mass_ratio"))
 
     @classmethod
     def for_record(cls, record, **options) -> "FloorMode":
@@ -291,9 +336,13 @@ class FloorMode(Effect):
         f_lo, f_hi = self.frequency_range
         d_lo, d_hi = self.damping_range
         m_lo, m_hi = self.mass_ratio_range
-        return (
+        motion = (
             Slot("z", "dynamic", "m", nominal=self.displacement, description="floor displacement at the person"),
             Slot("z_dot", "dynamic", "m/s", nominal=self.velocity, description="floor velocity at the person"),
+        )
+        if self.known:
+            return motion
+        return motion + (
             Slot("f_f", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
                  description="floor modal frequency", linear=False),
             Slot("xi_f", "parameter", "-", d_lo, d_hi, nominal=0.5 * (d_lo + d_hi),
@@ -330,10 +379,10 @@ class FloorMode(Effect):
         if not self.modal:
             return rates
         z, z_dot = x[..., model.index("z")], x[..., model.index("z_dot")]
-        omega_f = TWO_PI * x[..., model.index("f_f")]
-        xi_f = x[..., model.index("xi_f")]
+        f_f, xi_f, mu = self._modal_values(model, x)
+        omega_f = TWO_PI * f_f
         rates[..., 0] = z_dot
-        rates[..., 1] = -(omega_f**2) * z - 2.0 * xi_f * omega_f * z_dot - x[..., model.index("mass_ratio")] * acc
+        rates[..., 1] = -(omega_f**2) * z - 2.0 * xi_f * omega_f * z_dot - mu * acc
         return rates
 
     def slot_rates_jacobian(self, model, x, t, inputs, acc, acc_jacobian):
@@ -341,16 +390,19 @@ class FloorMode(Effect):
         jac = np.zeros(x.shape[:-1] + (width, x.shape[-1]))
         if not self.modal:
             return jac
-        i_z, i_v, i_f, i_xi, i_mu = (model.index(name) for name in self.slot_names)
+        i_z, i_v = model.index("z"), model.index("z_dot")
         z, z_dot = x[..., i_z], x[..., i_v]
-        omega_f, xi_f, mu = TWO_PI * x[..., i_f], x[..., i_xi], x[..., i_mu]
+        f_f, xi_f, mu = self._modal_values(model, x)
+        omega_f = TWO_PI * f_f
         jac[..., 0, i_v] = 1.0
-        row = -mu[..., None] * acc_jacobian
+        row = -np.asarray(mu)[..., None] * acc_jacobian
         row[..., i_z] += -(omega_f**2)
         row[..., i_v] += -2.0 * xi_f * omega_f
-        row[..., i_f] += -TWO_PI * (2.0 * omega_f * z + 2.0 * xi_f * z_dot)
-        row[..., i_xi] += -2.0 * omega_f * z_dot
-        row[..., i_mu] += -acc
+        if not self.known:
+            i_f, i_xi, i_mu = (model.index(name) for name in ("f_f", "xi_f", "mass_ratio"))
+            row[..., i_f] += -TWO_PI * (2.0 * omega_f * z + 2.0 * xi_f * z_dot)
+            row[..., i_xi] += -2.0 * omega_f * z_dot
+            row[..., i_mu] += -acc
         jac[..., 1, :] = row
         return jac
 

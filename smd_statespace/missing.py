@@ -65,6 +65,10 @@ from .errors import OptionError
 from .model import TWO_PI, SMDModel
 
 
+FLOOR_DAMPING = 0.01
+"""Damping ratio of the modal floor candidate seeded from the residual spectrum (floors: about 0.3-3 %)."""
+
+
 @dataclass
 class Candidate:
     """One refit: the effect, its model check and the evidence for it."""
@@ -167,25 +171,41 @@ def default_candidates(model: SMDModel, base: ModelCheck) -> list:
 
 
 def _floor_candidate(base: ModelCheck):
+    """The floor effect to try: the measured floor, or a known mode at the residual's strongest unlocked line.
+
+    A floor excited by anything but this person moves at its own frequency
+    with no fixed phase to the bouncing cycle. The residual's phase-locked
+    part (:meth:`ModelCheck.phase_locked`: missing harmonics, a
+    nonlinearity) is removed first, so that such a line is found even next
+    to a multiple of ``f_b``; a peak is taken only where at least half of
+    the residual's power is unlocked. Weak lines at ``(k + 1/2) f_b`` come
+    from cycle-to-cycle variation of the force: one is taken only when it is
+    stronger than every harmonic line of the residual.
+    """
     if base.preprocessed.floor_acc is not None:
         return make_effect("floor_mode:source=measured")
-    _, _, peaks = base.residual_spectrum()
-    # Weak lines at (k + 1/2) f_b come from cycle-to-cycle variation of the force, not from a floor;
-    # a line stronger than every harmonic one is taken whatever its frequency.
+    freq, psd, whole = base.residual_spectrum()
+    unlocked = base.residual - base.phase_locked()
+    _, psd_unlocked, peaks = base.residual_spectrum(values=unlocked)
+    bins = np.clip(np.searchsorted(freq, peaks["frequency"]), 0, freq.size - 1)
+    mostly_unlocked = psd_unlocked[bins] >= 0.5 * psd[bins]
     half = (peaks["f_over_fb"] % 1.0 - 0.5).abs() < 0.1
-    harmonic_power = peaks.loc[peaks["label"] != "non-harmonic", "power"].max()
+    harmonic_power = whole.loc[whole["label"] != "non-harmonic", "power"].max()
     dominant = peaks["power"] > (0.0 if pd.isna(harmonic_power) else harmonic_power)
-    other = peaks[(peaks["label"] == "non-harmonic") & (~half | dominant)]
+    other = peaks[mostly_unlocked & (~half | dominant)]
     if other.empty:
         return None
-    frequency = float(other.sort_values("power", ascending=False)["frequency"].iloc[0])
-    return make_effect(f"floor_mode:source=modal,frequency={frequency:.3f}")
+    frequency = float(other["frequency"].iloc[0])  # peaks are sorted strongest first
+    # A floor mode is one frequency for the whole record: a known mode at the line, not a per-cycle estimate.
+    effect = make_effect(f"floor_mode:source=modal,frequency={frequency:.3f},damping={FLOOR_DAMPING}")
+    effect.record_parameters = 1
+    return effect
 
 
 def _judge(base: ModelCheck, check: ModelCheck, effect, n_candidates: int, alpha: float, min_improvement: float):
     cycles = int((check.table["status"] == "ok").sum())
     n = base.residual.size
-    extra = check.n_absorbable - base.n_absorbable
+    extra = check.n_absorbable - base.n_absorbable + effect.record_parameters
     rss, rss_with = (float(np.sum(c.residual_unabsorbed**2)) for c in (base, check))
     dof = n - check.n_absorbable
     # A measured input (floor_acc) adds a term but no parameter: tested as if it had one coefficient.

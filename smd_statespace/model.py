@@ -221,10 +221,15 @@ class Effect:
         Registry name (``--effect NAME``).
     requires : tuple of str
         Exogenous signals the effect needs from :class:`CycleInputs`.
+    record_parameters : int
+        Values read off the whole record to configure the effect before any
+        cycle is identified (e.g. a floor frequency taken from the residual
+        spectrum); the missing-effect test counts them as fitted parameters.
     """
 
     name = "effect"
     requires: tuple[str, ...] = ()
+    record_parameters: int = 0
 
     def slots(self, model: "SMDModel") -> tuple[Slot, ...]:
         """State slots the effect adds (default: none).

@@ -271,6 +271,28 @@ def test_check_model_reuses_a_finished_runner(clean):
         check_model(runner=SimpleNamespace(table_=clean.table, results_={}, model=clean.model, preprocessed_=pre))
 
 
+def test_free_simulation_starts_from_the_least_squares_initial_state(clean):
+    """Default: each cycle's u, u_dot start where they fit the cycle best (as MATLAB's compare)."""
+    pre = clean.preprocessed
+    finished = SimpleNamespace(table_=clean.table, results_=clean.results, model=clean.model, preprocessed_=pre)
+    filtered = check_model(runner=finished, initial_state="filtered")
+    assert clean.initial_state == "estimate"
+    np.testing.assert_array_equal(filtered.measured, clean.measured)
+    # The base model is linear in u, u_dot: the fitted start is the exact least-squares one, so no cycle
+    # fits worse than from the filter's first-sample estimate, and the residual is orthogonal to the
+    # output changes the starting state can make.
+    for cycle in np.unique(clean.cycle_index):
+        rows = clean.cycle_index == cycle
+        assert np.sum(clean.residual[rows] ** 2) <= np.sum(filtered.residual[rows] ** 2) * (1 + 1e-9)
+    piece = clean._linear[0]
+    channel = clean.model.channels.index("u_ddot")
+    sensitivity = clean._path_sensitivity(piece["states"], piece["data"], channel)[piece["keep"]][:, :2]
+    block = clean.residual[piece["rows"]] / pre.mass
+    assert np.max(np.abs(sensitivity.T @ block)) < 1e-8 * np.linalg.norm(sensitivity) * np.linalg.norm(block)
+    with pytest.raises(OptionError, match="initial_state 'zero' is unknown"):
+        check_model(runner=finished, initial_state="zero")
+
+
 def test_summary_and_figures(harmonics, tmp_path):
     text = harmonics.summary()
     for piece in ("fit, free simulation", "% of body weight", "Ljung-Box", "Jarque-Bera", "harmonic 5",

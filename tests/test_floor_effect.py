@@ -35,6 +35,7 @@ MODELS = {
     "modal-rk4": lambda: SMDModel(effects=[FloorMode("modal", frequency=3.48)]),
     "modal-euler": lambda: SMDModel(effects=[FloorMode("modal")], discretisation="euler"),
     "modal-acc-substeps": lambda: SMDModel(effects=[FloorMode("modal")], observation="acc", substeps=2),
+    "modal-known": lambda: SMDModel(effects=[FloorMode("modal", frequency=3.48, damping=0.004, mass_ratio=0.04)]),
 }
 
 
@@ -133,6 +134,32 @@ def test_option_errors_name_the_problem():
         FloorMode("modal", frequency=3.5, frequency_range=(3.0, 4.0))
     with pytest.raises(OptionError, match="given twice"):
         SMDModel(effects=[FloorMode(), FloorMode("modal")])
+
+
+def test_known_mode_moves_as_the_estimated_mode_with_those_values():
+    """A known mode (constants f_f, xi_f, mass ratio) is the estimated mode with its parameter slots frozen."""
+    known = SMDModel(effects=[FloorMode("modal", frequency=6.1, damping=0.005, mass_ratio=0.03)])
+    estimated = SMDModel(effects=[FloorMode("modal")])
+    assert known.state_names[-2:] == ("z", "z_dot") and known.n_state == estimated.n_state - 3
+    x_known = modal_states(known, np.random.default_rng(3), 20)
+    x_est = np.concatenate([x_known, np.tile([6.1, 0.005, 0.03], (20, 1))], axis=1)
+    inputs = CycleInputs(f_b=1.75)
+    for _ in range(30):
+        x_known = known.transition(x_known, 0.4, 0.01, inputs)
+        x_est = estimated.transition(x_est, 0.4, 0.01, inputs)
+    np.testing.assert_allclose(x_known, x_est[:, :known.n_state], rtol=1e-12, atol=1e-15)
+    assert np.ptp(x_known[:, known.index("z")]) > 0  # the floor really moved
+
+
+def test_known_mode_options_are_checked():
+    with pytest.raises(OptionError, match="needs both frequency"):
+        make_effect("floor_mode:source=modal,damping=0.01")
+    with pytest.raises(OptionError, match="damping_range is a prior range"):
+        make_effect("floor_mode:source=modal,frequency=3,damping=0.01,damping_range=0.01/0.02")
+    with pytest.raises(OptionError, match="damping must be a ratio below 1"):
+        make_effect("floor_mode:source=modal,frequency=3,damping=1.5")
+    with pytest.raises(OptionError, match="'damping' applies to source='modal' only"):
+        make_effect("floor_mode:damping=0.01")
 
 
 def _floor_record(seed, **options):

@@ -6,6 +6,7 @@ import json
 
 import pandas as pd
 
+from ..diagnostics import INITIAL_STATES
 from ..estimators import ESTIMATORS
 from .common import (add_model_arguments, add_record_arguments, add_run_arguments, build_model, estimator_options,
                      out_dir, prepare_record)
@@ -30,6 +31,9 @@ def add_diagnose(subparsers):
     parser.add_argument("--json", metavar="FILE", help="write the report as JSON")
     parser.add_argument("--alpha", type=float, default=0.01, metavar="P",
                         help="significance level of the candidates' F-tests (default 0.01, Bonferroni-corrected)")
+    parser.add_argument("--initial-state", choices=INITIAL_STATES, default=INITIAL_STATES[0],
+                        help="where each cycle's free simulation starts: 'estimate' (least-squares fit to the "
+                             "cycle, as MATLAB's compare) or 'filtered' (the filter at the first sample)")
     return parser
 
 
@@ -61,7 +65,7 @@ def run_diagnose(args) -> int:
     model = build_model(args)
     record, preprocessed = prepare_record(args)
     options = dict(max_passes=args.max_passes, seed=args.seed, progress=not args.quiet,
-                   **estimator_options(args.estimator, args))
+                   initial_state=args.initial_state, **estimator_options(args.estimator, args))
     result = diagnose(preprocessed, model, estimator=args.estimator, alpha=args.alpha, **options)
     base = result.base
     print(f"{record.source}: {args.estimator} on {model}")
