@@ -76,8 +76,8 @@ def plot_trends(stats, path=None) -> Figure:
                 ax.axvline(trend.vertex, color="tab:blue", ls="--", lw=1.0, zorder=2)
                 ax.axvspan(max(trend.vertex_ci_delta[0], low), min(trend.vertex_ci_delta[1], high), color="tab:blue",
                            alpha=0.15, lw=0, zorder=1, label="vertex f* and its delta-method interval")
-                ax.text(0.98, 0.95, f"f* = {trend.vertex:.2f} Hz", transform=ax.transAxes, ha="right", va="top",
-                        fontsize=8, color="tab:blue")
+                ax.text(0.98, 0.95, f"{trend.vertex_kind} at f* = {trend.vertex:.2f} Hz", transform=ax.transAxes,
+                        ha="right", va="top", fontsize=8, color="tab:blue")
             elif trend.vertex is not None:
                 ax.text(0.98, 0.95, f"{trend.vertex_kind} at {trend.vertex:.2f} Hz\n(outside the bands)",
                         transform=ax.transAxes, ha="right", va="top", fontsize=7, color="tab:blue")
