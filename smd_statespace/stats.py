@@ -164,7 +164,8 @@ class Bands:
         try:
             array = np.asarray(intervals, dtype=float)
         except (TypeError, ValueError):
-            raise OptionError(f"{option}: bands must be (low, high) pairs of numbers in Hz, got {intervals!r}") from None
+            raise OptionError(
+                f"{option}: bands must be (low, high) pairs of numbers in Hz, got {intervals!r}") from None
         if array.ndim != 2 or array.shape[1] != 2 or array.shape[0] < 1:
             raise OptionError(f"{option}: bands must be one or more (low, high) pairs in Hz, got {intervals!r}")
         if not np.all(np.isfinite(array)) or np.any(array <= 0):
@@ -838,8 +839,8 @@ class TrendResult:
                          f"  p = {self.pvalues[k]:.3g}")
         if self.vertex is not None:
             where = ("inside" if self.f_b_range[0] <= self.vertex <= self.f_b_range[1] else "outside")
-            line = (f"  vertex ({self.vertex_kind}) f* = {self.vertex:.3f} Hz, delta method [{self.vertex_ci_delta[0]:.3f},"
-                    f" {self.vertex_ci_delta[1]:.3f}]")
+            low, high = self.vertex_ci_delta
+            line = f"  vertex ({self.vertex_kind}) f* = {self.vertex:.3f} Hz, delta method [{low:.3f}, {high:.3f}]"
             if self.vertex_ci_bootstrap is not None:
                 line += f", bootstrap [{self.vertex_ci_bootstrap[0]:.3f}, {self.vertex_ci_bootstrap[1]:.3f}]"
             lines.append(line + f" ({where} the data)")
@@ -1042,7 +1043,8 @@ class PopulationStats:
                 text = (f"{parameter}: {int(row['used'])} cycles used, whether they determined it is unknown "
                         f"(no {', '.join(missing_flags)} column)")
             elif self.options["include_undetermined"]:
-                text = f"{parameter}: {int(row['used'])} cycles used, {int(row['undetermined'])} of them undetermined (included)"
+                text = (f"{parameter}: {int(row['used'])} cycles used, {int(row['undetermined'])} of them "
+                        "undetermined (included)")
             else:
                 text = f"{parameter}: {int(row['used'])} cycles used, {int(row['excluded'])} undetermined left out"
             if row["missing_value"]:
@@ -1150,7 +1152,11 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
     if not (np.isfinite(a_max) and a_max > 0):
         raise OptionError(f"a_max must be a positive number, got {a_max!r}")
     degrees = dict(TREND_DEGREES)
-    degrees.update(trend_degrees or {})
+    for name, degree in dict(trend_degrees or {}).items():
+        if name not in PARAMETERS or degree not in (1, 2):
+            raise OptionError(f"trend_degrees: {name!r}: {degree!r}; give parameters of {', '.join(PARAMETERS)} "
+                              "with degree 1 or 2")
+        degrees[name] = degree
     table = read_results(sources, parameters=parameters, require_flags=not include_undetermined)
     sources_read = list(dict.fromkeys(table["source"]))
     by_status = {str(k): int(v) for k, v in table["status"].value_counts().items()}

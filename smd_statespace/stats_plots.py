@@ -12,6 +12,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from . import article
 from .plots import PARAMETER_LABELS
@@ -94,7 +95,8 @@ def plot_trends(stats, path=None) -> Figure:
         if values.size:
             q_lo, q_hi = np.percentile(values, [0.5, 99.5])
             span = max(q_hi - q_lo, 1e-12)
-            ax.set_ylim(min(q_lo, np.nanmin(means - sds)) - 0.05 * span, max(q_hi, np.nanmax(means + sds)) + 0.05 * span)
+            ax.set_ylim(min(q_lo, np.nanmin(means - sds)) - 0.05 * span,
+                        max(q_hi, np.nanmax(means + sds)) + 0.05 * span)
         ax.set_title(_label(parameter), fontsize=10)
         ax.set_xlim(low - 0.05, high + 0.05)
         ax.grid(alpha=0.3)
@@ -107,7 +109,7 @@ def plot_trends(stats, path=None) -> Figure:
             used_n = [stats.cells[parameter, b].n for b in range(len(stats.bands))]
             count_ax.bar(centres + k * width, used_n, width, color=color, label=f"used for {_label(parameter)}")
     count_ax.set_title("cycles per band", fontsize=10)
-    count_ax.set_ylim(0, 1.45 * max(int(in_band.max()), 1))
+    count_ax.set_ylim(0, 1.75 * max(int(in_band.max()), 1))
     count_ax.legend(fontsize=7, loc="upper left", frameon=False, ncol=1)
     count_ax.grid(alpha=0.3, axis="y")
     count_ax.set_xlim(low - 0.05, high + 0.05)
@@ -190,6 +192,8 @@ def plot_histograms(stats, parameter: str, path=None, published: bool = True) ->
         ax.text(0.98, 0.95, text, transform=ax.transAxes, ha="right", va="top", fontsize=7.5, color=color)
         ax.set_title(f"$f_b$ {stats.bands.labels[band]} Hz", fontsize=9)
         ax.set_yticks([])
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=5, prune="both"))
+        ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
         ax.grid(alpha=0.3, axis="x")
     for ax in axes[n_bands:]:
         ax.set_visible(False)
