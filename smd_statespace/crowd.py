@@ -342,7 +342,14 @@ class Crowd:
         return np.fft.rfftfreq(dynamic.size, 1.0 / fs), amplitude
 
     def harmonics(self, count=N_HARMONICS) -> pd.DataFrame:
-        """Amplitude of the total force near ``k f_b`` (largest bin within ±10 % of ``f_b``), N and per total weight."""
+        """Amplitude of the total force near ``k f_b`` (largest bin within ±10 % of ``f_b``).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``harmonic`` (k); ``frequency`` (Hz), ``amplitude_N`` (N) and
+            ``amplitude_per_weight`` (over the crowd's total weight).
+        """
         frequency, amplitude = self.spectrum()
         f_b = self.settings["f_b"]
         rows = []
@@ -364,7 +371,8 @@ class Crowd:
             f"f_h {people['f_h'].median():.2f} Hz (median), xi_h {people['xi_h'].median():.2f}, "
             f"BLF1-3 {people['blf1'].median():.3f} / {people['blf2'].median():.3f} / "
             f"{people['blf3'].median():.3f} g (medians)",
-            f"total: weight {self.weight / 1000:.2f} kN, dynamic force RMS {np.sqrt(np.mean(dynamic**2)) / 1000:.2f} kN, "
+            f"total: weight {self.weight / 1000:.2f} kN, "
+            f"dynamic force RMS {np.sqrt(np.mean(dynamic**2)) / 1000:.2f} kN, "
             f"range {dynamic.min() / 1000:+.2f} to {dynamic.max() / 1000:+.2f} kN",
         ]
         parts = [f"{k} f_b: {row.amplitude_N / 1000:.2f} kN ({row.amplitude_per_weight:.3f} W)"
@@ -388,9 +396,9 @@ class Crowd:
         """
         csv_path = Path(csv_path)
         people_path = csv_path.with_name(f"{csv_path.stem}_people.csv") if people_path is None else Path(people_path)
-        forces = self.forces.copy()
-        forces["time"] = forces["time"].round(6)
-        forces.to_csv(csv_path, index=False, float_format="%.3f")
+        forces = self.forces.round(3)  # 1 mN
+        forces["time"] = self.forces["time"].round(6)
+        forces.to_csv(csv_path, index=False)
         self.people.to_csv(people_path, index=False, float_format="%.6g")
         return csv_path, people_path
 
@@ -418,7 +426,8 @@ def _check_settings(duration, fs, fb_variation, coef_variation, phase_spread, f_
     phase_spread = number(phase_spread, "phase_spread", 0.0, 1.0)
     f_b = number(f_b, "f_b (Hz)", positive=True)
     if duration < 1.0 / f_b:
-        raise OptionError(f"crowd: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)")
+        raise OptionError(f"crowd: duration {duration:g} s is shorter than one bouncing cycle "
+                          f"(1/f_b = {1 / f_b:.3g} s)")
     highest = N_HARMONICS * f_b
     if fs < 4.0 * highest:
         raise OptionError(f"crowd: fs {fs:g} Hz is too low; it must be at least 4 x the highest harmonic "

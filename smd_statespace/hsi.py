@@ -61,7 +61,7 @@ state of the first cycle's force, as in
 from __future__ import annotations
 
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -118,12 +118,15 @@ HSI_SETTINGS = {
     "coef_variation": 0.10,
     "estimator": "ekf",
     "max_passes": 8,
+    "repeats": 10,
+    "mass_scales": (1.0, 0.5, 0.25),
 }
 """Defaults of :func:`hsi_study`: record length after the warm-up (s), warm-up
 dropped so that the lightly damped plate is past its start (s), sampling (Hz,
 the insoles' 100 Hz), GRF noise (fraction of body weight; floor acceleration
 noise the same fraction of its RMS), cycle-to-cycle variations (as
-:func:`~smd_statespace.simulate.simulate_bouncing`), estimator and passes."""
+:func:`~smd_statespace.simulate.simulate_bouncing`), estimator and passes, records
+of the estimator-free fit and modal-mass factors of the sensitivity table."""
 
 
 # ---------------------------------------------------------------------------
@@ -390,6 +393,12 @@ def batch_response(a_matrices, b_vectors, cycles_list, time, initial_states=None
     if np.any(time[0] < t_start[:, 0]) or np.any(time[-1] >= t_end):
         raise OptionError("batch_response: the cycles must cover every output time")
     lam, vectors = np.linalg.eig(a_matrices)  # (P, n), (P, n, n)
+    condition = np.linalg.cond(vectors)
+    if not np.all(condition < 1e8):
+        raise OptionError(
+            "batch_response: a system matrix is (nearly) defective, e.g. exactly critical damping "
+            f"(eigenvector condition number {np.max(condition):.3g}); change the damping ratio slightly"
+        )
     inverse = np.linalg.inv(vectors)
     w_in = np.einsum("pij,pj->pi", inverse, b_vectors.astype(complex))  # input in modal coordinates
     orders = np.arange(1, a.shape[2] + 1)
@@ -515,7 +524,8 @@ def simulate_on_floor(synthetic, floor: FloorModel, seed=None, floor_noise=None)
     """
     truth = synthetic.truth
     if truth.get("effects"):
-        raise OptionError(f"simulate_on_floor: needs a rigid-floor record without effects, got {sorted(truth['effects'])}")
+        raise OptionError("simulate_on_floor: needs a rigid-floor record without effects, "
+                          f"got {sorted(truth['effects'])}")
     mass = float(truth["mass"])
     time = synthetic.record.time
     grf_noise = synthetic.record.force - mass * (G + synthetic.states["u_ddot"].to_numpy())
@@ -762,7 +772,7 @@ def _median_parameters(table):
 
 
 def _settings(overrides):
-    settings = dict(HSI_SETTINGS, repeats=10, mass_scales=(1.0, 0.5, 0.25))
+    settings = dict(HSI_SETTINGS)
     for key, value in overrides.items():
         if value is not None:
             settings[key] = value

@@ -7,7 +7,7 @@ import pytest
 from smd_statespace import OptionError, article
 from smd_statespace.cli import main
 from smd_statespace.hsi import (FloorModel, HSIStudy, coupled_frf, coupled_response, hsi_study, plot_floor,
-                                plot_parameters, pooled_least_squares, simulate_on_floor, system_matrices)
+                                plot_parameters, pooled_least_squares, simulate_on_floor)
 from smd_statespace.io import G
 from smd_statespace.simulate import integrate_response, simulate_bouncing
 
