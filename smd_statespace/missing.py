@@ -30,6 +30,14 @@ channels they understate a real improvement (a cubic spring that lowered the
 residual by 37 % gave a filter likelihood ratio of p = 0.04) and are noisy
 between fits.
 
+Values an effect takes from the whole record before identification (the
+floor candidate's frequency, read off the residual spectrum) count as fitted
+parameters too (:attr:`Effect.record_parameters`). Without a floor
+accelerometer the floor candidate is a mode of known frequency whose motion
+``z``, ``z_dot`` each cycle estimates: two values per cycle, where two more
+force harmonics take four, so of two candidates that explain the same
+residual the floor ranks first.
+
 A candidate is reported missing only if its F-test is significant after a
 Bonferroni correction over the candidates, its score is positive *and* the
 residual RMS falls by at least ``min_improvement``: a false alarm on a clean
@@ -153,8 +161,9 @@ def default_candidates(model: SMDModel, base: ModelCheck) -> list:
     """Every registered effect not yet in ``model``, configured for this record.
 
     ``floor_mode`` uses the measured floor acceleration when the record has
-    one; otherwise it is a modal oscillator seeded at the strongest
-    non-harmonic peak of the residual spectrum (if there is none, it is left out).
+    one; otherwise it is a known mode at the strongest line of the residual
+    that is not locked to the bouncing cycle (see :func:`_floor_candidate`;
+    if there is none, it is left out).
     """
     present = {effect.name for effect in model.effects}
     candidates = []
