@@ -550,7 +550,7 @@ def plot_crowd(crowd: Crowd, path=None, n_people=3, window=4.0) -> Figure:
         person = crowd.people.iloc[i]
         column = crowd.forces.columns[1 + i]
         ax_people.plot(time[shown], crowd.forces[column].to_numpy()[shown] / person["weight"], lw=1.0,
-                       label=f"person {i}: {person['mass']:.0f} kg, f_h {person['f_h']:.2f} Hz, "
+                       label=f"person {i}: {person['mass']:.0f} kg, $f_h$ {person['f_h']:.2f} Hz, "
                              f"$\\xi_h$ {person['xi_h']:.2f}")
     ax_people.set_ylabel("GRF / body weight")
     ax_people.set_xlabel("time (s)")
