@@ -72,6 +72,10 @@ class Harmonics(Effect):
         jac[..., model.effect_slice(self)] = G * model.fourier_basis(t, inputs, harmonics=self.orders(model))
         return jac
 
+    @property
+    def spec(self) -> str:
+        return f"{self.name}:count={self.count}"
+
     def __repr__(self):
         return f"Harmonics(count={self.count})"
 
@@ -117,6 +121,10 @@ class CubicStiffness(Effect):
         jac[..., F_H] = -2.0 * TWO_PI * omega * beta * u**3
         jac[..., i_beta] = -(omega**2) * u**3
         return jac
+
+    @property
+    def spec(self) -> str:
+        return f"{self.name}:beta_range={_spec_value(self.beta_range)}"
 
     def __repr__(self):
         return f"CubicStiffness(beta_range={self.beta_range})"
@@ -406,9 +414,29 @@ class FloorMode(Effect):
         jac[..., 1, :] = row
         return jac
 
+    @property
+    def constants(self) -> dict:
+        if not self.known:
+            return {}
+        return dict(zip(("f_f", "xi_f", "mass_ratio"), self.known_values))
+
+    @property
+    def spec(self) -> str:
+        if not self.modal:
+            return self.name
+        options = "".join(f",{key}={_spec_value(value)}" for key, value in self.given.items())
+        return f"{self.name}:source=modal{options}"
+
     def __repr__(self):
         options = "".join(f", {key}={value!r}" for key, value in self.given.items())
         return f"FloorMode(source={self.source!r}{options})"
+
+
+def _spec_value(value) -> str:
+    """An option value as ``make_effect`` reads it (pairs as ``low/high``)."""
+    if isinstance(value, (tuple, list)):
+        return "/".join(_spec_value(v) for v in value)
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _positive(value, label, where):

@@ -140,7 +140,7 @@ class Diagnosis:
             "effects_in_model": [effect.name for effect in self.base.model.effects],
             "adequate": bool(self.adequate),
             "missing_effects": [
-                {"effect": c.name, "score": float(c.score), "fit_percent_with": float(c.check.fit_percent),
+                {"effect": c.name, "spec": c.effect.spec, "score": float(c.score), "fit_percent_with": float(c.check.fit_percent),
                  "residual_rms_with": float(c.check.residual_rms), "evidence": c.evidence,
                  "params": _effect_parameters(c.check)}
                 for c in self.missing
@@ -150,11 +150,13 @@ class Diagnosis:
 
 
 def _effect_parameters(check: ModelCheck) -> dict:
-    """Median identified value of every slot the effects added (over the identified cycles)."""
+    """The effects' given constants and the median identified value of every parameter slot they added."""
     ok = check.table[check.table["status"] == "ok"]
     base_names = set(SMDModel(n_harmonics=check.model.n_harmonics).state_names)
     names = [n for n in check.model.parameter_names if n not in base_names]
-    return {name: float(ok[name].median()) for name in names if name in ok}
+    out = {name: float(value) for effect in check.model.effects for name, value in effect.constants.items()}
+    out.update({name: float(ok[name].median()) for name in names if name in ok})
+    return out
 
 
 def default_candidates(model: SMDModel, base: ModelCheck) -> list:

@@ -231,6 +231,16 @@ class Effect:
     requires: tuple[str, ...] = ()
     record_parameters: int = 0
 
+    @property
+    def constants(self) -> dict:
+        """Fixed physical values the effect was given (name to value, SI units); default none."""
+        return {}
+
+    @property
+    def spec(self) -> str:
+        """The ``--effect`` text that builds this effect again (``NAME[:key=value,...]``)."""
+        return self.name
+
     def slots(self, model: "SMDModel") -> tuple[Slot, ...]:
         """State slots the effect adds (default: none).
 

@@ -75,6 +75,9 @@ def test_hidden_floor_without_accelerometer_is_found(seed, f_b, f_f, ambient):
     assert best.effect.source == "modal" and best.effect.known
     assert abs(best.effect.frequency - f_f) < 0.02 * f_f
     assert best.effect.record_parameters == 1  # the frequency read off the spectrum counts as fitted
+    first = result.report()["missing_effects"][0]
+    assert first["params"]["f_f"] == pytest.approx(best.effect.frequency)
+    assert first["spec"].startswith("floor_mode:source=modal,frequency=")
 
 
 def test_floor_at_the_bouncing_harmonics_is_absorbed_and_said_so():

@@ -237,3 +237,21 @@ def test_derived_quantities_from_states():
     assert out["c_h"][0] == pytest.approx(730.9, abs=0.1)
     np.testing.assert_allclose(out["blf_1"], 0.5)
     np.testing.assert_allclose(out["blf_2"], 0.0)
+
+
+@pytest.mark.parametrize("text", ["harmonics", "harmonics:count=3", "cubic_stiffness:beta_range=-500/1500",
+                                  "floor_mode", "floor_mode:source=modal,frequency_range=3/4.5",
+                                  "floor_mode:source=modal,frequency=9.187,damping=0.01,mass_ratio=0.02"])
+def test_effect_spec_builds_the_same_effect(text):
+    """``effect.spec`` is what ``--effect`` needs to rebuild it (the diagnosis prints it as the next command)."""
+    effect = make_effect(text)
+    again = make_effect(effect.spec)
+    assert type(again) is type(effect) and repr(again) == repr(effect)
+    assert SMDModel(effects=[again]).state_names == SMDModel(effects=[effect]).state_names
+    assert again.constants == effect.constants
+
+
+def test_known_floor_mode_reports_its_constants():
+    effect = make_effect("floor_mode:source=modal,frequency=9.2,damping=0.01,mass_ratio=0.02")
+    assert effect.constants == {"f_f": 9.2, "xi_f": 0.01, "mass_ratio": 0.02}
+    assert make_effect("floor_mode:source=modal,frequency=9.2").constants == {}

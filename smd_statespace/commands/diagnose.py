@@ -89,7 +89,7 @@ def run_diagnose(args) -> int:
     else:
         best = result.missing[0]
         print(f"\nverdict: missing effect '{best.name}': {best.evidence}")
-        print(f"next: smd-statespace diagnose {args.record} --mass {args.mass:g} --effect {best.name}")
+        print(f"next: smd-statespace diagnose {args.record} --mass {args.mass:g} --effect {best.effect.spec}")
     for note in result.notes:
         print(f"note: {note}")
     base.plot_diagnostics(directory / "diagnostics.png")
