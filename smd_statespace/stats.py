@@ -1149,6 +1149,9 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
             raise OptionError(f"{name} must be a whole number >= {minimum}, got {value!r}")
     if not 0 < confidence < 1:
         raise OptionError(f"confidence must be between 0 and 1, got {confidence!r}")
+    if not (isinstance(seed, np.random.SeedSequence) or (isinstance(seed, (int, np.integer))
+                                                          and not isinstance(seed, bool) and seed >= 0)):
+        raise OptionError(f"seed must be a non-negative whole number or a numpy SeedSequence, got {seed!r}")
     if not (np.isfinite(a_max) and a_max > 0):
         raise OptionError(f"a_max must be a positive number, got {a_max!r}")
     degrees = dict(TREND_DEGREES)
@@ -1180,7 +1183,8 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
 
     cells, trends, no_flags = {}, {}, {}
     f_b = table["f_b"].to_numpy()
-    for p_index, parameter in enumerate(parameters):
+    for parameter in parameters:
+        p_index = list(PARAMETERS).index(parameter)  # seeds keyed by the parameter, not by what else is fitted
         spec = PARAMETERS[parameter]
         values = table[spec.column].to_numpy(dtype=float)
         if include_undetermined:

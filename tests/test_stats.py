@@ -275,6 +275,8 @@ def test_same_seed_same_statistics_and_user_bands():
     pd.testing.assert_frame_equal(one, two)
     np.testing.assert_array_equal(one["m"], other["m"])  # point fits do not depend on the seed
     assert not np.array_equal(one["m_low"], other["m_low"])
+    alone = population_stats(frame, seed=7, n_bootstrap=20, parameters=("BLF1",)).to_frame()
+    pd.testing.assert_frame_equal(alone, one.loc[["BLF1"]])  # a cell's intervals do not depend on the others
     wide = population_stats(frame, bands="1.35,2.55,3.75", n_bootstrap=0, parameters=("f_h",))
     assert [wide.cells["f_h", b].n for b in range(2)] == [180, 180]
     with pytest.raises(OptionError, match="article's bands"):
