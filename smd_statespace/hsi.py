@@ -137,6 +137,8 @@ of the estimator-free fit and modal-mass factors of the sensitivity table."""
 class FloorModel:
     """Modes of a floor as seen at the person's position.
 
+    An empty model (no modes) is a rigid floor.
+
     Parameters
     ----------
     frequency : tuple of float
@@ -150,8 +152,6 @@ class FloorModel:
         masses are driving-point masses.
     name : str
         Label for tables and figures.
-
-    An empty model (no modes) is a rigid floor.
     """
 
     frequency: tuple = ()

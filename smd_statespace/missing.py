@@ -95,6 +95,7 @@ class Candidate:
 
     @property
     def name(self) -> str:
+        """Registry name of the candidate effect."""
         return self.effect.name
 
 
