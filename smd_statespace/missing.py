@@ -141,9 +141,9 @@ class Diagnosis:
             "effects_in_model": [effect.name for effect in self.base.model.effects],
             "adequate": bool(self.adequate),
             "missing_effects": [
-                {"effect": c.name, "spec": c.effect.spec, "score": float(c.score), "fit_percent_with": float(c.check.fit_percent),
-                 "residual_rms_with": float(c.check.residual_rms), "evidence": c.evidence,
-                 "params": _effect_parameters(c.check)}
+                {"effect": c.name, "spec": c.effect.spec, "score": float(c.score),
+                 "fit_percent_with": float(c.check.fit_percent), "residual_rms_with": float(c.check.residual_rms),
+                 "evidence": c.evidence, "params": _effect_parameters(c.check)}
                 for c in self.missing
             ],
             "notes": list(self.notes),
