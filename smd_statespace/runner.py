@@ -98,8 +98,13 @@ def converged(previous: dict, current: dict, model: SMDModel, tolerance: float) 
 
 
 def identify_cycle(model: SMDModel, estimator, data, seed, record_key: int, mass: float, max_passes: int,
-                   tolerance: float, cycle_info: dict) -> CycleOutcome:
-    """Identify one cycle with repeated passes (runs in a worker process when an executor is used)."""
+                   tolerance: float, cycle_info: dict, keep_result: bool = True) -> CycleOutcome:
+    """Identify one cycle with repeated passes (runs in a worker process when an executor is used).
+
+    With ``keep_result=False`` the final :class:`FilterResult` (for a particle
+    filter it holds the whole cloud, 0.5 MB at 5000 particles) is dropped in
+    the worker, so it is neither sent back nor held.
+    """
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(record_key, data.index)))
     row = dict(cycle_info)
     history = []
@@ -121,7 +126,7 @@ def identify_cycle(model: SMDModel, estimator, data, seed, record_key: int, mass
         row.update(passes=len(history) + 1, converged=False, status="failed", reason=str(failure))
         result = None  # an earlier pass's result must not stand in for the failed cycle
     row["seconds"] = time.perf_counter() - started
-    return CycleOutcome(row=row, history=history, result=result)
+    return CycleOutcome(row=row, history=history, result=result if keep_result else None)
 
 
 class CycleRunner:
@@ -216,9 +221,45 @@ class CycleRunner:
         self.table_ = order_columns(table, self.model)
         return self.table_
 
+    def run_many(self, records, path, masses=None) -> int:
+        """Identify many records one after another, appending each record's rows to the CSV ``path``.
+
+        Nothing is held between records (``results_`` and ``history_`` describe
+        the last record only, and with ``keep_results=False`` not even its filter
+        results), so memory stays flat however many records and cycles there are:
+        this is how a study of thousands of cycles runs (docs/performance.md).
+
+        Parameters
+        ----------
+        records : iterable of Record or Preprocessed
+            Loaded lazily if it is a generator. Record ``i`` gets ``record_key=i``
+            (part of every cycle's seed), so the rows do not depend on how the
+            study is split into calls, as long as the keys are kept.
+        path : str or Path
+            CSV written afresh; one header (the first record's columns), a
+            ``record`` column with the key.
+        masses : sequence of float, optional
+            Body masses (default: each record's own).
+
+        Returns
+        -------
+        int
+            Rows written.
+        """
+        rows, columns = 0, None
+        with open(path, "w", newline="") as handle:
+            for key, record in enumerate(records):
+                table = self.run(record, mass=None if masses is None else masses[key], record_key=key)
+                table.insert(0, "record", key)
+                if columns is None:
+                    columns = list(table.columns)
+                table.reindex(columns=columns).to_csv(handle, header=rows == 0, index=False)
+                rows += len(table)
+        return rows
+
     def _execute(self, jobs, mass, record_key):
         arguments = [(self.model, self.estimator, data, self.seed, record_key, mass, self.max_passes, self.tolerance,
-                      info) for data, info in jobs]
+                      info, self.keep_results) for data, info in jobs]
         bar = tqdm(total=len(jobs), desc=f"identify ({self.estimator.name})", unit="cycle",
                    disable=not self.progress, leave=False)
         outcomes = []

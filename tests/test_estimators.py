@@ -151,11 +151,7 @@ def well_excited_cycle(seed=3, f_h=2.6, xi_h=0.25, samples=81, n_harmonics=4):
     return model, data, x0
 
 
-# The article's plain particle filter samples every slot; with n = 4 harmonics its 13-dimensional
-# cloud collapses onto wrong coefficients (docs/benchmarks.md measures it), so its recovery is
-# tested where a bootstrap filter is expected to work: one harmonic, 7 slots.
-RECOVERY = [("grid", {}, 4), ("ukf", {}, 4), ("ekf", {}, 4), ("rbpf", {"n_particles": 300}, 4),
-            ("pf", {"n_particles": 5000}, 1)]
+RECOVERY = [("grid", {}, 4), ("ukf", {}, 4), ("ekf", {}, 4), ("rbpf", {"n_particles": 300}, 4)]
 
 
 @pytest.mark.parametrize("name,options,harmonics", RECOVERY)
@@ -170,6 +166,26 @@ def test_recovers_known_parameters_on_well_excited_cycle(name, options, harmonic
     assert abs(result.final_mean[i_f] - truth[i_f]) < 0.1 * truth[i_f]
     assert abs(result.final_mean[i_xi] - truth[i_xi]) < 0.1
     assert result.width_ratio()[i_f] < 0.3
+
+
+# The article's plain particle filter samples every slot; with n = 4 harmonics its 13-dimensional
+# cloud collapses onto wrong coefficients (docs/benchmarks.md measures it), so its recovery is
+# tested where a bootstrap filter is expected to work: one harmonic, 7 slots. Even there a run is
+# a draw: over 30 seeds, 5000 particles recovered f_h within 10 % in about half of the runs, 20000
+# particles in 75-85 % (docs/performance.md). So: most of six seeded runs must recover.
+@pytest.mark.parametrize("f_h,xi_h,seed", [(2.6, 0.25, 3), (1.8, 0.45, 5)])
+def test_particle_filter_recovers_known_parameters_in_most_runs(f_h, xi_h, seed):
+    model, data, truth = well_excited_cycle(seed=seed, f_h=f_h, xi_h=xi_h, n_harmonics=1)
+    pf = get_estimator("pf", n_particles=20000)
+    i_f, i_xi = model.index("f_h"), model.index("xi_h")
+    recovered = 0
+    for run in range(6):
+        result = pf.run(model, data, rng=np.random.default_rng(7 + 100 * run))
+        for p in range(3):
+            result = pf.run(model, data, start=result.restart, rng=np.random.default_rng(8 + p + 100 * run))
+        recovered += bool(abs(result.final_mean[i_f] - truth[i_f]) < 0.1 * truth[i_f]
+                          and abs(result.final_mean[i_xi] - truth[i_xi]) < 0.1 and result.width_ratio()[i_f] < 0.3)
+    assert recovered >= 3, recovered
 
 
 def test_grid_posterior_concentrates_at_truth():

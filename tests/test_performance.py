@@ -1,0 +1,99 @@
+"""The fast paths compute what the reference paths compute; parallel and distributed runs equal serial ones.
+
+No timings here (they are in benchmarks/perf.py and docs/performance.md): only equality.
+"""
+
+import numpy as np
+import pytest
+
+from smd_statespace.effects import make_effect
+from smd_statespace.estimators import GaussianStart, get_estimator
+from smd_statespace.estimators.particle import noise_generator
+from smd_statespace.model import SMDModel
+
+from test_estimators import FIXED, linear_case, well_excited_cycle
+
+
+def run_both(model, data, **options):
+    results = {}
+    for engine in ("numba", "numpy"):
+        rng = np.random.default_rng(3)
+        pf = get_estimator("pf", engine=engine, **options)
+        result = pf.run(model, data, rng=rng)
+        results[engine] = (result, rng.bit_generator.state, pf)
+    return results
+
+
+def assert_same_pass(a, b):
+    np.testing.assert_allclose(a.mean, b.mean, rtol=1e-9, atol=1e-13)
+    np.testing.assert_allclose(a.std, b.std, rtol=1e-7, atol=1e-11)  # a fixed slot: sd of rounding
+    np.testing.assert_allclose(a.innovations, b.innovations, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(a.innovation_cov, b.innovation_cov, rtol=1e-9, atol=1e-15)
+    assert a.log_likelihood == pytest.approx(b.log_likelihood, rel=1e-11)
+    np.testing.assert_allclose(a.restart.particles, b.restart.particles, rtol=1e-9, atol=1e-13)
+    np.testing.assert_array_equal(a.diagnostics["ess"] > 0, b.diagnostics["ess"] > 0)
+    assert a.diagnostics["resamples"] == b.diagnostics["resamples"]
+
+
+@pytest.mark.parametrize("discretisation,substeps,observation", [("rk4", 1, "full"), ("euler", 2, "full"),
+                                                                  ("rk4", 1, "acc")])
+def test_compiled_particle_filter_equals_numpy_path(discretisation, substeps, observation):
+    model = SMDModel(discretisation=discretisation, substeps=substeps, observation=observation)
+    _, data, _ = well_excited_cycle(samples=40)
+    if observation == "acc":
+        data = type(data)(t=data.t, y=data.y[:, 2:], inputs=data.inputs)
+    runs = run_both(model, data, n_particles=400)
+    (fast, fast_state, fast_pf), (slow, slow_state, _) = runs["numba"], runs["numpy"]
+    assert fast.diagnostics["engine"] == "numba" and slow.diagnostics["engine"] == "numpy"
+    assert fast.diagnostics["resamples"] > 3
+    assert_same_pass(fast, slow)
+    # The generator is left exactly where numpy leaves it, so the next pass draws the same numbers too.
+    assert fast_state == slow_state
+    again = get_estimator("pf", engine="numba", n_particles=400).run(model, data, start=fast.restart,
+                                                                    rng=np.random.default_rng(4))
+    other = get_estimator("pf", engine="numpy", n_particles=400).run(model, data, start=slow.restart,
+                                                                    rng=np.random.default_rng(4))
+    assert_same_pass(again, other)
+
+
+def test_compiled_particle_filter_with_fixed_slots_and_reflection():
+    model, data = linear_case("rk4")
+    runs = run_both(model, data, n_particles=300)
+    assert_same_pass(runs["numba"][0], runs["numpy"][0])
+    fixed = {}
+    for engine in ("numba", "numpy"):
+        pf = get_estimator("pf", engine=engine, n_particles=300)
+        fixed[engine] = pf.run(model, data, fixed=FIXED, rng=np.random.default_rng(9))
+        np.testing.assert_allclose(fixed[engine].mean[:, model.index("f_h")], FIXED["f_h"], rtol=1e-12)
+    assert_same_pass(fixed["numba"], fixed["numpy"])
+    # A Gaussian start far outside the coefficient box exercises the reflection at the bounds.
+    setup_mean = np.zeros(model.n_state)
+    setup_mean[model.index("f_h")], setup_mean[model.index("xi_h")] = 2.5, 0.3
+    setup_mean[model.index("a1")] = 0.39
+    start = GaussianStart(setup_mean, np.diag(np.r_[1e-4, 1e-2, 0.1, 0.01, np.full(model.n_state - 4, 0.04)]))
+    edge = {engine: get_estimator("pf", engine=engine, n_particles=300).run(model, data, start=start,
+                                                                            rng=np.random.default_rng(2))
+            for engine in ("numba", "numpy")}
+    assert_same_pass(edge["numba"], edge["numpy"])
+
+
+def test_engine_choice():
+    model = SMDModel(n_harmonics=2)
+    assert get_estimator("pf").engine_for(model) == "numba"
+    assert get_estimator("pf", engine="numpy").engine_for(model) == "numpy"
+    with_effect = model.with_effects(make_effect("cubic_stiffness"))
+    assert get_estimator("pf").engine_for(with_effect) == "numpy"
+    from smd_statespace.errors import OptionError
+
+    with pytest.raises(OptionError, match="engine='numba' needs"):
+        get_estimator("pf", engine="numba").engine_for(with_effect)
+    with pytest.raises(OptionError, match="engine must be one of"):
+        get_estimator("pf", engine="cuda")
+
+
+def test_noise_generator_is_a_function_of_the_given_generator():
+    a = noise_generator(np.random.default_rng(5)).standard_normal(4)
+    b = noise_generator(np.random.default_rng(5)).standard_normal(4)
+    c = noise_generator(np.random.default_rng(6)).standard_normal(4)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
