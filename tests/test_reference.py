@@ -1,0 +1,83 @@
+"""The generated references: the API reference builds from the docstrings, the CLI reference is current."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from smd_statespace import docs_reference
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
+def test_api_reference_builds():
+    """Every public object has a docstring numpydoc parses without warnings, and no unknown parameter."""
+    text = docs_reference.build_api()
+    for module in docs_reference.public_modules():
+        assert f"## `{module}`" in text
+    assert "### class `CycleRunner(" in text and "#### `SMDModel.transition(" in text
+
+
+def test_api_reference_lists_the_public_objects_of_the_committed_page():
+    """docs/api.md documents the same modules as the code (wording may lag; regenerate to refresh it)."""
+    committed = set(re.findall(r"^## `([\w.]+)`$", (DOCS / "api.md").read_text(encoding="utf-8"), flags=re.M))
+    assert committed == set(docs_reference.public_modules()), (
+        "docs/api.md is out of date: run python -m smd_statespace.docs_reference")
+
+
+def test_cli_reference_is_current():
+    """docs/cli.md is exactly what the argument parser gives: a new option without regenerating fails."""
+    assert (DOCS / "cli.md").read_text(encoding="utf-8") == docs_reference.build_cli(), (
+        "docs/cli.md is out of date: run python -m smd_statespace.docs_reference")
+
+
+@pytest.mark.parametrize("mistake, message", [
+    ('"""Summary.\n\n    Parameters\n    ----------\n    y : int\n        Not an argument.\n    """', "documents parameter 'y'"),
+    ('"""Summary.\n\n    Weird Heading\n    -------------\n    text\n    """', "Unknown section Weird Heading"),
+    (None, "no docstring"),
+])
+def test_a_broken_docstring_fails_the_build(mistake, message):
+    namespace = {}
+    source = "def f(x):\n    " + (mistake or "pass") + "\n"
+    exec(source, namespace)
+    problems = []
+    docs_reference.parse(namespace["f"], "f", problems)
+    assert problems and message in problems[0]
+
+
+def test_qualified_section_heading_is_accepted():
+    class Example:
+        """Summary.
+
+        Attributes (after :meth:`run`)
+        ------------------------------
+        table_ : DataFrame
+            The table.
+        """
+
+    problems = []
+    parsed = docs_reference.parse(Example, "Example", problems)
+    assert problems == [] and parsed.qualifiers == {"Attributes": ":meth:`run`".join(["after ", ""])}
+
+
+def test_check_mode_reports_a_stale_page(tmp_path, capsys):
+    (tmp_path / "cli.md").write_text("stale\n", encoding="utf-8")
+    (tmp_path / "api.md").write_text(docs_reference.build_api(), encoding="utf-8")
+    assert docs_reference.main(["--docs", str(tmp_path), "--check"]) == 1
+    assert "cli.md" in capsys.readouterr().err
+    assert docs_reference.main(["--docs", str(tmp_path)]) == 0
+    assert docs_reference.main(["--docs", str(tmp_path), "--check"]) == 0
+
+
+def test_relative_links_in_docs_resolve():
+    """Every relative link and image in README.md and docs/*.md points to a file that exists."""
+    root = DOCS.parent
+    broken = []
+    for page in [root / "README.md", *sorted(DOCS.glob("*.md"))]:
+        text = re.sub(r"```.*?```", "", page.read_text(encoding="utf-8"), flags=re.S)
+        for target in re.findall(r"\]\(([^)\s]+)\)", text):
+            if re.match(r"^[a-z]+:", target) or target.startswith("#"):
+                continue
+            if not (page.parent / target.split("#")[0]).exists():
+                broken.append(f"{page.name}: {target}")
+    assert not broken, broken
