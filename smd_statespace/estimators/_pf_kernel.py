@@ -29,15 +29,20 @@ import numpy as np
 
 TWO_PI = 2.0 * math.pi
 
-_KERNEL = None
+_COMPILED = {}
 
 
 def kernel():
     """The compiled pass (compiled on first use, cached on disk by numba)."""
-    global _KERNEL
-    if _KERNEL is None:
-        _KERNEL = _compile()
-    return _KERNEL
+    if not _COMPILED:
+        _COMPILED.update(_compile())
+    return _COMPILED["run_pass"]
+
+
+def normal_filler():
+    """The compiled ``fill_normal(state, out)``: the pass's normal sampler alone (for profiles)."""
+    kernel()
+    return _COMPILED["fill_normal"]
 
 
 def available() -> bool:
@@ -266,7 +271,13 @@ def _compile():
                 resamples += 1
         return 0, m, total_log_likelihood, resamples, particles, log_weights
 
-    return run_pass
+    @numba.njit(cache=True, nogil=True)
+    def fill_normal(state, out):
+        flat = out.reshape(-1)
+        for i in range(flat.size):
+            flat[i] = standard_normal(state)
+
+    return {"run_pass": run_pass, "fill_normal": fill_normal}
 
 
 def force_rows(model, data, substeps: int, rk4: bool):
