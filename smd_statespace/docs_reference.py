@@ -260,7 +260,7 @@ def rst_to_markdown(lines) -> str:
     for block in blocks:
         block_lines = block.split("\n")
         indented = all(line.startswith((" ", "\t")) or not line.strip() for line in block_lines)
-        table = block_lines[0].lstrip().startswith("===") or block_lines[0].lstrip().startswith("+--")
+        table = block_lines[0].lstrip().startswith(("===", "+--", ">>>"))
         if literal_next or indented or table:
             if out and out[-1].startswith("```") and out[-1].endswith("```") and indented:
                 # continue the previous literal block across a blank line
