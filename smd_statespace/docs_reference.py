@@ -369,6 +369,7 @@ def _signature(name, obj) -> str:
         params = params[1:]
     text = str(sig.replace(parameters=params, return_annotation=inspect.Signature.empty))
     text = re.sub(r"<([\w.]+) object at 0x[0-9a-f]+>", r"\1", text)  # stable defaults
+    text = re.sub(r"(: |-> )'([^']*)'", r"\1\2", text)  # postponed annotations without their quotes
     return f"{name}{text}"
 
 
