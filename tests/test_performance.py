@@ -97,3 +97,72 @@ def test_noise_generator_is_a_function_of_the_given_generator():
     c = noise_generator(np.random.default_rng(6)).standard_normal(4)
     np.testing.assert_array_equal(a, b)
     assert not np.array_equal(a, c)
+
+
+# -- parallel and distributed runs give the serial table ---------------------------------------
+
+
+@pytest.fixture(scope="module")
+def record():
+    from smd_statespace.signals import preprocess
+    from smd_statespace.simulate import simulate_bouncing
+
+    return preprocess(simulate_bouncing(mass=64.0, f_b=2.4, f_h=2.6, xi_h=0.35, duration=7.0, seed=21).record)
+
+
+def table_without_timings(table):
+    return table[[c for c in table.columns if c != "seconds"]]
+
+
+def test_identify_jobs_two_equals_jobs_one(tmp_path):
+    import pandas as pd
+
+    from smd_statespace.cli import main
+
+    record = tmp_path / "rec.csv"
+    assert main(["simulate", "--out", str(record), "--mass", "66", "--fb", "2.4", "--fh", "2.8", "--xi", "0.3",
+                 "--duration", "6", "--seed", "3"]) == 0
+    tables = []
+    for jobs in (1, 2):
+        out = tmp_path / f"jobs{jobs}"
+        assert main(["identify", str(record), "--mass", "66", "--estimator", "pf", "--particles", "300",
+                     "--max-passes", "2", "--seed", "4", "--jobs", str(jobs), "--out", str(out), "--quiet"]) == 0
+        tables.append(table_without_timings(pd.read_csv(out / "results.csv")))
+    assert (tables[0].status == "ok").sum() >= 4
+    pd.testing.assert_frame_equal(tables[0], tables[1])
+
+
+def test_run_many_streams_records_and_matches_single_runs(record, tmp_path):
+    import pandas as pd
+
+    from smd_statespace.runner import CycleRunner
+
+    options = dict(estimator="pf", n_particles=200, max_passes=2, progress=False, seed=5)
+    runner = CycleRunner(keep_results=False, **options)
+    path = tmp_path / "study.csv"
+    rows = runner.run_many([record, record], path)
+    study = pd.read_csv(path)
+    assert rows == len(study) == 2 * len(record.cycles) and runner.results_ == {}
+    for key in (0, 1):
+        alone = CycleRunner(**options).run(record, record_key=key)
+        part = study[study.record == key].drop(columns="record").reset_index(drop=True)
+        np.testing.assert_allclose(part.f_h.to_numpy(float), alone.f_h.to_numpy(float), rtol=1e-12)
+        np.testing.assert_allclose(part.log_likelihood.to_numpy(float), alone.log_likelihood.to_numpy(float),
+                                   rtol=1e-12)
+    # Different record keys draw different numbers.
+    assert not np.allclose(study[study.record == 0].f_h.dropna(), study[study.record == 1].f_h.dropna())
+
+
+def test_dask_cluster_executor_gives_the_serial_table(record):
+    distributed = pytest.importorskip("distributed")
+    import pandas as pd
+
+    from smd_statespace.runner import CycleRunner
+
+    options = dict(estimator="pf", n_particles=200, max_passes=2, progress=False, seed=5)
+    serial = CycleRunner(**options).run(record)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        runner = CycleRunner(executor=client.get_executor(), **options)
+        clustered = runner.run(record)
+    pd.testing.assert_frame_equal(table_without_timings(serial), table_without_timings(clustered))
