@@ -11,8 +11,9 @@ import pandas as pd
 
 from .. import __version__
 from ..estimators import ESTIMATORS
-from .common import (_count, add_model_arguments, add_record_arguments, add_run_arguments, build_model,
-                     estimator_options, load_truth, out_dir, prepare_record, truth_values)
+from ..errors import OptionError
+from .common import (PROG, _count, add_model_arguments, add_run_arguments, build_model, estimator_options, load_truth,
+                     out_dir, prepare_record, truth_values)
 
 DEFAULT_ESTIMATOR = "ekf"
 """Estimator used when ``--estimator`` is not given (see docs/benchmarks.md for why)."""
@@ -27,9 +28,19 @@ def add_identify(subparsers):
         help="identify the SMD model cycle by cycle",
         description=("Split the record into bouncing cycles (GRF peak to peak) and identify f_h, xi_h and the "
                      "force coefficients of every cycle with repeated passes (Wang et al. 2019, Section 3.2); "
-                     "write DIR/results.csv, DIR/run.json and figures."),
+                     "write DIR/results.csv, DIR/run.json and figures. Given a folder, a glob or --manifest, "
+                     "identify every record, writing each finished one to DIR/parts/ (see --resume); exit "
+                     "status 1 when some records failed (each is named on stderr), 0 when none did."),
     )
-    add_record_arguments(parser)
+    parser.add_argument("record", metavar="REC", nargs="?",
+                        help="a record CSV (time,force[,floor_acc]), a folder of them, or a quoted glob "
+                             "('data/*.csv'); may be omitted with --manifest")
+    parser.add_argument("--mass", type=float, metavar="KG",
+                        help="body mass M_h (kg); with many records, the mass of those the manifest does not list")
+    parser.add_argument("--manifest", metavar="FILE",
+                        help="CSV with columns file,mass: one body mass per record (files relative to it)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue a killed batch run in --out: finished records are kept, not recomputed")
     parser.add_argument("--estimator", choices=sorted(ESTIMATORS), default=DEFAULT_ESTIMATOR,
                         help=f"pf (the article's particle filter), rbpf, ukf, ekf or grid (default {DEFAULT_ESTIMATOR})")
     add_model_arguments(parser)
@@ -112,8 +123,52 @@ def write_outputs(directory, runner, table, args, estimator, truth=None) -> list
     return written
 
 
+def is_batch(args) -> bool:
+    """Whether the options ask for many records (a folder, a glob, a manifest or --resume)."""
+    import glob
+
+    from pathlib import Path
+
+    record = args.record
+    return (args.manifest is not None or args.resume or record is None or Path(record).is_dir()
+            or (glob.has_magic(record) and not Path(record).exists()))
+
+
+def run_batch_identify(args) -> int:
+    """Identify many records (see :mod:`smd_statespace.batch`); 1 when some failed, else 0."""
+    import sys
+
+    from ..batch import collect_records, run_batch
+    from ..plots import plot_parameters
+
+    if args.truth is not None:
+        raise OptionError("--truth applies to one record, not to a batch")
+    directory = out_dir(args.out)
+    model = build_model(args)
+    records = collect_records(args.record, args.mass, args.manifest)
+    options = dict(max_passes=args.max_passes, seed=args.seed, **estimator_options(args.estimator, args))
+    started = time.perf_counter()
+    summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
+                        progress=not args.quiet)
+    table = pd.read_csv(summary.results)
+    written = [summary.results, directory / "run.json"]
+    if (table["status"] == "ok").any():
+        written.append(directory / "parameters.png")
+        plot_parameters(table, written[-1])
+    print(f"{summary.line()}; {time.perf_counter() - started:.1f} s")
+    failed = table[(table["status"] == "failed") & table.get("cycle", pd.Series(np.nan, index=table.index)).isna()]
+    for row in failed.itertuples():
+        print(f"{PROG}: error: {row.reason}", file=sys.stderr)
+    print("wrote " + ", ".join(str(path) for path in written) + f" and {len(records)} parts in {directory / 'parts'}")
+    return 1 if summary.failed_records else 0
+
+
 def run_identify(args) -> int:
     """Run ``smd-statespace identify``."""
+    if is_batch(args):
+        return run_batch_identify(args)
+    if args.mass is None:
+        raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
     directory = out_dir(args.out)
     model = build_model(args)
     truth = truth_values(load_truth(args.truth))

@@ -1,0 +1,154 @@
+"""Batch identification: many records, failures contained, atomic parts, --resume after a kill, any --jobs."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+
+from smd_statespace.batch import collect_records, read_manifest, record_key, run_batch
+from smd_statespace.cli import main
+from smd_statespace.errors import OptionError, RecordError
+from smd_statespace.io import write_record
+from smd_statespace.simulate import simulate_bouncing
+
+OPTIONS = dict(max_passes=2, seed=11)
+
+
+def write_records(folder, count, duration=8.0):
+    folder.mkdir(parents=True, exist_ok=True)
+    for i in range(count):
+        synthetic = simulate_bouncing(mass=60.0 + i, f_b=1.8 + 0.15 * i, f_h=2.4, xi_h=0.3, duration=duration,
+                                      seed=100 + i)
+        write_record(folder / f"rec{i}.csv", synthetic.record)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def records(tmp_path_factory):
+    folder = write_records(tmp_path_factory.mktemp("batch") / "records", 3)
+    (folder / "flat.csv").write_text("time,force\n" + "".join(f"{k / 100},700\n" for k in range(800)))
+    (folder / "manifest.csv").write_text("file,mass\nrec0.csv,60\nrec1.csv,61\nrec2.csv,62\nflat.csv,70\n")
+    return folder
+
+
+def results(folder):
+    """A run's results without the wall-clock column (the only thing allowed to differ between runs)."""
+    return pd.read_csv(folder / "results.csv").drop(columns="seconds")
+
+
+def test_records_from_folder_glob_and_manifest(records):
+    by_folder = collect_records(records, manifest=records / "manifest.csv")
+    assert [r.name for r in by_folder] == ["flat.csv", "rec0.csv", "rec1.csv", "rec2.csv"]  # not the manifest
+    assert [r.mass for r in by_folder] == [70.0, 60.0, 61.0, 62.0]
+    by_glob = collect_records(str(records / "rec*.csv"), mass=75)
+    assert [r.path.name for r in by_glob] == ["rec0.csv", "rec1.csv", "rec2.csv"] and {r.mass for r in by_glob} == {75}
+    only_manifest = collect_records(None, manifest=records / "manifest.csv")
+    assert [r.name for r in only_manifest] == ["rec0.csv", "rec1.csv", "rec2.csv", "flat.csv"]
+    # The seed key depends on the name only: the same wherever the record sits in the batch.
+    assert by_folder[1].key == only_manifest[0].key == record_key("rec0.csv")
+    assert len({r.part for r in by_folder}) == 4
+
+
+@pytest.mark.parametrize("text,message", [
+    ("file,weight\na.csv,60\n", "missing column 'mass'"),
+    ("file,mass\n", "no records listed"),
+    ("file,mass\nrec0.csv,sixty\n", "row 2 (rec0.csv) has mass 'sixty'"),
+    ("file,mass\nrec0.csv,60\nrec0.csv,61\n", "row 3 lists 'rec0.csv' a second time"),
+    ("file,mass\nrec0.csv,600\n", "row 2 (rec0.csv)"),
+])
+def test_bad_manifest_is_one_clear_line(tmp_path, text, message):
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(text)
+    with pytest.raises(RecordError if "600" not in text else ValueError, match=message.replace("(", r"\(")
+                       .replace(")", r"\)")):
+        read_manifest(manifest)
+
+
+def test_missing_masses_and_files_are_named(records, tmp_path):
+    with pytest.raises(OptionError, match="--mass KG"):
+        collect_records(records)
+    manifest = tmp_path / "m.csv"
+    manifest.write_text("file,mass\nrec0.csv,60\n")
+    with pytest.raises(RecordError, match="no mass for flat.csv"):
+        collect_records(records, manifest=manifest)
+    with pytest.raises(RecordError, match="no record files"):
+        collect_records(str(tmp_path / "nothing*.csv"), mass=70)
+
+
+def test_failures_are_contained_and_jobs_do_not_change_results(records, tmp_path):
+    found = collect_records(records, manifest=records / "manifest.csv")
+    one = run_batch(found, tmp_path / "one", runner_options=OPTIONS, progress=False)
+    two = run_batch(found, tmp_path / "two", runner_options=OPTIONS, jobs=2, progress=False)
+    assert one.failed_records == ["flat.csv"] and one.identified == 4
+    table = results(tmp_path / "one")
+    flat = table[table["record"] == "flat.csv"]
+    assert len(flat) == 1 and flat["status"].iloc[0] == "failed" and "no GRF peaks" in flat["reason"].iloc[0]
+    assert (table.loc[table["record"] != "flat.csv", "status"] != "failed").all()
+    assert table["record"].drop_duplicates().tolist() == [r.name for r in found]  # the run's order
+    pd.testing.assert_frame_equal(table, results(tmp_path / "two"))
+    assert two.cycles == one.cycles
+    # Each record's rows are those of identifying it alone (seed from its name, not its position).
+    alone = run_batch([found[2]], tmp_path / "alone", runner_options=OPTIONS, progress=False)
+    assert alone.identified == 1
+    single = results(tmp_path / "alone")
+    within = table[table["record"] == found[2].name].reset_index(drop=True)[single.columns]
+    pd.testing.assert_frame_equal(single, within, check_dtype=False)  # the batch's cycle column has a NaN row
+
+
+def test_resume_keeps_finished_records_and_refuses_other_settings(records, tmp_path):
+    found = collect_records(records, manifest=records / "manifest.csv")
+    out = tmp_path / "run"
+    run_batch(found[:2], out, runner_options=OPTIONS, progress=False)  # as if killed after two records...
+    (out / "results.csv").unlink()
+    with pytest.raises(OptionError, match="the records differ"):
+        run_batch(found, out, runner_options=OPTIONS, resume=True, progress=False)
+    with pytest.raises(OptionError, match="holds a previous batch run"):
+        run_batch(found[:2], out, runner_options=OPTIONS, progress=False)
+    with pytest.raises(OptionError, match="the options differ"):
+        run_batch(found[:2], out, runner_options=dict(OPTIONS, max_passes=3), resume=True, progress=False)
+    with pytest.raises(OptionError, match="no run in"):
+        run_batch(found, tmp_path / "empty", runner_options=OPTIONS, resume=True, progress=False)
+    again = run_batch(found[:2], out, runner_options=OPTIONS, resume=True, progress=False)
+    assert again.resumed == 2 and again.identified == 0
+
+
+def test_sigkill_mid_run_then_resume_gives_the_clean_results(tmp_path):
+    """A real process killed with SIGKILL after its first record; --resume completes it, nothing lost or doubled."""
+    folder = write_records(tmp_path / "records", 6, duration=10.0)
+    argv = ["identify", str(folder), "--mass", "65", "--max-passes", "2", "--seed", "5", "--quiet"]
+    killed = tmp_path / "killed"
+    process = subprocess.Popen([sys.executable, "-m", "smd_statespace", *argv, "--out", str(killed)],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    parts = killed / "parts"
+    deadline = time.monotonic() + 120
+    while not (parts.is_dir() and any(parts.glob("*.csv"))):
+        assert process.poll() is None, "the run ended before it could be killed"
+        assert time.monotonic() < deadline, "no record finished within 120 s"
+        time.sleep(0.02)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    done = sorted(parts.glob("*.csv"))
+    assert 1 <= len(done) < 6 and not (killed / "results.csv").exists()
+    for part in done:  # every part on disk is whole
+        assert pd.read_csv(part)["record"].nunique() == 1
+    assert main(argv + ["--out", str(killed), "--resume"]) == 0
+    assert main(argv + ["--out", str(tmp_path / "clean")]) == 0
+    resumed, clean = results(killed), results(tmp_path / "clean")
+    pd.testing.assert_frame_equal(resumed, clean)
+    assert resumed["record"].nunique() == 6
+
+
+def test_cli_batch_reports_each_bad_file_and_exits_1(records, tmp_path, capsys):
+    status = main(["identify", str(records), "--manifest", str(records / "manifest.csv"), "--max-passes", "2",
+                   "--out", str(tmp_path / "o"), "--quiet"])
+    captured = capsys.readouterr()
+    assert status == 1
+    errors = captured.err.strip().splitlines()
+    assert len(errors) == 1 and errors[0].startswith("smd-statespace: error: ") and "flat.csv" in errors[0]
+    assert "4 records: 4 identified now" in captured.out and (tmp_path / "o" / "results.csv").exists()
+    assert main(["identify", str(records), "--max-passes", "2", "--out", str(tmp_path / "p"), "--quiet"]) == 2
+    assert "--mass KG" in capsys.readouterr().err
