@@ -97,6 +97,26 @@ def converged(previous: dict, current: dict, model: SMDModel, tolerance: float) 
     return True
 
 
+def check_sampling(model: SMDModel, preprocessed: Preprocessed) -> None:
+    """Refuse a record sampled too slowly for the force harmonics of the model (Eq. 4).
+
+    Harmonic ``k`` of a cycle at ``f_b`` oscillates at ``k f_b``; it must stay
+    below the Nyquist frequency ``fs / 2`` of the record.
+    """
+    top = model.n_harmonics + sum(int(getattr(effect, "count", 0)) for effect in model.effects
+                                  if hasattr(effect, "orders"))
+    valid = [cycle.f_b for cycle in preprocessed.valid_cycles]
+    if not valid:
+        return
+    f_b = max(valid)
+    if top * f_b >= 0.5 * preprocessed.fs:
+        raise OptionError(
+            f"{preprocessed.source}: sampled at {preprocessed.fs:g} Hz, too slowly for force harmonic {top} at "
+            f"f_b up to {f_b:.2f} Hz ({top * f_b:.1f} Hz needs more than {2 * top * f_b:.0f} Hz); "
+            "lower --harmonics or record faster"
+        )
+
+
 def identify_cycle(model: SMDModel, estimator, data, seed, record_key: int, mass: float, max_passes: int,
                    tolerance: float, cycle_info: dict, keep_result: bool = True) -> CycleOutcome:
     """Identify one cycle with repeated passes (runs in a worker process when an executor is used).
@@ -120,10 +140,16 @@ def identify_cycle(model: SMDModel, estimator, data, seed, record_key: int, mass
             if number > 1 and converged(history[-2], summary, model, tolerance):
                 done = True
                 break
+        bad = [name for name, value in history[-1].items()
+               if isinstance(value, float) and not np.isfinite(value) and not name.endswith("width_ratio")]
+        if bad:
+            raise EstimatorFailure(f"cycle {data.index}: non-finite {', '.join(bad[:3])} after pass {len(history)}")
         row.update(history[-1])
         row.update(passes=len(history), converged=done, status="ok", reason="")
-    except EstimatorFailure as failure:
-        row.update(passes=len(history) + 1, converged=False, status="failed", reason=str(failure))
+    except (EstimatorFailure, ArithmeticError, np.linalg.LinAlgError) as failure:
+        # A diverging cycle is that cycle's failure, never the batch's, and never a silent NaN in the table.
+        reason = str(failure) if isinstance(failure, EstimatorFailure) else f"{type(failure).__name__}: {failure}"
+        row.update(passes=len(history) + 1, converged=False, status="failed", reason=reason)
         result = None  # an earlier pass's result must not stand in for the failed cycle
     row["seconds"] = time.perf_counter() - started
     return CycleOutcome(row=row, history=history, result=result if keep_result else None)
@@ -202,6 +228,7 @@ class CycleRunner:
             Identity of the record within a batch, part of every cycle's seed.
         """
         preprocessed = preprocess(record) if isinstance(record, Record) else record
+        check_sampling(self.model, preprocessed)
         mass = float(preprocessed.mass if mass is None else mass)
         self.preprocessed_ = preprocessed
         jobs = []
