@@ -67,8 +67,8 @@ def plot_convergence(history, cycle: int, tolerance: float = 0.05, path=None, na
 
 
 def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
-                    names=("f_h", "xi_h", "blf_1", "blf_2", "blf_3")) -> Figure:
-    """Identified parameters of every cycle over the record, with ±1 sd bars.
+                    names=("f_h", "xi_h", "blf_1", "blf_2", "blf_3"), against: str = "time") -> Figure:
+    """Identified parameters of every cycle over the record (or against ``f_b``), with ±1 sd bars.
 
     Cycles that did not determine a parameter (posterior not much narrower
     than the prior, the ``*_determined`` columns) are drawn hollow and grey,
@@ -80,12 +80,17 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
         ``CycleRunner.run`` output (one row per cycle).
     truth : dict, optional
         Known values (e.g. of a synthetic record) drawn as dashed lines.
+    against : {"time", "f_b"}
+        Horizontal axis: the cycle's middle time (s; one record) or its
+        bouncing frequency (Hz; many records, as the article's Fig. 6-8).
     """
+    if against not in ("time", "f_b"):
+        raise ValueError(f"against must be 'time' or 'f_b', got {against!r}")
     ok = table[table["status"] == "ok"]
     names = [n for n in names if n in ok]
     fig = Figure(figsize=(9.0, 1.9 * len(names) + 0.6))
     axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
-    middle = 0.5 * (ok["t_start"] + ok["t_end"])
+    middle = 0.5 * (ok["t_start"] + ok["t_end"]) if against == "time" else ok["f_b"]
     for ax, name in zip(axes, names):
         sd = ok.get(f"{name}_sd", pd.Series(np.zeros(len(ok)), index=ok.index))
         flag = ok.get(f"{name}_determined", pd.Series(np.ones(len(ok), dtype=bool), index=ok.index)).astype(bool)
@@ -98,9 +103,10 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
         ax.set_ylabel(PARAMETER_LABELS.get(name, name))
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, ncol=3, loc="lower right", bbox_to_anchor=(1.0, 1.0), frameon=False)
-    axes[-1].set_xlabel("time (s)")
+    axes[-1].set_xlabel("time (s)" if against == "time" else r"bouncing frequency $f_b$ (Hz)")
     estimator = ok["estimator"].iloc[0] if len(ok) else "?"
-    fig.suptitle(f"Parameters per cycle ({estimator}; bars ±1 sd)", fontsize=11, x=0.02, ha="left")
+    records = f"{ok['record'].nunique()} records, " if "record" in ok else ""
+    fig.suptitle(f"Parameters per cycle ({records}{estimator}; bars ±1 sd)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
     return _save(fig, path)
 

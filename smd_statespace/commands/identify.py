@@ -154,7 +154,7 @@ def run_batch_identify(args) -> int:
     written = [summary.results, directory / "run.json"]
     if (table["status"] == "ok").any():
         written.append(directory / "parameters.png")
-        plot_parameters(table, written[-1])
+        plot_parameters(table, written[-1], against="f_b")
     print(f"{summary.line()}; {time.perf_counter() - started:.1f} s")
     failed = table[(table["status"] == "failed") & table.get("cycle", pd.Series(np.nan, index=table.index)).isna()]
     for row in failed.itertuples():
