@@ -47,10 +47,10 @@ def standard_normal(s):
         bits >>= S8
         rabs = (bits >> S1) & MANTISSA
         x = np.int64(rabs) * wi_double[idx]
-        if bits & S1:
-            x = -x
+        sign = 1.0 - 2.0 * np.float64(np.int64(bits & S1))  # +-1 without a branch (one in two would mispredict)
         if rabs < ki_double[idx]:
-            return x
+            return x * sign
+        x = x * sign
         if idx == 0:
             while True:
                 xx = -ziggurat_nor_inv_r * math.log1p(-next_double(s))
@@ -186,15 +186,18 @@ def run_pass(particles, log_weights, y, steps, move_basis, obs_basis, c0, rk4, f
             return 1, k, total_log_likelihood, resamples, particles, log_weights
         total = 0.0
         for i in range(n):
-            total += math.exp(log_weights[i] - top)
+            wi = math.exp(log_weights[i] - top)
+            weights[i] = wi
+            total += wi
         increment = top + math.log(total)
         total_log_likelihood += increment
-        # Normalised weights, filtered mean and sd, effective sample size.
+        # Normalised weights (one exponential per particle), filtered mean and sd, effective sample size.
         sum_w2 = 0.0
         accumulator[:] = 0.0
+        scale = 1.0 / total
         for i in range(n):
             log_weights[i] -= increment
-            wi = math.exp(log_weights[i])
+            wi = weights[i] * scale
             weights[i] = wi
             sum_w2 += wi * wi
             for j in range(d):
