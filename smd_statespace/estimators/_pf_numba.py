@@ -85,11 +85,10 @@ def run_pass(particles, log_weights, y, steps, move_basis, obs_basis, c0, rk4, f
     spare = np.empty_like(particles)
     cumulative = np.empty(n)
     accumulator = np.empty(d)
-    predicted_mean = np.empty(n_obs)
     total_log_likelihood = 0.0
     resamples = 0
     for k in range(m):
-        predicted_mean[:] = 0.0
+        mean_u = mean_v = mean_acc = 0.0
         # Predict every particle (Eq. 11-12 plus noise, Eq. 6), then its observation (Eq. 13-16).
         for i in range(n):
             u = particles[i, 0]
@@ -152,36 +151,57 @@ def run_pass(particles, log_weights, y, steps, move_basis, obs_basis, c0, rk4, f
                 predicted[i, 0] = u
                 predicted[i, 1] = v
                 predicted[i, 2] = acc
-                predicted_mean[0] += wi * u
-                predicted_mean[1] += wi * v
-                predicted_mean[2] += wi * acc
+                mean_u += wi * u
+                mean_v += wi * v
+                mean_acc += wi * acc
             else:
                 predicted[i, 0] = acc
-                predicted_mean[0] += wi * acc
-        for c in range(n_obs):
-            innovations[k, c] = y[k, c] - predicted_mean[c]
+                mean_acc += wi * acc
         # Predictive covariance of the observation (weights of the previous sample), and reweighting in logs.
-        innovation_cov[k, :, :] = 0.0
+        # Sums in local variables (not array cells), so the compiler keeps them in registers.
         top = -np.inf
+        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+        y0, y1, y2 = y[k, 0], y[k, n_obs - 2], y[k, n_obs - 1]
+        r0, r1, r2 = r[0], r[n_obs - 2], r[n_obs - 1]
         for i in range(n):
             wi = weights[i]
-            s2 = 0.0
-            for a in range(n_obs):
-                da = predicted[i, a] - predicted_mean[a]
-                for b in range(a, n_obs):
-                    innovation_cov[k, a, b] += wi * da * (predicted[i, b] - predicted_mean[b])
-                z = (y[k, a] - predicted[i, a]) / r[a]
-                s2 += z * z
+            if full:
+                p0, p1, p2 = predicted[i, 0], predicted[i, 1], predicted[i, 2]
+                d0, d1, d2 = p0 - mean_u, p1 - mean_v, p2 - mean_acc
+                c00 += wi * d0 * d0
+                c01 += wi * d0 * d1
+                c02 += wi * d0 * d2
+                c11 += wi * d1 * d1
+                c12 += wi * d1 * d2
+                c22 += wi * d2 * d2
+                z0 = (y0 - p0) / r0
+                z1 = (y1 - p1) / r1
+                z2 = (y2 - p2) / r2
+                s2 = z0 * z0 + z1 * z1 + z2 * z2
+            else:
+                d2 = predicted[i, 0] - mean_acc
+                c22 += wi * d2 * d2
+                z2 = (y2 - predicted[i, 0]) / r2
+                s2 = z2 * z2
             value = log_weights[i] + (log_norm - 0.5 * s2)
             if not math.isfinite(value):
                 value = -np.inf
             log_weights[i] = value
             if value > top:
                 top = value
-        for a in range(n_obs):
-            innovation_cov[k, a, a] += r[a] * r[a]
-            for b in range(a + 1, n_obs):
-                innovation_cov[k, b, a] = innovation_cov[k, a, b]
+        if full:
+            innovations[k, 0] = y0 - mean_u
+            innovations[k, 1] = y1 - mean_v
+            innovations[k, 2] = y2 - mean_acc
+            innovation_cov[k, 0, 0] = c00 + r0 * r0
+            innovation_cov[k, 1, 1] = c11 + r1 * r1
+            innovation_cov[k, 2, 2] = c22 + r2 * r2
+            innovation_cov[k, 0, 1] = innovation_cov[k, 1, 0] = c01
+            innovation_cov[k, 0, 2] = innovation_cov[k, 2, 0] = c02
+            innovation_cov[k, 1, 2] = innovation_cov[k, 2, 1] = c12
+        else:
+            innovations[k, 0] = y2 - mean_acc
+            innovation_cov[k, 0, 0] = c22 + r2 * r2
         if not math.isfinite(top):
             return 1, k, total_log_likelihood, resamples, particles, log_weights
         total = 0.0
