@@ -11,7 +11,11 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
 def test_api_reference_builds():
-    """Every public object has a docstring numpydoc parses without warnings, and no unknown parameter."""
+    """Every public object has a docstring numpydoc parses without warnings, and no unknown parameter.
+
+    The committed docs/api.md is a snapshot: its wording is refreshed by rerunning the generator
+    and is deliberately not compared here (docs/cli.md is, below).
+    """
     text = docs_reference.build_api()
     for module in docs_reference.public_modules():
         assert f"## `{module}`" in text
@@ -50,7 +54,7 @@ def test_qualified_section_heading_is_accepted():
 
     problems = []
     parsed = docs_reference.parse(Example, "Example", problems)
-    assert problems == [] and parsed.qualifiers == {"Attributes": ":meth:`run`".join(["after ", ""])}
+    assert problems == [] and parsed.qualifiers == {"Attributes": "after :meth:`run`"}
 
 
 def test_check_mode_reports_a_stale_page(tmp_path, capsys):
