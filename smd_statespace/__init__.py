@@ -2,9 +2,13 @@
 
 Implements H. Wang, J. Chen, T. Nagayama, "Parameter identification of
 spring-mass-damper model for bouncing people", J. Sound Vib. 456 (2019) 13-29:
-the augmented-state SMD model (Eq. 7-16), the signal pipeline that turns a
-ground reaction force (GRF) into centre-of-mass motion (Eq. 3), synthetic
-records with known truth, and (in later modules) interchangeable estimators.
+the augmented-state SMD model (Eq. 7-16) with pluggable physical effects, the
+signal pipeline that turns a ground reaction force (GRF) into centre-of-mass
+motion (Eq. 3), interchangeable estimators (particle filter, UKF, EKF, exact
+grid) run cycle by cycle with repeated passes, model checking and the search
+for missing effects, batch runs, population statistics (Section 5), a crowd-load
+generator and the human-structure interaction study (Section 6), with a
+simulator of records with known truth. Map of the modules: docs/index.md.
 """
 
 __version__ = "0.1.0"

@@ -20,7 +20,6 @@ from smd_statespace.io import read_record
 from smd_statespace.signals import preprocess
 from smd_statespace.simulate import sample_path, sample_truth_path
 
-ROOT = Path(__file__).resolve().parents[1]
 SIMULATE = ["simulate", "--mass", "70", "--fb", "2.0", "--fh", "2.5", "--xi", "0.3", "--duration", "12",
             "--seed", "1"]
 
@@ -211,17 +210,6 @@ def test_console_script_error_is_one_line(tmp_path):
                           timeout=120)
     assert done.returncode == 2
     assert len(done.stderr.splitlines()) == 1 and done.stderr.startswith("smd-statespace: error: --mass")
-
-
-def test_readme_python_example_runs(tmp_path, monkeypatch, capsys):
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    blocks = re.findall(r"```python\n(.*?)```", readme, flags=re.S)
-    assert blocks, "README.md has no python example"
-    monkeypatch.chdir(tmp_path)
-    for block in blocks:
-        exec(compile(block, "README.md", "exec"), {"__name__": "readme"})
-    out = capsys.readouterr().out
-    assert "median f_h" in out and "determined in" in out  # the README's last line ran to the end
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,6 @@ each page, and matplotlib draws off-screen.
 import os
 import re
 import shlex
-import time
 from pathlib import Path
 
 import pytest
@@ -55,7 +54,6 @@ def test_examples_run(page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     registered = dict(EFFECTS)
     namespace = {"__name__": f"docs_{page.stem}"}
-    started = time.perf_counter()
     try:
         for kind, code, line in blocks(page):
             where = f"{page.name}:{line}"
@@ -69,8 +67,6 @@ def test_examples_run(page, tmp_path, monkeypatch):
         import matplotlib.pyplot as plt
 
         plt.close("all")
-    # Keep the docs fast: the whole file should stay well under 90 s on a shared 2-core machine.
-    assert time.perf_counter() - started < 60, f"{page.name}: examples took too long; shorten them"
 
 
 def test_every_page_is_reachable_from_the_index():
