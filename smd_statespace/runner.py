@@ -37,6 +37,10 @@ from .io import Record
 from .model import SMDModel, blf
 from .signals import Preprocessed, preprocess
 
+DEFAULT_ESTIMATOR = "ekf"
+"""Estimator used when none is named: fast, deterministic and, with repeated passes, honest about its
+widths (docs/benchmarks.md measures every estimator; the article's particle filter is over-confident)."""
+
 DETERMINED_RATIO = 0.25
 """A parameter is 'determined' by a cycle when its posterior sd is below this fraction of its prior sd."""
 
@@ -164,7 +168,8 @@ class CycleRunner:
         The augmented-state model (default ``SMDModel()``: 4 harmonics, RK4).
     estimator : str or Estimator
         ``"pf"`` (the article's particle filter), ``"rbpf"``, ``"ukf"``,
-        ``"ekf"`` or ``"grid"`` (exact reference, one pass).
+        ``"ekf"`` or ``"grid"`` (exact reference, one pass). Default
+        :data:`DEFAULT_ESTIMATOR`, as on the command line.
     max_passes : int
         Largest number of passes per cycle.
     tolerance : float
@@ -192,12 +197,12 @@ class CycleRunner:
         The pipeline output the cycles came from.
     """
 
-    def __init__(self, model: SMDModel | None = None, estimator="pf", max_passes: int = 8, tolerance: float = 0.05,
+    def __init__(self, model: SMDModel | None = None, estimator=None, max_passes: int = 8, tolerance: float = 0.05,
                  seed: int = 0, progress: bool = True, executor=None, keep_results: bool = True, **options):
         self.model = SMDModel() if model is None else model
         if isinstance(estimator, str) and estimator not in ESTIMATORS:
             raise OptionError(f"unknown estimator {estimator!r}; choose one of {', '.join(sorted(ESTIMATORS))}")
-        self.estimator = get_estimator(estimator, **options)
+        self.estimator = get_estimator(DEFAULT_ESTIMATOR if estimator is None else estimator, **options)
         if isinstance(max_passes, bool) or int(max_passes) != max_passes or max_passes < 1:
             raise OptionError(f"max_passes must be a whole number >= 1, got {max_passes!r}")
         if not 0 < float(tolerance) < 1:

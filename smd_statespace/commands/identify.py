@@ -12,11 +12,10 @@ import pandas as pd
 from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError
+from ..runner import DEFAULT_ESTIMATOR
 from .common import (PROG, _count, add_model_arguments, add_run_arguments, build_model, estimator_options, load_truth,
                      out_dir, prepare_record, truth_values)
 
-DEFAULT_ESTIMATOR = "ekf"
-"""Estimator used when ``--estimator`` is not given (see docs/benchmarks.md for why)."""
 
 SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
 
