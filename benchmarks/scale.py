@@ -149,7 +149,7 @@ def _peak_rss_mb(_=None):
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def figure(cycles, particles, harmonics, procs, path):
+def figure(cycles, particles, harmonics, procs, path, note=""):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -158,7 +158,7 @@ def figure(cycles, particles, harmonics, procs, path):
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5))
     ax = axes[0, 0]
     ax.plot([r["cycles"] for r in cycles], [r["seconds"] for r in cycles], "o-")
-    ax.set(xlabel="cycles identified", ylabel="wall time (s)", title="(a) cost vs cycles (N = 5000, passes to ±5 %)")
+    ax.set(xlabel="cycles identified", ylabel="wall time (s)", title="(a) cost vs cycles (N = 5000, up to 5 passes)")
     ax.grid(alpha=0.3)
     ax = axes[0, 1]
     ax.loglog([r["n"] for r in particles], [r["seconds"] for r in particles], "o-", label="one pass (s)")
@@ -184,6 +184,8 @@ def figure(cycles, particles, harmonics, procs, path):
     ax.axhline(2.0, color="grey", ls=":", lw=1)
     ax.set(xlabel="processes", ylabel="speed-up over 1 process", ylim=(0, 2.5),
            title=f"(d) parallel speed-up ({procs[0]['cycles']} cycles)")
+    if note:
+        fig.suptitle(note, fontsize=9, color="dimgrey")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -208,7 +210,10 @@ def main(argv=None):
         particles = sweep_particles()
         harmonics = sweep_harmonics(args.particles)
         procs, same = processes(args.particles, args.max_passes)
-        figure(cycles, particles, harmonics, procs, args.figure)
+        load = os.getloadavg()
+        figure(cycles, particles, harmonics, procs, args.figure,
+               note=f"one core per process, 2-core machine; load average (1, 5, 15 min) before "
+                    f"{', '.join(f'{v:.2f}' for v in load_before)}, after {', '.join(f'{v:.2f}' for v in load)}")
         lines += ["| cycles | mean passes | wall (s) | ns / particle-step |", "|---|---|---|---|"]
         lines += [f"| {r['cycles']} | {r['passes']:.1f} | {r['seconds']:.2f} | {r['ns']:.0f} |" for r in cycles]
         lines += ["", "| particles | s / pass | ns / particle-step |", "|---|---|---|"]
