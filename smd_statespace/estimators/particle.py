@@ -124,7 +124,7 @@ class ParticleFilter(Estimator):
         ``SMDModel`` without effects). ``"numpy"``: whole-cloud calls of the
         model's methods (any model). ``"auto"`` (default) takes the compiled pass
         whenever it applies. Both draw the same random numbers in the same order
-        and agree to rounding; the compiled one is about ten times faster
+        and agree to rounding; the compiled one is about six times faster
         (docs/performance.md).
 
     Attributes (after :meth:`run`)

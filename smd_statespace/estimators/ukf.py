@@ -73,7 +73,7 @@ class UnscentedFilter(Estimator):
     vectorised : bool
         Move and observe all sigma points in one call of the model's
         transition and observation each (default) instead of filterpy's loops
-        over them; the numbers are the same, about four times faster
+        over them; the numbers are the same, about ten times faster
         (docs/performance.md).
     process_noise_std, observation_noise_std : array_like, optional
         Override the model's default noise levels.
