@@ -42,6 +42,7 @@ from tqdm import tqdm
 from . import __version__
 from .errors import OptionError, RecordError, SMDInputError
 from .io import check_mass
+from .runner import DEFAULT_ESTIMATOR
 
 __all__ = ["BatchRecord", "BatchSummary", "collect_records", "read_manifest", "record_key", "run_batch",
            "atomic_write_csv"]
@@ -109,7 +110,8 @@ def read_manifest(path) -> list[BatchRecord]:
     try:
         table = pd.read_csv(path, dtype=str, keep_default_na=False)
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise RecordError(f"--manifest {path}: not a readable CSV with columns file,mass ({type(exc).__name__})") from None
+        raise RecordError(
+            f"--manifest {path}: not a readable CSV with columns file,mass ({type(exc).__name__})") from None
     table.columns = [str(c).strip() for c in table.columns]
     missing = [c for c in MANIFEST_COLUMNS if c not in table.columns]
     if missing:
@@ -128,7 +130,8 @@ def read_manifest(path) -> list[BatchRecord]:
         try:
             value = float(mass)
         except ValueError:
-            raise RecordError(f"--manifest {path}: row {row} ({name}) has mass {mass!r}; expected a number of kg") from None
+            raise RecordError(
+                f"--manifest {path}: row {row} ({name}) has mass {mass!r}; expected a number of kg") from None
         records.append(BatchRecord(path.parent / name, check_mass(value, f"--manifest {path} row {row} ({name})"),
                                    name))
     return records
@@ -238,8 +241,8 @@ def _check_settings(sidecar: Path, settings: dict, resume: bool, parts: Path):
                               f"({sidecar.name}); resume with the same records and options, or choose another --out")
 
 
-def run_batch(records, out, model=None, estimator="ekf", runner_options=None, jobs: int = 1, resume: bool = False,
-              progress: bool = True) -> BatchSummary:
+def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_options=None, jobs: int = 1,
+              resume: bool = False, progress: bool = True) -> BatchSummary:
     """Identify every record, writing each finished one at once; see the module docstring.
 
     Parameters
@@ -251,7 +254,7 @@ def run_batch(records, out, model=None, estimator="ekf", runner_options=None, jo
     model : SMDModel, optional
         Default ``SMDModel()``.
     estimator : str
-        Estimator name (default the EKF).
+        Estimator name (default :data:`~smd_statespace.runner.DEFAULT_ESTIMATOR`).
     runner_options : dict, optional
         :class:`~smd_statespace.runner.CycleRunner` options (``max_passes``,
         ``seed``, ``n_particles``, ...).
@@ -274,9 +277,9 @@ def run_batch(records, out, model=None, estimator="ekf", runner_options=None, jo
     parts = out / "parts"
     parts.mkdir(parents=True, exist_ok=True)
     sidecar = out / "run.json"
-    settings = _settings(records, model, estimator, runner_options)
+    settings = json.loads(json.dumps(_settings(records, model, estimator, runner_options)))  # as stored
     _check_settings(sidecar, settings, resume, parts)
-    if not sidecar.exists():
+    if not resume:
         temporary = sidecar.with_name(".run.json.tmp")
         temporary.write_text(json.dumps(settings, indent=2), encoding="utf-8")
         os.replace(temporary, sidecar)

@@ -152,3 +152,13 @@ def test_cli_batch_reports_each_bad_file_and_exits_1(records, tmp_path, capsys):
     assert "4 records: 4 identified now" in captured.out and (tmp_path / "o" / "results.csv").exists()
     assert main(["identify", str(records), "--max-passes", "2", "--out", str(tmp_path / "p"), "--quiet"]) == 2
     assert "--mass KG" in capsys.readouterr().err
+
+
+def test_a_new_run_rewrites_settings_left_in_its_folder(records, tmp_path):
+    found = collect_records(records, manifest=records / "manifest.csv")[1:2]
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "run.json").write_text('{"records": [], "options": {}}')  # left by something else, no parts
+    run_batch(found, out, runner_options=OPTIONS, progress=False)
+    again = run_batch(found, out, runner_options=OPTIONS, resume=True, progress=False)  # compared with the new
+    assert again.resumed == 1
