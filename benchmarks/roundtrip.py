@@ -39,7 +39,6 @@ records and results whatever ``--jobs``. Finished people are kept in
 from __future__ import annotations
 
 import argparse
-import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -49,6 +48,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from smd_statespace import article
+from smd_statespace.batch import atomic_write_csv
 from smd_statespace.errors import SMDInputError
 from smd_statespace.model import SMDModel
 from smd_statespace.runner import CycleRunner
@@ -90,9 +90,7 @@ def identify_person(person: dict, seed: np.random.SeedSequence, duration: float,
     except SMDInputError as exc:  # e.g. a GRF with two peaks per bouncing cycle: the record cannot be segmented
         table = pd.DataFrame([{"f_b": person["f_b"], "status": "failed", "reason": str(exc)}])
     table.insert(0, "person", person["person"])
-    partial = path.with_suffix(".part")
-    table.to_csv(partial, index=False)
-    os.replace(partial, path)  # a killed run leaves no half-written results
+    atomic_write_csv(table, path)  # a killed run leaves no half-written results
     return table
 
 

@@ -73,14 +73,24 @@ class BatchRecord:
 
 @dataclass
 class BatchSummary:
-    """What a batch run did: records identified now, taken from an earlier run, failed; cycles by status."""
+    """What a batch run did: records identified now, taken from an earlier run, failed; cycles by status.
+
+    ``failures`` maps each record that could not be identified at all to the reason; ``table`` is
+    what ``results`` holds (every record's cycles, in the run's record order).
+    """
 
     records: int
     identified: int
     resumed: int
-    failed_records: list = field(default_factory=list)
+    failures: dict = field(default_factory=dict)
     cycles: dict = field(default_factory=dict)
     results: Path | None = None
+    table: pd.DataFrame | None = None
+
+    @property
+    def failed_records(self) -> list:
+        """Names of the records that could not be identified at all, sorted."""
+        return sorted(self.failures)
 
     def line(self) -> str:
         """One line for the terminal."""
@@ -306,6 +316,7 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     results = out / "results.csv"
     atomic_write_csv(table, results)
     cycle = table["cycle"] if "cycle" in table else pd.Series(np.nan, index=table.index)
-    failed = sorted(set(table.loc[(table["status"] == "failed") & cycle.isna(), "record"]))
+    failed = table[(table["status"] == "failed") & cycle.isna()]  # a record's one row: it was not identified
     return BatchSummary(records=len(records), identified=len(pending), resumed=len(records) - len(pending),
-                        failed_records=failed, cycles=table["status"].value_counts().to_dict(), results=results)
+                        failures=dict(zip(failed["record"], failed["reason"])),
+                        cycles=table["status"].value_counts().to_dict(), results=results, table=table)

@@ -851,12 +851,8 @@ class ModelCheck:
         return out
 
     def harmonic_orders(self) -> np.ndarray:
-        """Force harmonic orders of the identified model: ``1..n`` plus those of any ``orders``-bearing effect."""
-        orders = set(range(1, int(self.model.n_harmonics) + 1))
-        for effect in getattr(self.model, "effects", ()):
-            if hasattr(effect, "orders"):
-                orders.update(int(k) for k in np.atleast_1d(effect.orders(self.model)))
-        return np.array(sorted(orders), dtype=int)
+        """Force harmonic orders of the identified model (:meth:`SMDModel.harmonic_orders`)."""
+        return self.model.harmonic_orders()
 
     def harmonic_signal(self, order) -> np.ndarray:
         """``[cos(k theta), sin(k theta)]`` of each checked cycle over the whole record, shape (n, 2).

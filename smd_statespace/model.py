@@ -501,6 +501,14 @@ class SMDModel:
 
     # -- physics ------------------------------------------------------------
 
+    def harmonic_orders(self) -> np.ndarray:
+        """Force harmonic orders of the model (Eq. 4): ``1..n`` plus those of any ``orders``-bearing effect."""
+        orders = set(range(1, int(self.n_harmonics) + 1))
+        for effect in self.effects:
+            if hasattr(effect, "orders"):
+                orders.update(int(k) for k in np.atleast_1d(effect.orders(self)))
+        return np.array(sorted(orders), dtype=int)
+
     def fourier_basis(self, t, inputs: CycleInputs, harmonics: Sequence[int] | None = None):
         """Regressors ``[1, cos(theta), sin(theta), ..., cos(n theta), sin(n theta)]`` of Eq. 4.
 

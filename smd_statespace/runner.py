@@ -107,8 +107,7 @@ def check_sampling(model: SMDModel, preprocessed: Preprocessed) -> None:
     Harmonic ``k`` of a cycle at ``f_b`` oscillates at ``k f_b``; it must stay
     below the Nyquist frequency ``fs / 2`` of the record.
     """
-    top = model.n_harmonics + sum(int(getattr(effect, "count", 0)) for effect in model.effects
-                                  if hasattr(effect, "orders"))
+    top = int(model.harmonic_orders().max())
     valid = [cycle.f_b for cycle in preprocessed.valid_cycles]
     if not valid:
         return

@@ -26,6 +26,16 @@ def _label(parameter: str) -> str:
     return PARAMETER_LABELS.get(PARAMETERS[parameter].column, parameter)
 
 
+def _collect_legend(axes, handles: list, labels: list):
+    """Append each axes' legend entries to ``handles``/``labels`` once per label; return both."""
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            if label not in labels:
+                handles.append(handle)
+                labels.append(label)
+    return handles, labels
+
+
 def _save(fig: Figure, path):
     if path is not None:
         fig.savefig(path, dpi=100)
@@ -119,11 +129,7 @@ def plot_trends(stats, path=None) -> Figure:
         ax.set_xlabel("bouncing frequency $f_b$ (Hz)")
     handles = [Line2D([], [], marker=".", ls="", color="0.55", ms=7)]
     labels = ["cycles" + (f" (an even subsample of {MAX_POINTS} per panel)" if len(cycles) > MAX_POINTS else "")]
-    for ax in axes[:len(parameters)]:
-        for h, l in zip(*ax.get_legend_handles_labels()):
-            if l not in labels:
-                handles.append(h)
-                labels.append(l)
+    _collect_legend(axes[:len(parameters)], handles, labels)
     fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=8, frameon=False,
                bbox_to_anchor=(0.5, 1.0 - 0.36 / fig.get_figheight()))
     included = "all cycles" if stats.options["include_undetermined"] else "cycles that determined each parameter"
@@ -199,12 +205,7 @@ def plot_histograms(stats, parameter: str, path=None, published: bool = True) ->
         ax.set_visible(False)
     for ax in axes[max(0, n_bands - ncols):n_bands]:
         ax.set_xlabel(_label(parameter))
-    handles, labels = [], []
-    for ax in axes[:n_bands]:
-        for h, l in zip(*ax.get_legend_handles_labels()):
-            if l not in labels:
-                handles.append(h)
-                labels.append(l)
+    handles, labels = _collect_legend(axes[:n_bands], [], [])
     fig.legend(handles, labels, loc="upper right", ncol=len(labels), fontsize=8, frameon=False,
                bbox_to_anchor=(0.995, 1.0 - 0.04 / fig.get_figheight()))
     excluded = sum(c.excluded for (p, _), c in stats.cells.items() if p == parameter)

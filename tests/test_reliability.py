@@ -37,6 +37,18 @@ def assert_finite_or_explained(table):
     assert (table.loc[table["status"] == "failed", "reason"].str.len() > 0).all()
 
 
+def identified_or_refused(identify):
+    """Run ``identify()``: either a typed one-line error, or a table that passes :func:`assert_finite_or_explained`."""
+    try:
+        table = identify()
+    except SMDInputError as error:
+        assert one_line(error)
+        event(f"typed error: {type(error).__name__}")
+        return
+    event("identified")
+    assert_finite_or_explained(table)
+
+
 def one_line(error) -> bool:
     return "\n" not in str(error).strip() and str(error).strip() != ""
 
@@ -78,15 +90,8 @@ def test_pipeline_and_runner_on_arbitrary_finite_signals(fs, n, force, seed):
     values = np.resize(np.asarray(force, dtype=float), n) + rng.normal(0.0, 1.0, n) * np.ptp(force)
     values = values - values.mean() + 70.0 * G  # about the body weight, so the unit check lets some through
     time = np.arange(n) / fs
-    try:
-        pre = preprocess(make_record(time, values, 70.0, source="prop"))
-        table = CycleRunner(SMDModel(n_harmonics=2), estimator="ekf", max_passes=1, progress=False).run(pre)
-    except SMDInputError as error:
-        assert one_line(error)
-        event(f"typed error: {type(error).__name__}")
-        return
-    event("identified")
-    assert_finite_or_explained(table)
+    runner = CycleRunner(SMDModel(n_harmonics=2), estimator="ekf", max_passes=1, progress=False)
+    identified_or_refused(lambda: runner.run(preprocess(make_record(time, values, 70.0, source="prop"))))
 
 
 @pytest.fixture(scope="module")
@@ -162,12 +167,5 @@ def test_runner_on_arbitrary_bouncing_like_signals(f_b, amplitudes, spikes, nois
     force = force + rng.normal(0.0, noise, time.size)
     for index, value in spikes:
         force[index] += value
-    try:
-        table = CycleRunner(estimator="ekf", max_passes=1, progress=False).run(
-            preprocess(make_record(time, force, 70.0, source="periodic")))
-    except SMDInputError as error:
-        assert one_line(error)
-        event(f"typed error: {type(error).__name__}")
-        return
-    event("identified")
-    assert_finite_or_explained(table)
+    identified_or_refused(lambda: CycleRunner(estimator="ekf", max_passes=1, progress=False).run(
+        preprocess(make_record(time, force, 70.0, source="periodic"))))

@@ -149,15 +149,13 @@ def run_batch_identify(args) -> int:
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
                         progress=not args.quiet)
-    table = pd.read_csv(summary.results)
     written = [summary.results, directory / "run.json"]
-    if (table["status"] == "ok").any():
+    if (summary.table["status"] == "ok").any():
         written.append(directory / "parameters.png")
-        plot_parameters(table, written[-1], against="f_b")
+        plot_parameters(summary.table, written[-1], against="f_b")
     print(f"{summary.line()}; {time.perf_counter() - started:.1f} s")
-    failed = table[(table["status"] == "failed") & table.get("cycle", pd.Series(np.nan, index=table.index)).isna()]
-    for row in failed.itertuples():
-        print(f"{PROG}: error: {row.reason}", file=sys.stderr)
+    for reason in summary.failures.values():
+        print(f"{PROG}: error: {reason}", file=sys.stderr)
     print("wrote " + ", ".join(str(path) for path in written) + f" and {len(records)} parts in {directory / 'parts'}")
     return 1 if summary.failed_records else 0
 
