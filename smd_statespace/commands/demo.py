@@ -189,7 +189,10 @@ def demo_next_steps() -> str:
         "  smd-statespace compare REC.csv --mass KG --truth T.json   estimators side by side",
         "  smd-statespace simulate --out REC.csv ...                   synthetic records with known truth",
         "  smd-statespace diagnose REC.csv --mass KG [--json R.json]   where the model fails, which effect is missing",
-        "  Population statistics (Section 5) and the floor study (Section 6) are the next stages.",
+        "  smd-statespace identify FOLDER --manifest M.csv --out DIR   a whole study, resumable (--resume)",
+        "  smd-statespace stats DIR/results.csv                        Section 5: bands, Table 2 fits, trends",
+        "  smd-statespace crowd --people 50 --fb 2.5 --out crowd.csv   crowd loads drawn from Table 2",
+        "  smd-statespace hsi                                          Section 6: the vibrating-floor study",
     ])
 
 
