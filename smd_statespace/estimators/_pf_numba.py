@@ -2,7 +2,8 @@
 
 Module-level functions, so that numba's on-disk cache serves every process
 (a worker of a process pool or a Dask cluster loads the machine code instead
-of compiling it again). See :mod:`._pf_kernel` for what the pass does.
+of compiling it again). See :mod:`._pf_kernel` for what the pass does and
+docs/performance.md for why it is laid out as it is.
 """
 
 from __future__ import annotations
@@ -22,243 +23,409 @@ LOW8, MANTISSA = u64(0xFF), u64(0x000FFFFFFFFFFFFF)
 
 
 @numba.njit(inline="always")
-def next_uint64(s):
-    """SFC64 (numpy's ``SFC64`` bit generator, state ``s`` of 4 words, advanced in place)."""
-    out = s[0] + s[1] + s[3]
-    s[3] += S1
-    s[0] = s[1] ^ (s[1] >> S11)
-    s[1] = s[2] + (s[2] << S3)
-    s[2] = ((s[2] << S24) | (s[2] >> S40)) + out
-    return out
+def sfc64(s0, s1, s2, s3):
+    """One output of SFC64 (numpy's ``SFC64`` bit generator) and its next state.
+
+    The state travels in four local variables, not an array, so that the
+    compiler keeps it in registers (a third faster than an array in memory).
+    """
+    out = s0 + s1 + s3
+    s3 += S1
+    s0 = s1 ^ (s1 >> S11)
+    s1 = s2 + (s2 << S3)
+    s2 = ((s2 << S24) | (s2 >> S40)) + out
+    return out, s0, s1, s2, s3
 
 
 @numba.njit(inline="always")
-def next_double(s):
-    """Uniform on [0, 1) as numpy's ``Generator.random``."""
-    return np.int64(next_uint64(s) >> S11) * (1.0 / 9007199254740992.0)
+def unit_double(bits):
+    """Uniform on [0, 1) from 64 bits, as numpy's ``Generator.random``."""
+    return np.int64(bits >> S11) * (1.0 / 9007199254740992.0)
 
 
 @numba.njit(inline="always")
-def standard_normal(s):
-    """numpy's ziggurat ``Generator.standard_normal`` (the same tables, hence the same numbers)."""
+def standard_normal(s0, s1, s2, s3):
+    """numpy's ziggurat ``Generator.standard_normal`` (the same tables, hence the same numbers).
+
+    Returns ``(value, s0, s1, s2, s3)``. The fast path (about 99 % of draws)
+    is inlined; the rest goes to :func:`_normal_slow`.
+    """
+    bits, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
+    idx = np.intp(bits & LOW8)
+    rest = bits >> S8
+    rabs = (rest >> S1) & MANTISSA
+    if rabs < ki_double[idx]:
+        sign = 1.0 - 2.0 * np.float64(np.int64(rest & S1))  # +-1 without a branch (one in two would mispredict)
+        return np.int64(rabs) * wi_double[idx] * sign, s0, s1, s2, s3
+    return _normal_slow(bits, s0, s1, s2, s3)
+
+
+@numba.njit(cache=True, nogil=True)
+def _normal_slow(bits, s0, s1, s2, s3):
+    """The rest of numpy's ziggurat, from the first draw ``bits`` that missed the fast path."""
     while True:
-        bits = next_uint64(s)
         idx = np.intp(bits & LOW8)
         bits >>= S8
         rabs = (bits >> S1) & MANTISSA
         x = np.int64(rabs) * wi_double[idx]
-        sign = 1.0 - 2.0 * np.float64(np.int64(bits & S1))  # +-1 without a branch (one in two would mispredict)
+        if bits & S1:
+            x = -x
         if rabs < ki_double[idx]:
-            return x * sign
-        x = x * sign
+            return x, s0, s1, s2, s3
         if idx == 0:
             while True:
-                xx = -ziggurat_nor_inv_r * math.log1p(-next_double(s))
-                yy = -math.log1p(-next_double(s))
+                first, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
+                second, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
+                xx = -ziggurat_nor_inv_r * math.log1p(-unit_double(first))
+                yy = -math.log1p(-unit_double(second))
                 if yy + yy > xx * xx:
                     if (rabs >> S8) & S1:
-                        return -(ziggurat_nor_r + xx)
-                    return ziggurat_nor_r + xx
-        elif (fi_double[idx - 1] - fi_double[idx]) * next_double(s) + fi_double[idx] < math.exp(-0.5 * x * x):
-            return x
+                        return -(ziggurat_nor_r + xx), s0, s1, s2, s3
+                    return ziggurat_nor_r + xx, s0, s1, s2, s3
+        uniform, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
+        if (fi_double[idx - 1] - fi_double[idx]) * unit_double(uniform) + fi_double[idx] < math.exp(-0.5 * x * x):
+            return x, s0, s1, s2, s3
+        bits, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def run_pass(particles, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full, noisy, q, bounded, low,
-             high, r, ess_threshold, state, mean, std, innovations, innovation_cov, ess):
-    """Filter one pass in place; returns (status, sample, log_likelihood, resamples, particles, log_weights).
+@numba.njit(cache=True, nogil=True)
+def fill_normal(state, out):
+    """Fill ``out`` (any shape, in C order) with standard normals from the SFC64 ``state`` (advanced in place)."""
+    s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
+    flat = out.reshape(-1)
+    for i in range(flat.size):
+        value, s0, s1, s2, s3 = standard_normal(s0, s1, s2, s3)
+        flat[i] = value
+    state[0], state[1], state[2], state[3] = s0, s1, s2, s3
 
-    ``state`` is the SFC64 state of the filter's generator, advanced in place
-    exactly as numpy would. status 0: done; 1: every weight vanished at ``sample``.
+
+@numba.njit(cache=True, nogil=True)
+def fill_normal_transposed(state, out):
+    """Fill ``out[j, i]`` in the order ``i`` then ``j``: the draws of ``rng.standard_normal((i, j))``, transposed."""
+    s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
+    rows, columns = out.shape
+    for i in range(columns):
+        for j in range(rows):
+            value, s0, s1, s2, s3 = standard_normal(s0, s1, s2, s3)
+            out[j, i] = value
+    state[0], state[1], state[2], state[3] = s0, s1, s2, s3
+
+
+@numba.njit(cache=True, nogil=True)
+def next_unit_double(state):
+    """One ``Generator.random()`` from the SFC64 ``state`` (advanced in place)."""
+    bits, state[0], state[1], state[2], state[3] = sfc64(state[0], state[1], state[2], state[3])
+    return unit_double(bits)
+
+
+@numba.njit(inline="never")
+def fold(value, low, high):
+    """Reflect ``value`` into ``[low, high]`` (as :func:`~.particle.reflect`); out of line, it is rarely needed."""
+    width = high - low
+    shifted = (value - low) % (2.0 * width)
+    return low + (2.0 * width - shifted if shifted > width else shifted)
+
+
+@numba.njit(inline="always")
+def fold_block(row, low, high, outside):
+    """Fold the values of ``row`` outside ``[low, high]`` back in, if ``outside`` says there are any."""
+    if outside:
+        for i in range(row.size):
+            if row[i] < low or row[i] > high:
+                row[i] = fold(row[i], low, high)
+
+
+@numba.njit(inline="always")
+def reflect_block(row, low, high):
+    """Fold the values of ``row`` outside ``[low, high]`` back in (a vectorised test, then the rare folds)."""
+    outside = 0
+    for i in range(row.size):
+        outside += (row[i] < low) | (row[i] > high)
+    fold_block(row, low, high, outside)
+
+
+@numba.njit(inline="always")
+def jitter_block(row, draws, std, low, high):
+    """Add ``draws * std`` to ``row`` (process noise, Eq. 6) and reflect into ``[low, high]``, in one sweep."""
+    outside = 0
+    for i in range(row.size):
+        value = row[i] + draws[i] * std
+        row[i] = value
+        outside += (value < low) | (value > high)
+    fold_block(row, low, high, outside)
+
+
+BLOCK = 256
+"""Particles per block: a block's slice of the cloud, its forces and its draws stay in the core's cache."""
+
+SUMS = {"reassoc", "contract"}
+"""Floating-point licence of the pass: sums may be reordered (so that they vectorise) and ``a * b + c`` fused.
+No assumption about NaN or infinity (a non-finite likelihood is tested for)."""
+
+
+@numba.njit(inline="always")
+def block_force(cloud, c0, nb, basis, start, length, out):
+    """The Fourier force (Eq. 4) of particles ``start .. start + length``: ``out[i] = sum_j c_j[i] * basis[j]``."""
+    coefficients = cloud[c0][start:start + length]
+    b = basis[0]
+    for i in range(length):
+        out[i] = coefficients[i] * b
+    for j in range(1, nb):
+        coefficients = cloud[c0 + j][start:start + length]
+        b = basis[j]
+        for i in range(length):
+            out[i] += coefficients[i] * b
+
+
+@numba.njit(inline="always")
+def block_forces(cloud, c0, nb, basis, start, length, out0, out1, out2):
+    """:func:`block_force` at the three times of an RK4 step (rows of ``basis``), in one sweep over the coefficients."""
+    row = cloud[c0][start:start + length]
+    b0, b1, b2 = basis[0, 0], basis[1, 0], basis[2, 0]
+    for i in range(length):
+        c = row[i]
+        out0[i] = c * b0
+        out1[i] = c * b1
+        out2[i] = c * b2
+    for j in range(1, nb):
+        row = cloud[c0 + j][start:start + length]
+        b0, b1, b2 = basis[0, j], basis[1, j], basis[2, j]
+        for i in range(length):
+            c = row[i]
+            out0[i] += c * b0
+            out1[i] += c * b1
+            out2[i] += c * b2
+
+
+@numba.njit(inline="always")
+def move_block(u, v, freq, damping, f_start, f_mid, f_end, h, rk4):
+    """One RK4 (or Euler) step of ``u, u'`` (Eq. 10-12) for a block of particles, in place.
+
+    ``f_start, f_mid, f_end`` are the Fourier forces at ``t``, ``t + h/2`` and ``t + h``.
     """
-    n, d = particles.shape
+    if rk4:
+        for i in range(u.size):
+            u1, v1 = u[i], v[i]
+            omega = TWO_PI * freq[i]
+            w2 = omega * omega
+            damp = 2.0 * damping[i] * omega
+            a1 = -w2 * u1 - damp * v1 + f_start[i]
+            u2 = u1 + 0.5 * h * v1
+            v2 = v1 + 0.5 * h * a1
+            a2 = -w2 * u2 - damp * v2 + f_mid[i]
+            u3 = u1 + 0.5 * h * v2
+            v3 = v1 + 0.5 * h * a2
+            a3 = -w2 * u3 - damp * v3 + f_mid[i]
+            u4 = u1 + h * v3
+            v4 = v1 + h * a3
+            a4 = -w2 * u4 - damp * v4 + f_end[i]
+            u[i] = u1 + (h / 6.0) * (v1 + 2.0 * v2 + 2.0 * v3 + v4)
+            v[i] = v1 + (h / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+    else:
+        for i in range(u.size):
+            u1, v1 = u[i], v[i]
+            omega = TWO_PI * freq[i]
+            u[i] = u1 + h * v1
+            v[i] = v1 + h * (-omega * omega * u1 - 2.0 * damping[i] * omega * v1 + f_start[i])
+
+
+@numba.njit(inline="always")
+def weigh_block(u, v, freq, damping, force, weights, log_weights, observed, inverse_noise, log_norm, pending, full):
+    """Reweight a block by the likelihood of the observation (Eq. 13-16), in logs and in place.
+
+    ``log_weights`` become ``log_weights - pending + log p(y | particle)``
+    (non-finite ones -inf). Returns the sums, with the previous ``weights``,
+    of the residuals ``prediction - y`` and of their products (for the
+    innovation covariance), and the largest new log-weight.
+    """
+    y0, y1, y2 = observed
+    i0, i1, i2 = inverse_noise
+    e0 = e1 = e2 = c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+    for i in range(u.size):
+        omega = TWO_PI * freq[i]
+        r2 = (-omega * omega * u[i] - 2.0 * damping[i] * omega * v[i] + force[i]) - y2
+        wi = weights[i]
+        e2 += wi * r2
+        c22 += wi * r2 * r2
+        z2 = r2 * i2
+        s2 = z2 * z2
+        if full:
+            r0 = u[i] - y0
+            r1 = v[i] - y1
+            e0 += wi * r0
+            e1 += wi * r1
+            c00 += wi * r0 * r0
+            c01 += wi * r0 * r1
+            c02 += wi * r0 * r2
+            c11 += wi * r1 * r1
+            c12 += wi * r1 * r2
+            z0 = r0 * i0
+            z1 = r1 * i1
+            s2 += z0 * z0 + z1 * z1
+        value = (log_weights[i] - pending) + (log_norm - 0.5 * s2)
+        log_weights[i] = value if math.isfinite(value) else -np.inf
+    top = -np.inf
+    for i in range(u.size):
+        if log_weights[i] > top:
+            top = log_weights[i]
+    return (e0, e1, e2, c00, c01, c02, c11, c12, c22), top
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", fastmath=SUMS)
+def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full, noisy, q, noisy_low, noisy_high,
+             quiet, quiet_low, quiet_high, r, ess_threshold, state, mean, std, innovations, innovation_cov, ess):
+    """Filter one pass in place; returns (status, sample, log_likelihood, resamples, cloud, log_weights).
+
+    ``cloud`` has one row per state slot (shape ``(n_state, n_particles)``);
+    ``noisy`` are the slots with process noise ``q`` and bounds
+    ``noisy_low``/``noisy_high`` (infinite where unbounded); ``quiet`` the
+    bounded slots without noise. ``state`` is the SFC64 state of the filter's
+    generator, advanced in place exactly as numpy would. status 0: done;
+    1: every weight vanished at ``sample``.
+    """
+    d, n = cloud.shape
     m, n_obs = y.shape
     nb = obs_basis.shape[1]
-    substeps = move_basis.shape[1]
+    n_noisy = noisy.size
     log_norm = -0.5 * n_obs * math.log(TWO_PI)
     for c in range(n_obs):
         log_norm -= math.log(r[c])
-    predicted = np.empty((n, n_obs))
+    inverse_noise = (1.0 / r[0], 1.0 / r[n_obs - 2], 1.0 / r[n_obs - 1])
+    var0, var1, var2 = r[0] * r[0], r[n_obs - 2] * r[n_obs - 2], r[n_obs - 1] * r[n_obs - 1]
+    # Weights of the previous sample: weights * scale; log-weights: log_weights - pending.
     weights = np.empty(n)
     for i in range(n):
         weights[i] = math.exp(log_weights[i])
-    spare = np.empty_like(particles)
-    cumulative = np.empty(n)
-    accumulator = np.empty(d)
+    scale = 1.0
+    pending = 0.0
+    spare = np.empty_like(cloud)
+    f_start = np.empty(BLOCK)
+    f_mid = np.empty(BLOCK)
+    f_end = np.empty(BLOCK)
+    force = np.empty(BLOCK)
+    draws = np.empty((n_noisy, BLOCK))
+    n_blocks = (n + BLOCK - 1) // BLOCK
+    block_weight = np.empty(n_blocks)
+    block_mean = np.empty((n_blocks, d))
+    block_m2 = np.empty((n_blocks, d))
+    index = np.empty(n, np.intp)
     total_log_likelihood = 0.0
     resamples = 0
     for k in range(m):
-        mean_u = mean_v = mean_acc = 0.0
-        # Predict every particle (Eq. 11-12 plus noise, Eq. 6), then its observation (Eq. 13-16).
-        for i in range(n):
-            u = particles[i, 0]
-            v = particles[i, 1]
-            omega = TWO_PI * particles[i, 2]
-            w2 = omega * omega
-            damp = 2.0 * particles[i, 3] * omega
-            if k > 0:
-                h = steps[k]
-                for s in range(substeps):
-                    f0 = 0.0
-                    fh = 0.0
-                    f1 = 0.0
-                    for j in range(nb):
-                        cj = particles[i, c0 + j]
-                        f0 += cj * move_basis[k, s, 0, j]
-                        fh += cj * move_basis[k, s, 1, j]
-                        f1 += cj * move_basis[k, s, 2, j]
-                    k1u = v
-                    k1v = -w2 * u - damp * v + f0
-                    if rk4:
-                        u2 = u + 0.5 * h * k1u
-                        v2 = v + 0.5 * h * k1v
-                        k2v = -w2 * u2 - damp * v2 + fh
-                        u3 = u + 0.5 * h * v2
-                        v3 = v + 0.5 * h * k2v
-                        k3v = -w2 * u3 - damp * v3 + fh
-                        u4 = u + h * v3
-                        v4 = v + h * k3v
-                        k4v = -w2 * u4 - damp * v4 + f1
-                        u = u + (h / 6.0) * (k1u + 2.0 * v2 + 2.0 * v3 + v4)
-                        v = v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
-                    else:
-                        u = u + h * k1u
-                        v = v + h * k1v
-                particles[i, 0] = u
-                particles[i, 1] = v
-                for j in range(noisy.size):
-                    particles[i, noisy[j]] += standard_normal(state) * q[j]
-                for j in range(bounded.size):
-                    b = bounded[j]
-                    value = particles[i, b]
-                    lo = low[j]
-                    hi = high[j]
-                    if value < lo or value > hi:
-                        width = hi - lo
-                        shifted = (value - lo) % (2.0 * width)
-                        particles[i, b] = lo + (2.0 * width - shifted if shifted > width else shifted)
-                u = particles[i, 0]
-                v = particles[i, 1]
-                omega = TWO_PI * particles[i, 2]
-                w2 = omega * omega
-                damp = 2.0 * particles[i, 3] * omega
-            force = 0.0
-            for j in range(nb):
-                force += particles[i, c0 + j] * obs_basis[k, j]
-            acc = -w2 * u - damp * v + force
-            wi = weights[i]
-            if full:
-                predicted[i, 0] = u
-                predicted[i, 1] = v
-                predicted[i, 2] = acc
-                mean_u += wi * u
-                mean_v += wi * v
-                mean_acc += wi * acc
-            else:
-                predicted[i, 0] = acc
-                mean_acc += wi * acc
-        # Predictive covariance of the observation (weights of the previous sample), and reweighting in logs.
-        # Sums in local variables (not array cells), so the compiler keeps them in registers.
+        u, v, freq, damping = cloud[0], cloud[1], cloud[2], cloud[3]
+        observed = (y[k, 0], y[k, n_obs - 2], y[k, n_obs - 1])
+        h = steps[k]
+        # Sums of the weighted residuals of the predicted observation, and of their products.
+        sums = np.zeros(9)
         top = -np.inf
-        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
-        y0, y1, y2 = y[k, 0], y[k, n_obs - 2], y[k, n_obs - 1]
-        r0, r1, r2 = r[0], r[n_obs - 2], r[n_obs - 1]
-        for i in range(n):
-            wi = weights[i]
-            if full:
-                p0, p1, p2 = predicted[i, 0], predicted[i, 1], predicted[i, 2]
-                d0, d1, d2 = p0 - mean_u, p1 - mean_v, p2 - mean_acc
-                c00 += wi * d0 * d0
-                c01 += wi * d0 * d1
-                c02 += wi * d0 * d2
-                c11 += wi * d1 * d1
-                c12 += wi * d1 * d2
-                c22 += wi * d2 * d2
-                z0 = (y0 - p0) / r0
-                z1 = (y1 - p1) / r1
-                z2 = (y2 - p2) / r2
-                s2 = z0 * z0 + z1 * z1 + z2 * z2
-            else:
-                d2 = predicted[i, 0] - mean_acc
-                c22 += wi * d2 * d2
-                z2 = (y2 - predicted[i, 0]) / r2
-                s2 = z2 * z2
-            value = log_weights[i] + (log_norm - 0.5 * s2)
-            if not math.isfinite(value):
-                value = -np.inf
-            log_weights[i] = value
-            if value > top:
-                top = value
+        for start in range(0, n, BLOCK):
+            length = min(BLOCK, n - start)
+            if k > 0:
+                # Predict (Eq. 11-12): RK4 or Euler on u, u'; the parameters are random walks (Eq. 6).
+                block = slice(start, start + length)
+                for s in range(move_basis.shape[1]):
+                    block_forces(cloud, c0, nb, move_basis[k, s], start, length, f_start, f_mid, f_end)
+                    move_block(u[block], v[block], freq[block], damping[block], f_start, f_mid, f_end, h, rk4)
+                # Process noise, drawn particle by particle as rng.standard_normal((n, n_noisy)) does;
+                # then the parameters that left their prior box are reflected back.
+                if n_noisy:
+                    fill_normal_transposed(state, draws[:, :length])
+                for j in range(n_noisy):
+                    jitter_block(cloud[noisy[j]][start:start + length], draws[j], q[j], noisy_low[j], noisy_high[j])
+                for j in range(quiet.size):
+                    reflect_block(cloud[quiet[j]][start:start + length], quiet_low[j], quiet_high[j])
+            # Predicted observation (Eq. 13-16) and reweighting by its likelihood, in logs.
+            block_force(cloud, c0, nb, obs_basis[k], start, length, force)
+            block = slice(start, start + length)
+            block_sums, block_top = weigh_block(u[block], v[block], freq[block], damping[block], force, weights[block],
+                                                log_weights[block], observed, inverse_noise, log_norm, pending, full)
+            for j in range(9):
+                sums[j] += block_sums[j]
+            top = max(top, block_top)
+        # Innovation and its predicted covariance, with the weights of the previous sample (sums shifted by y).
+        e0, e1, e2, c00, c01, c02, c11, c12, c22 = sums
+        e0, e1, e2 = e0 * scale, e1 * scale, e2 * scale
         if full:
-            innovations[k, 0] = y0 - mean_u
-            innovations[k, 1] = y1 - mean_v
-            innovations[k, 2] = y2 - mean_acc
-            innovation_cov[k, 0, 0] = c00 + r0 * r0
-            innovation_cov[k, 1, 1] = c11 + r1 * r1
-            innovation_cov[k, 2, 2] = c22 + r2 * r2
-            innovation_cov[k, 0, 1] = innovation_cov[k, 1, 0] = c01
-            innovation_cov[k, 0, 2] = innovation_cov[k, 2, 0] = c02
-            innovation_cov[k, 1, 2] = innovation_cov[k, 2, 1] = c12
+            innovations[k, 0], innovations[k, 1], innovations[k, 2] = -e0, -e1, -e2
+            innovation_cov[k, 0, 0] = c00 * scale - e0 * e0 + var0
+            innovation_cov[k, 1, 1] = c11 * scale - e1 * e1 + var1
+            innovation_cov[k, 2, 2] = c22 * scale - e2 * e2 + var2
+            innovation_cov[k, 0, 1] = innovation_cov[k, 1, 0] = c01 * scale - e0 * e1
+            innovation_cov[k, 0, 2] = innovation_cov[k, 2, 0] = c02 * scale - e0 * e2
+            innovation_cov[k, 1, 2] = innovation_cov[k, 2, 1] = c12 * scale - e1 * e2
         else:
-            innovations[k, 0] = y2 - mean_acc
-            innovation_cov[k, 0, 0] = c22 + r2 * r2
+            innovations[k, 0] = -e2
+            innovation_cov[k, 0, 0] = c22 * scale - e2 * e2 + var2
         if not math.isfinite(top):
-            return 1, k, total_log_likelihood, resamples, particles, log_weights
+            return 1, k, total_log_likelihood, resamples, cloud, log_weights
+        # New weights (one exponential per particle), effective sample size, filtered mean and sd. The
+        # moments are taken block by block (two passes over a block while it is in cache) and the blocks
+        # combined as in Chan et al.'s parallel variance, which keeps a collapsed slot's sd accurate.
         total = 0.0
-        for i in range(n):
-            wi = math.exp(log_weights[i] - top)
-            weights[i] = wi
-            total += wi
-        increment = top + math.log(total)
-        total_log_likelihood += increment
-        # Normalised weights (one exponential per particle), filtered mean and sd, effective sample size.
-        sum_w2 = 0.0
-        accumulator[:] = 0.0
+        sum_squares = 0.0
+        for block, start in enumerate(range(0, n, BLOCK)):
+            stop = min(start + BLOCK, n)
+            block_total = 0.0
+            wb, lb = weights[start:stop], log_weights[start:stop]
+            for i in range(stop - start):
+                wi = math.exp(lb[i] - top)
+                wb[i] = wi
+                block_total += wi
+                sum_squares += wi * wi
+            total += block_total
+            block_weight[block] = block_total
+            inverse = 1.0 / block_total if block_total > 0.0 else 0.0
+            for j in range(d):
+                row = cloud[j][start:stop]
+                s1 = 0.0
+                for i in range(stop - start):
+                    s1 += wb[i] * row[i]
+                centre = s1 * inverse
+                s2 = 0.0
+                for i in range(stop - start):
+                    x = row[i] - centre
+                    s2 += wb[i] * x * x
+                block_mean[block, j] = centre
+                block_m2[block, j] = s2
+        pending = top + math.log(total)
+        total_log_likelihood += pending
         scale = 1.0 / total
-        for i in range(n):
-            log_weights[i] -= increment
-            wi = weights[i] * scale
-            weights[i] = wi
-            sum_w2 += wi * wi
-            for j in range(d):
-                accumulator[j] += wi * particles[i, j]
-        mean[k, :] = accumulator
-        accumulator[:] = 0.0
-        for i in range(n):
-            wi = weights[i]
-            for j in range(d):
-                dev = particles[i, j] - mean[k, j]
-                accumulator[j] += wi * dev * dev
         for j in range(d):
-            std[k, j] = math.sqrt(max(accumulator[j], 0.0))
-        ess[k] = 1.0 / sum_w2
+            centre = 0.0
+            for block in range(n_blocks):
+                centre += block_weight[block] * block_mean[block, j]
+            centre *= scale
+            spread = 0.0
+            for block in range(n_blocks):
+                x = block_mean[block, j] - centre
+                spread += block_m2[block, j] + block_weight[block] * x * x
+            mean[k, j] = centre
+            std[k, j] = math.sqrt(max(spread * scale, 0.0))
+        ess[k] = total * total / sum_squares
         if ess[k] < ess_threshold * n and k < m - 1:
             # Systematic resampling (as systematic_resample): one uniform, N evenly spaced pointers.
-            start = next_double(state)
+            offset = next_unit_double(state)
             running = 0.0
-            for i in range(n):
-                running += weights[i]
-                cumulative[i] = running
-            cumulative[n - 1] = 1.0
             source = 0
             for i in range(n):
-                position = (start + i) / n
-                while source < n - 1 and cumulative[source] <= position:
+                position = (offset + i) / n
+                while source < n - 1 and running + weights[source] * scale <= position:
+                    running += weights[source] * scale
                     source += 1
-                for j in range(d):
-                    spare[i, j] = particles[source, j]
-            particles, spare = spare, particles
+                index[i] = source
+            for j in range(d):
+                row, target = cloud[j], spare[j]
+                for i in range(n):
+                    target[i] = row[index[i]]
+            cloud, spare = spare, cloud
             uniform = -math.log(n)
             flat = math.exp(uniform)
             for i in range(n):
                 log_weights[i] = uniform
                 weights[i] = flat
+            scale = 1.0
+            pending = 0.0
             resamples += 1
-    return 0, m, total_log_likelihood, resamples, particles, log_weights
-
-
-@numba.njit(cache=True, nogil=True)
-def fill_normal(state, out):
-    flat = out.reshape(-1)
-    for i in range(flat.size):
-        flat[i] = standard_normal(state)
+    for i in range(n):
+        log_weights[i] -= pending
+    return 0, m, total_log_likelihood, resamples, cloud, log_weights

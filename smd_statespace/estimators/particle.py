@@ -201,18 +201,20 @@ class ParticleFilter(Estimator):
         rk4 = model.discretisation == "rk4"
         steps, move_basis, obs_basis = _pf_kernel.force_rows(model, data, model.substeps, rk4)
         noisy = np.flatnonzero(setup.q_std > 0)
-        bounded = np.flatnonzero(np.isfinite(setup.low) & np.isfinite(setup.high))
+        bounded = np.isfinite(setup.low) & np.isfinite(setup.high)
+        quiet = np.flatnonzero(bounded & (setup.q_std <= 0))  # bounded slots without noise (fixed ones)
+        low, high = np.where(bounded, setup.low, -np.inf), np.where(bounded, setup.high, np.inf)
         trace = Trace(model, data)
         ess_trace = np.empty(len(data))
         generator_state = rng.bit_generator.state
         state = generator_state["state"]["state"].copy()
-        status, sample, log_likelihood, resamples, particles, log_weights = _pf_kernel.kernel()(
-            np.ascontiguousarray(particles, dtype=float), np.ascontiguousarray(log_weights, dtype=float),
+        status, sample, log_likelihood, resamples, cloud, log_weights = _pf_kernel.kernel()(
+            np.ascontiguousarray(particles.T, dtype=float), np.ascontiguousarray(log_weights, dtype=float),
             np.ascontiguousarray(data.y, dtype=float), steps, move_basis, obs_basis, model.index("a0"), rk4,
-            model.observation == "full", noisy, np.ascontiguousarray(setup.q_std[noisy]), bounded,
-            np.ascontiguousarray(setup.low[bounded]), np.ascontiguousarray(setup.high[bounded]),
-            np.ascontiguousarray(setup.r_std, dtype=float), self.ess_threshold, state, trace.mean, trace.std,
-            trace.innovations, trace.innovation_cov, ess_trace)
+            model.observation == "full", noisy, setup.q_std[noisy], low[noisy], high[noisy], quiet, low[quiet],
+            high[quiet], np.ascontiguousarray(setup.r_std, dtype=float), self.ess_threshold, state, trace.mean,
+            trace.std, trace.innovations, trace.innovation_cov, ess_trace)
+        particles = np.ascontiguousarray(cloud.T)
         generator_state["state"]["state"] = state
         rng.bit_generator.state = generator_state
         if status == 1:
