@@ -12,6 +12,9 @@ import math
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
 from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
 
 TWO_PI = 2.0 * math.pi
@@ -118,6 +121,57 @@ def next_unit_double(state):
     return unit_double(bits)
 
 
+@intrinsic
+def bits_of(typingctx, x):
+    """The 64 bits of a float64, as an int64 (a free reinterpretation, which the compiler can vectorise)."""
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(64))
+    return types.int64(types.float64), codegen
+
+
+@intrinsic
+def float_of(typingctx, x):
+    """The float64 whose 64 bits are the int64 ``x``."""
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.DoubleType())
+    return types.float64(types.int64), codegen
+
+
+LOG2E = 1.4426950408889634
+LN2_HI, LN2_LO = 6.93147180369123816490e-01, 1.90821492927058770002e-10  # ln 2 in two parts (Cody and Waite)
+ROUNDER = 6755399441055744.0  # 1.5 * 2**52: adding it to a whole float puts the integer in the low bits
+ROUNDER_BITS = np.int64(0x4338000000000000)
+LOWEST_EXPONENT = -708.0  # exp(-708) is about 3e-308, the smallest normal float's neighbourhood
+E0, E1, E2, E3, E4, E5, E6, E7, E8, E9, E10, E11, E12, E13 = (1.0 / math.factorial(k) for k in range(14))
+
+
+@numba.njit(inline="always")
+def exp_nonpositive(x):
+    """``exp(x)`` for ``x <= 0`` within 1 ulp of ``math.exp``; 0 below -708 (and for -inf).
+
+    ``x = k ln 2 + r`` with ``|r| <= ln 2 / 2``, a degree-13 Taylor polynomial
+    for ``exp(r)`` and ``2**k`` built from its bits: arithmetic only, so a loop
+    of these vectorises (libm's ``exp`` is a call per value, twice as slow).
+    Below -708 numpy gives subnormals of at most 3e-308 where this gives 0:
+    a relative weight that no sum can see.
+    """
+    y = x if x > LOWEST_EXPONENT else LOWEST_EXPONENT
+    kf = math.floor(y * LOG2E + 0.5)
+    r = (y - kf * LN2_HI) - kf * LN2_LO
+    p = ((((((((((((E13 * r + E12) * r + E11) * r + E10) * r + E9) * r + E8) * r + E7) * r + E6) * r + E5) * r
+             + E4) * r + E3) * r + E2) * r + E1) * r + E0
+    k = bits_of(kf + ROUNDER) - ROUNDER_BITS
+    value = p * float_of((k + 1023) << 52)
+    return value if x > LOWEST_EXPONENT else 0.0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def exponentiate(log_weights, top, out):
+    """``out = exp(log_weights - top)`` (no fast-math licence here: the range reduction must stay exact)."""
+    for i in range(log_weights.size):
+        out[i] = exp_nonpositive(log_weights[i] - top)
+
+
 @numba.njit(inline="never")
 def fold(value, low, high):
     """Reflect ``value`` into ``[low, high]`` (as :func:`~.particle.reflect`); out of line, it is rarely needed."""
@@ -195,6 +249,32 @@ def block_forces(cloud, c0, nb, basis, start, length, out0, out1, out2):
             out0[i] += c * b0
             out1[i] += c * b1
             out2[i] += c * b2
+
+
+@numba.njit(inline="always")
+def systematic_index(weights, scale, offset, counts, index):
+    """The particles chosen by systematic resampling, without a branch per particle.
+
+    Pointer ``i`` sits at ``(offset + i) / n`` and picks the first particle
+    whose cumulative normalised weight ``C_j`` exceeds it (numpy's
+    ``searchsorted(C, pointers, side="right")``, ``C_{n-1} = 1``). Pointer
+    ``i`` is past ``C_j`` exactly when ``i >= A_j = ceil(n C_j - offset)``, so
+    ``index[i]`` is the number of ``A_j <= i``: a histogram of the ``A_j`` and
+    its running sum. (The two tests round differently only for a pointer
+    within a rounding error of a ``C_j``.)
+    """
+    n = weights.size
+    counts[:] = 0
+    running = 0.0
+    for j in range(n - 1):
+        running += weights[j] * scale
+        passed = math.ceil(n * running - offset)
+        counts[min(max(passed, 0), n)] += 1
+    counts[n] += 1  # C_{n-1} = 1: no pointer is past the last particle
+    chosen = 0
+    for i in range(n):
+        chosen += counts[i]
+        index[i] = min(chosen, n - 1)
 
 
 @numba.njit(inline="always")
@@ -309,6 +389,7 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
     block_mean = np.empty((n_blocks, d))
     block_m2 = np.empty((n_blocks, d))
     index = np.empty(n, np.intp)
+    counts = np.empty(n + 1, np.intp)
     total_log_likelihood = 0.0
     resamples = 0
     for k in range(m):
@@ -320,9 +401,9 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
         top = -np.inf
         for start in range(0, n, BLOCK):
             length = min(BLOCK, n - start)
+            block = slice(start, start + length)
             if k > 0:
                 # Predict (Eq. 11-12): RK4 or Euler on u, u'; the parameters are random walks (Eq. 6).
-                block = slice(start, start + length)
                 for s in range(move_basis.shape[1]):
                     block_forces(cloud, c0, nb, move_basis[k, s], start, length, f_start, f_mid, f_end)
                     move_block(u[block], v[block], freq[block], damping[block], f_start, f_mid, f_end, h, rk4)
@@ -331,12 +412,11 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
                 if n_noisy:
                     fill_normal_transposed(state, draws[:, :length])
                 for j in range(n_noisy):
-                    jitter_block(cloud[noisy[j]][start:start + length], draws[j], q[j], noisy_low[j], noisy_high[j])
+                    jitter_block(cloud[noisy[j]][block], draws[j], q[j], noisy_low[j], noisy_high[j])
                 for j in range(quiet.size):
-                    reflect_block(cloud[quiet[j]][start:start + length], quiet_low[j], quiet_high[j])
+                    reflect_block(cloud[quiet[j]][block], quiet_low[j], quiet_high[j])
             # Predicted observation (Eq. 13-16) and reweighting by its likelihood, in logs.
             block_force(cloud, c0, nb, obs_basis[k], start, length, force)
-            block = slice(start, start + length)
             block_sums, block_top = weigh_block(u[block], v[block], freq[block], damping[block], force, weights[block],
                                                 log_weights[block], observed, inverse_noise, log_norm, pending, full)
             for j in range(9):
@@ -358,35 +438,33 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
             innovation_cov[k, 0, 0] = c22 * scale - e2 * e2 + var2
         if not math.isfinite(top):
             return 1, k, total_log_likelihood, resamples, cloud, log_weights
-        # New weights (one exponential per particle), effective sample size, filtered mean and sd. The
-        # moments are taken block by block (two passes over a block while it is in cache) and the blocks
-        # combined as in Chan et al.'s parallel variance, which keeps a collapsed slot's sd accurate.
+        # New weights, effective sample size, filtered mean and sd. Each block's moments are summed in one
+        # sweep, shifted by the block's first particle (so a fixed slot has sd 0 and a collapsed one keeps
+        # its digits), and the blocks are combined as in Chan et al.'s parallel variance.
         total = 0.0
         sum_squares = 0.0
         for block, start in enumerate(range(0, n, BLOCK)):
             stop = min(start + BLOCK, n)
+            wb = weights[start:stop]
+            exponentiate(log_weights[start:stop], top, wb)
             block_total = 0.0
-            wb, lb = weights[start:stop], log_weights[start:stop]
             for i in range(stop - start):
-                wi = math.exp(lb[i] - top)
-                wb[i] = wi
-                block_total += wi
-                sum_squares += wi * wi
+                block_total += wb[i]
+                sum_squares += wb[i] * wb[i]
             total += block_total
             block_weight[block] = block_total
             inverse = 1.0 / block_total if block_total > 0.0 else 0.0
             for j in range(d):
                 row = cloud[j][start:stop]
-                s1 = 0.0
+                offset = row[0]
+                s1 = s2 = 0.0
                 for i in range(stop - start):
-                    s1 += wb[i] * row[i]
-                centre = s1 * inverse
-                s2 = 0.0
-                for i in range(stop - start):
-                    x = row[i] - centre
+                    x = row[i] - offset
+                    s1 += wb[i] * x
                     s2 += wb[i] * x * x
-                block_mean[block, j] = centre
-                block_m2[block, j] = s2
+                centre = s1 * inverse
+                block_mean[block, j] = offset + centre
+                block_m2[block, j] = max(s2 - centre * s1, 0.0)
         pending = top + math.log(total)
         total_log_likelihood += pending
         scale = 1.0 / total
@@ -404,15 +482,7 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
         ess[k] = total * total / sum_squares
         if ess[k] < ess_threshold * n and k < m - 1:
             # Systematic resampling (as systematic_resample): one uniform, N evenly spaced pointers.
-            offset = next_unit_double(state)
-            running = 0.0
-            source = 0
-            for i in range(n):
-                position = (offset + i) / n
-                while source < n - 1 and running + weights[source] * scale <= position:
-                    running += weights[source] * scale
-                    source += 1
-                index[i] = source
+            systematic_index(weights, scale, next_unit_double(state), counts, index)
             for j in range(d):
                 row, target = cloud[j], spare[j]
                 for i in range(n):
