@@ -310,12 +310,17 @@ class Prior:
         """Draw ``size`` states, shape ``(size, n_state)``."""
         uniform = np.array([kind == "uniform" for kind in self.kinds])
         draws = np.empty((size, len(self.names)))
-        # low + (high - low) * U and mean + std * Z: what rng.uniform and rng.normal compute element by element
-        # (the same numbers), without their slower per-element broadcasting of the parameters.
-        low, high = self.first[uniform], self.second[uniform]
-        draws[:, uniform] = low + (high - low) * rng.random((size, low.size))
+        # low + (high - low) * U and mean + std * Z, in place: what rng.uniform and rng.normal compute
+        # element by element (the same numbers), without their slow per-element parameter broadcasting.
+        values = rng.random((size, int(uniform.sum())))
+        values *= self.second[uniform] - self.first[uniform]
+        values += self.first[uniform]
+        draws[:, uniform] = values
         normal = ~uniform
-        draws[:, normal] = self.first[normal] + self.second[normal] * rng.standard_normal((size, normal.sum()))
+        values = rng.standard_normal((size, int(normal.sum())))
+        values *= self.second[normal]
+        values += self.first[normal]
+        draws[:, normal] = values
         return draws
 
 

@@ -209,7 +209,7 @@ def jitter_block(row, draws, std, low, high):
     fold_block(row, low, high, outside)
 
 
-BLOCK = 256
+BLOCK = 128
 """Particles per block: a block's slice of the cloud, its forces and its draws stay in the core's cache."""
 
 SUMS = {"reassoc", "contract"}
