@@ -26,7 +26,9 @@ Usage::
     python benchmarks/perf.py --particles 5000 --repeats 5 --out docs/perf_table.md
 
 The load average of the machine is printed before and after; timings are the
-fastest of ``--repeats`` runs, wall clock and CPU time of this process.
+fastest of ``--repeats`` runs, wall clock and CPU time of this process, which
+is pinned to one CPU (``--cpu``) so that it is not moved between cores in the
+middle of a timing.
 """
 
 from __future__ import annotations
@@ -300,7 +302,11 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=5, help="timed runs per filter (fastest kept)")
     parser.add_argument("--seeds", type=int, default=20, help="runs per filter for the log-likelihood")
     parser.add_argument("--out", help="also write the tables (markdown) to this file")
+    parser.add_argument("--cpu", type=int, default=max(os.sched_getaffinity(0)),
+                        help="pin the run to this CPU (default: the last one); -1: do not pin")
     args = parser.parse_args(argv)
+    if args.cpu >= 0:
+        os.sched_setaffinity(0, {args.cpu})  # one core, and no migration between cores in the middle of a timing
     model = SMDModel()
     data = the_cycle(model)
     load_before = os.getloadavg()
@@ -313,7 +319,8 @@ def main(argv=None):
     load_after = os.getloadavg()
     lines = [f"- {versions()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}.",
              f"- Cycle: {len(data)} samples, {model}; N = {args.particles}; fastest of {args.repeats} runs; "
-             f"log-likelihood over {args.seeds} seeds.",
+             f"log-likelihood over {args.seeds} seeds; "
+             + (f"pinned to CPU {args.cpu}." if args.cpu >= 0 else "not pinned."),
              f"- Load average (1, 5, 15 min) before: {', '.join(f'{v:.2f}' for v in load_before)}; after: "
              f"{', '.join(f'{v:.2f}' for v in load_after)}; this run took {time.perf_counter() - started:.0f} s.",
              "", "| particle filter | ns / particle-step (wall) | (CPU) | s / pass | vs ours compiled | "

@@ -99,6 +99,63 @@ def test_noise_generator_is_a_function_of_the_given_generator():
     assert not np.array_equal(a, c)
 
 
+
+# -- the pieces of the compiled pass that replace a library call --------------------------------
+
+
+def test_compiled_normals_are_numpys():
+    from smd_statespace.estimators._pf_numba import fill_normal, fill_normal_transposed
+
+    generator = np.random.Generator(np.random.SFC64(11))
+    state = generator.bit_generator.state["state"]["state"].copy()
+    expected = generator.standard_normal(200_000)  # enough draws to pass through every slow-path branch
+    drawn = np.empty(200_000)
+    fill_normal(state, drawn)
+    np.testing.assert_array_equal(drawn, expected)
+    assert np.array_equal(state, generator.bit_generator.state["state"]["state"])
+    blocks = np.empty((13, 50))
+    fill_normal_transposed(state, blocks)
+    np.testing.assert_array_equal(blocks, generator.standard_normal((50, 13)).T)
+
+
+def test_vectorised_exponential_is_within_one_ulp_of_libm():
+    from smd_statespace.estimators._pf_numba import exponentiate
+
+    rng = np.random.default_rng(0)
+    x = np.concatenate([-rng.exponential(50.0, 100_000), -rng.random(10_000) * 1e-6, [0.0, -1e-300, -707.9]])
+    out = np.empty_like(x)
+    exponentiate(x, 0.0, out)
+    expected = np.exp(x)
+    assert np.max(np.abs(out - expected) / np.spacing(expected)) <= 1.0
+    shifted = np.empty(3)
+    exponentiate(np.array([3.0, 2.0, -np.inf]), 3.0, shifted)  # exp(log_weights - top)
+    np.testing.assert_allclose(shifted, [1.0, np.exp(-1.0), 0.0], rtol=1e-15)
+    below = np.empty(3)
+    exponentiate(np.array([-708.5, -800.0, -np.inf]), 0.0, below)  # numpy: subnormals, at most 3e-308
+    np.testing.assert_array_equal(below, 0.0)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_branch_free_systematic_index_equals_searchsorted(seed):
+    from smd_statespace.estimators._pf_numba import systematic_index
+    from smd_statespace.estimators.particle import systematic_resample
+
+    rng = np.random.default_rng(seed)
+    n = 1000
+    weights = rng.random(n) ** 8  # a few heavy particles, as after a sharp likelihood
+    weights[rng.random(n) < 0.3] = 0.0  # and particles whose weight underflowed
+    total = weights.sum()
+    offset = rng.random()
+    chosen = np.empty(n, np.intp)
+    systematic_index(weights, 1.0 / total, offset, np.empty(n + 1, np.intp), chosen)
+
+    class Fixed:  # the same uniform for the reference
+        def random(self):
+            return offset
+
+    np.testing.assert_array_equal(chosen, systematic_resample(weights / total, Fixed()))
+    assert np.all(weights[chosen] > 0)
+
 # -- parallel and distributed runs give the serial table ---------------------------------------
 
 
