@@ -156,7 +156,7 @@ def exp_nonpositive(x):
     a relative weight that no sum can see.
     """
     y = x if x > LOWEST_EXPONENT else LOWEST_EXPONENT
-    kf = math.floor(y * LOG2E + 0.5)
+    kf = np.floor(y * LOG2E + 0.5)
     r = (y - kf * LN2_HI) - kf * LN2_LO
     p = ((((((((((((E13 * r + E12) * r + E11) * r + E10) * r + E9) * r + E8) * r + E7) * r + E6) * r + E5) * r
              + E4) * r + E3) * r + E2) * r + E1) * r + E0
@@ -309,6 +309,15 @@ def move_block(u, v, freq, damping, f_start, f_mid, f_end, h, rk4):
             v[i] = v1 + h * (-omega * omega * u1 - 2.0 * damping[i] * omega * v1 + f_start[i])
 
 
+@numba.njit(cache=True, nogil=True, fastmath={"nnan", "nsz", "reassoc"})
+def largest(values):
+    """The largest of ``values``, none of them NaN (-inf allowed): a licence the compiler needs to vectorise it."""
+    top = -np.inf
+    for i in range(values.size):
+        top = max(top, values[i])
+    return top
+
+
 @numba.njit(inline="always")
 def weigh_block(u, v, freq, damping, force, weights, log_weights, observed, inverse_noise, log_norm, pending, full):
     """Reweight a block by the likelihood of the observation (Eq. 13-16), in logs and in place.
@@ -344,10 +353,7 @@ def weigh_block(u, v, freq, damping, force, weights, log_weights, observed, inve
             s2 += z0 * z0 + z1 * z1
         value = (log_weights[i] - pending) + (log_norm - 0.5 * s2)
         log_weights[i] = value if math.isfinite(value) else -np.inf
-    top = -np.inf
-    for i in range(u.size):
-        if log_weights[i] > top:
-            top = log_weights[i]
+    top = largest(log_weights)
     return (e0, e1, e2, c00, c01, c02, c11, c12, c22), top
 
 
