@@ -276,6 +276,10 @@ class Effect:
         return f"{type(self).__name__}()"
 
 
+ONE_WORD_PER_DOUBLE = (np.random.SFC64, np.random.PCG64, np.random.PCG64DXSM, np.random.Philox)
+"""Bit generators whose ``random()`` uses exactly one ``random_raw`` word per number (not MT19937: two)."""
+
+
 @dataclass(frozen=True)
 class Prior:
     """Independent prior of every state slot.
@@ -306,22 +310,37 @@ class Prior:
         """Diagonal prior covariance."""
         return np.diag(self.std**2)
 
-    def sample(self, rng: np.random.Generator, size: int) -> np.ndarray:
-        """Draw ``size`` states, shape ``(size, n_state)``."""
+    def sample(self, rng: np.random.Generator, size: int, columns=None) -> np.ndarray:
+        """Draw ``size`` states, shape ``(size, n_state)``.
+
+        ``columns`` (a boolean mask over the slots, or slot indices in
+        increasing order) returns only those slots, and leaves ``rng`` exactly where the
+        full draw would: the uniform slots' numbers are skipped, not computed,
+        when none of them is asked for (a restart needs only the two motion
+        slots). The uniform slots draw first, then the normal ones.
+        """
         uniform = np.array([kind == "uniform" for kind in self.kinds])
-        draws = np.empty((size, len(self.names)))
-        # low + (high - low) * U and mean + std * Z, in place: what rng.uniform and rng.normal compute
-        # element by element (the same numbers), without their slow per-element parameter broadcasting.
-        values = rng.random((size, int(uniform.sum())))
-        values *= self.second[uniform] - self.first[uniform]
-        values += self.first[uniform]
-        draws[:, uniform] = values
         normal = ~uniform
+        wanted = np.ones(len(self.names), dtype=bool)
+        if columns is not None:
+            wanted[:] = False
+            wanted[columns] = True  # a boolean mask or slot indices
+        draws = np.empty((size, len(self.names)))
+        n_uniform = int(uniform.sum())
+        if (wanted & uniform).any() or not isinstance(rng.bit_generator, ONE_WORD_PER_DOUBLE):
+            # low + (high - low) * U and mean + std * Z, in place: what rng.uniform and rng.normal compute
+            # element by element (the same numbers), without their slow per-element parameter broadcasting.
+            values = rng.random((size, n_uniform))
+            values *= self.second[uniform] - self.first[uniform]
+            values += self.first[uniform]
+            draws[:, uniform] = values
+        else:
+            rng.bit_generator.random_raw(size * n_uniform)  # the words rng.random would have used
         values = rng.standard_normal((size, int(normal.sum())))
         values *= self.second[normal]
         values += self.first[normal]
         draws[:, normal] = values
-        return draws
+        return draws if columns is None else draws[:, wanted]
 
 
 # ---------------------------------------------------------------------------

@@ -223,3 +223,24 @@ def test_dask_cluster_executor_gives_the_serial_table(record):
         runner = CycleRunner(executor=client.get_executor(), **options)
         clustered = runner.run(record)
     pd.testing.assert_frame_equal(table_without_timings(serial), table_without_timings(clustered))
+
+
+@pytest.mark.parametrize("bit_generator", [np.random.SFC64, np.random.PCG64, np.random.MT19937])
+def test_prior_columns_are_the_full_draws_columns_and_the_stream_moves_alike(bit_generator):
+    model = SMDModel()
+    _, data, _ = well_excited_cycle(samples=10)
+    prior = model.prior(data.y[0], model.data_scale(data.y, data.inputs))
+    full, part = np.random.Generator(bit_generator(3)), np.random.Generator(bit_generator(3))
+    dynamic = np.array([slot.kind == "dynamic" for slot in model.slots])
+    np.testing.assert_array_equal(prior.sample(part, 300, columns=dynamic), prior.sample(full, 300)[:, dynamic])
+    assert part.random() == full.random()  # the skipped uniform slots used the same words
+    some = np.array([2, 5])
+    np.testing.assert_array_equal(prior.sample(part, 7, columns=some), prior.sample(full, 7)[:, some])
+    # What rng.uniform and rng.normal would give, element by element.
+    reference = np.random.Generator(bit_generator(8))
+    drawn = prior.sample(np.random.Generator(bit_generator(8)), 50)
+    uniform = np.array([kind == "uniform" for kind in prior.kinds])
+    expected_uniform = reference.uniform(prior.first[uniform], prior.second[uniform], size=(50, uniform.sum()))
+    expected_normal = reference.normal(prior.first[~uniform], prior.second[~uniform], size=(50, (~uniform).sum()))
+    np.testing.assert_array_equal(drawn[:, uniform], expected_uniform)
+    np.testing.assert_array_equal(drawn[:, ~uniform], expected_normal)

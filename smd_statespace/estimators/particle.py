@@ -124,7 +124,7 @@ class ParticleFilter(Estimator):
         ``SMDModel`` without effects). ``"numpy"``: whole-cloud calls of the
         model's methods (any model). ``"auto"`` (default) takes the compiled pass
         whenever it applies. Both draw the same random numbers in the same order
-        and agree to rounding; the compiled one is about six times faster
+        and agree to rounding; the compiled one is about fifteen times faster
         (docs/performance.md).
 
     Attributes (after :meth:`run`)
@@ -171,7 +171,7 @@ class ParticleFilter(Estimator):
             log_weights = np.full(n, -np.log(n)) if index is not None else start.log_weights.copy()
             # Motion restarts from the prior at the cycle start; parameters are carried over.
             dynamic = dynamic_mask(model)
-            particles[:, dynamic] = setup.prior.sample(rng, n)[:, dynamic]
+            particles[:, dynamic] = setup.prior.sample(rng, n, columns=dynamic)
         elif hasattr(start, "mean") and hasattr(start, "cov"):
             particles = rng.multivariate_normal(np.asarray(start.mean, float), np.asarray(start.cov, float), size=n,
                                                 method="eigh")

@@ -71,7 +71,7 @@ class RaoBlackwellisedFilter(Estimator):
         prior_block = setup.prior_cov[np.ix_(linear, linear)]
         if start is None:
             x = np.broadcast_to(setup.prior_mean, (n, model.n_state)).copy()
-            x[:, nonlinear] = setup.prior.sample(rng, n)[:, nonlinear]
+            x[:, nonlinear] = setup.prior.sample(rng, n, columns=nonlinear)
             P = np.broadcast_to(prior_block, (n, linear.size, linear.size)).copy()
             return x, P, np.full(n, -np.log(n))
         if not (isinstance(start, ParticleStart) and start.covariances is not None):
