@@ -78,11 +78,8 @@ def force_rows(model, data, substeps: int, rk4: bool):
     steps = np.zeros(m)
     steps[1:] = (t[1:] - t[:-1]) / substeps
     times = np.zeros((m, substeps, 3))
-    for k in range(1, m):
-        h = steps[k]
-        for s in range(substeps):
-            tt = t[k - 1] + s * h
-            times[k, s] = (tt, tt + 0.5 * h, tt + h)
+    starts = t[:-1, None] + np.arange(substeps) * steps[1:, None]  # t_{k-1} + s h
+    times[1:] = starts[..., None] + np.array([0.0, 0.5, 1.0]) * steps[1:, None, None]
     move_basis = G * model.fourier_basis(times, data.inputs)
     obs_basis = G * model.fourier_basis(t, data.inputs)
     return steps, np.ascontiguousarray(move_basis), np.ascontiguousarray(obs_basis)
