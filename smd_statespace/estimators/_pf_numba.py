@@ -449,7 +449,7 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
         # its digits), and the blocks are combined as in Chan et al.'s parallel variance.
         total = 0.0
         sum_squares = 0.0
-        for block, start in enumerate(range(0, n, BLOCK)):
+        for number, start in enumerate(range(0, n, BLOCK)):
             stop = min(start + BLOCK, n)
             wb = weights[start:stop]
             exponentiate(log_weights[start:stop], top, wb)
@@ -458,7 +458,7 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
                 block_total += wb[i]
                 sum_squares += wb[i] * wb[i]
             total += block_total
-            block_weight[block] = block_total
+            block_weight[number] = block_total
             inverse = 1.0 / block_total if block_total > 0.0 else 0.0
             for j in range(d):
                 row = cloud[j][start:stop]
@@ -469,20 +469,20 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
                     s1 += wb[i] * x
                     s2 += wb[i] * x * x
                 centre = s1 * inverse
-                block_mean[block, j] = offset + centre
-                block_m2[block, j] = max(s2 - centre * s1, 0.0)
+                block_mean[number, j] = offset + centre
+                block_m2[number, j] = max(s2 - centre * s1, 0.0)
         pending = top + math.log(total)
         total_log_likelihood += pending
         scale = 1.0 / total
         for j in range(d):
             centre = 0.0
-            for block in range(n_blocks):
-                centre += block_weight[block] * block_mean[block, j]
+            for number in range(n_blocks):
+                centre += block_weight[number] * block_mean[number, j]
             centre *= scale
             spread = 0.0
-            for block in range(n_blocks):
-                x = block_mean[block, j] - centre
-                spread += block_m2[block, j] + block_weight[block] * x * x
+            for number in range(n_blocks):
+                x = block_mean[number, j] - centre
+                spread += block_m2[number, j] + block_weight[number] * x * x
             mean[k, j] = centre
             std[k, j] = math.sqrt(max(spread * scale, 0.0))
         ess[k] = total * total / sum_squares
