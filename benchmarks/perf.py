@@ -245,8 +245,8 @@ def profile_rows(model, data, n, repeats):
     steps = n * len(data)
     fill = normal_filler()
     state = np.random.Generator(np.random.SFC64(0)).bit_generator.state["state"]["state"].copy()
-    block = np.empty((len(data) - 1, n, model.n_state))
-    fill(state, block[:1, :10])
+    block = np.empty((model.n_state, (len(data) - 1) * n))  # one row per slot, as the pass fills them
+    fill(state, block[:, :10])
     draws_wall, draws_cpu, _ = timed(lambda: fill(state, block), repeats)
     # The compiled pass alone: the kernel call inside ParticleFilter.run, timed by a wrapper.
     compiled, inner = [], _pf_kernel.kernel()

@@ -104,13 +104,13 @@ def test_noise_generator_is_a_function_of_the_given_generator():
 
 
 def test_compiled_normals_are_numpys():
-    from smd_statespace.estimators._pf_numba import fill_normal, fill_normal_transposed
+    from smd_statespace.estimators._pf_numba import fill_normal_transposed
 
     generator = np.random.Generator(np.random.SFC64(11))
     state = generator.bit_generator.state["state"]["state"].copy()
     expected = generator.standard_normal(200_000)  # enough draws to pass through every slow-path branch
     drawn = np.empty(200_000)
-    fill_normal(state, drawn)
+    fill_normal_transposed(state, drawn.reshape(1, -1))
     np.testing.assert_array_equal(drawn, expected)
     assert np.array_equal(state, generator.bit_generator.state["state"]["state"])
     blocks = np.empty((13, 50))

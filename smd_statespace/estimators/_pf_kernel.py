@@ -43,9 +43,9 @@ def kernel():
 
 
 def normal_filler():
-    """The compiled ``fill_normal(state, out)``: the pass's normal sampler alone (for profiles)."""
+    """The compiled ``fill_normal_transposed(state, out)``: the pass's normal sampler alone (for profiles)."""
     kernel()
-    return _COMPILED["fill_normal"]
+    return _COMPILED["fill_normal_transposed"]
 
 
 def available() -> bool:
@@ -60,7 +60,7 @@ def available() -> bool:
 def _compile():
     from . import _pf_numba
 
-    return {"run_pass": _pf_numba.run_pass, "fill_normal": _pf_numba.fill_normal}
+    return {"run_pass": _pf_numba.run_pass, "fill_normal_transposed": _pf_numba.fill_normal_transposed}
 
 
 def force_rows(model, data, substeps: int, rk4: bool):

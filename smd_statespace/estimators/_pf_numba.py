@@ -92,17 +92,6 @@ def _normal_slow(bits, s0, s1, s2, s3):
 
 
 @numba.njit(cache=True, nogil=True)
-def fill_normal(state, out):
-    """Fill ``out`` (any shape, in C order) with standard normals from the SFC64 ``state`` (advanced in place)."""
-    s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
-    flat = out.reshape(-1)
-    for i in range(flat.size):
-        value, s0, s1, s2, s3 = standard_normal(s0, s1, s2, s3)
-        flat[i] = value
-    state[0], state[1], state[2], state[3] = s0, s1, s2, s3
-
-
-@numba.njit(cache=True, nogil=True)
 def fill_normal_transposed(state, out):
     """Fill ``out[j, i]`` in the order ``i`` then ``j``: the draws of ``rng.standard_normal((i, j))``, transposed."""
     s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
@@ -380,8 +369,7 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
     var0, var1, var2 = r[0] * r[0], r[n_obs - 2] * r[n_obs - 2], r[n_obs - 1] * r[n_obs - 1]
     # Weights of the previous sample: weights * scale; log-weights: log_weights - pending.
     weights = np.empty(n)
-    for i in range(n):
-        weights[i] = math.exp(log_weights[i])
+    exponentiate(log_weights, 0.0, weights)
     scale = 1.0
     pending = 0.0
     spare = np.empty_like(cloud)
