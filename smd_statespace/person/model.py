@@ -1,0 +1,331 @@
+"""The record-level model of one bouncing person: one (f_h, xi_h) for a whole record.
+
+The per-cycle method of the article (Sections 3.2 and 4) re-estimates every
+parameter in every cycle. Here the person is fixed over the record and only
+the force varies:
+
+- Eq. 2, ``u'' + 2 xi_h w_h u' + w_h^2 u = g F(t)``, with ``f_h``, ``xi_h``
+  constant over the record and ``u, u'`` carried across cycle boundaries;
+- Eq. 4, ``F = a0 + sum_i [a_i cos(i theta) + b_i sin(i theta)]`` (g), with
+  the phase ``theta(t)`` of :class:`~smd_statespace.person.timing.CycleTiming`
+  and coefficients ``alpha_j = [a0, a1, b1, ..., an, bn]`` that change from
+  cycle to cycle around the person's record-level *template* ``tau``;
+- Eq. 3, the observation ``y = GRF / M_h - g = u''`` plus white noise of
+  variance ``sigma^2`` (the only observation: ``u`` and ``u'`` are latent, so
+  no high-pass filter or integration touches the data).
+
+Variation models of the coefficients (chosen by likelihood in
+:func:`~smd_statespace.person.fit.identify_person`):
+
+``"independent"``
+    ``alpha_j = tau + d_j``, ``d_j ~ N(0, D)`` independent per cycle.
+``"random_walk"``
+    ``alpha_j = alpha_{j-1} + e_j``, ``e_j ~ N(0, E)``; ``tau`` is ``alpha_0``.
+``"both"``
+    ``alpha_j = m_j + d_j``, ``m_j = m_{j-1} + e_j``: a wandering template.
+
+``D`` and ``E`` are diagonal with one variance for ``a0`` and one per harmonic
+(shared by ``a_i`` and ``b_i``: a perturbation of the harmonic's complex
+amplitude with no preferred phase).
+
+The transition is the exact discretisation of Eq. 2 over one sample with the
+force of Eq. 4 inside the step (phase linear in time), so no discretisation
+error enters the likelihood (the article's Euler step, Eq. 11-12, is not used).
+
+Parameters estimated by maximum likelihood (:attr:`RecordModel.param_names`):
+``f_h`` (Hz), ``xi_h`` (-), ``log_var_d_0 .. log_var_d_n`` (log of ``D``'s
+variances relative to ``sigma^2``), likewise ``log_var_e_*``, and with
+``process_noise=True`` ``log_var_w`` (a white force on the COM, variance per
+second relative to ``sigma^2``). ``sigma^2``, the template, ``u_0``, ``u'_0``
+and the coefficients of effects' regressors are concentrated out (generalised
+least squares inside :mod:`smd_statespace.person.kalman`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import linalg
+
+from ..errors import OptionError
+from ..io import G
+from . import kalman
+from .timing import CycleTiming
+
+__all__ = ["VARIATIONS", "Regressor", "RecordModel", "coefficient_names"]
+
+VARIATIONS = {"independent": kalman.INDEPENDENT, "random_walk": kalman.RANDOM_WALK, "both": kalman.BOTH}
+"""Variation models of the force coefficients and their codes in the compiled pass."""
+
+F_H_BOUNDS = (0.5, 10.0)
+"""Search range of ``f_h`` (Hz)."""
+
+XI_H_BOUNDS = (1e-3, 3.0)
+"""Search range of ``xi_h`` (-)."""
+
+LOG_VAR_BOUNDS = (-25.0, 12.0)
+"""Search range of every log variance ratio."""
+
+
+def coefficient_names(n_harmonics):
+    """``["a0", "a1", "b1", ..., "an", "bn"]``: the coefficients of Eq. 4."""
+    names = ["a0"]
+    for i in range(1, n_harmonics + 1):
+        names += [f"a{i}", f"b{i}"]
+    return names
+
+
+@dataclass(frozen=True)
+class Regressor:
+    """A known signal whose unknown coefficient enters the person's acceleration.
+
+    An effect that is linear in one unknown coefficient ``c`` adds
+    ``c x(t)`` to ``u''`` (Eq. 2): for example the measured floor acceleration
+    (the leg acts on the motion relative to the floor) or ``u^3`` evaluated on
+    the smoothed displacement (a cubic spring, linearised about the fitted
+    path). The coefficient is estimated with the template, by generalised
+    least squares, so it costs no search dimension.
+
+    Attributes
+    ----------
+    name : str
+        Name of the coefficient (its key in ``person.json``).
+    values : ndarray, shape (N,)
+        The signal at the samples (m/s^2 per unit coefficient).
+    unit : str
+        Unit of the coefficient.
+    """
+
+    name: str
+    values: np.ndarray
+    unit: str = "-"
+
+
+@dataclass
+class RecordModel:
+    """The record-level state-space model of one person over one record.
+
+    Parameters
+    ----------
+    time : ndarray, shape (N,)
+        Sample times (s), uniform.
+    y : ndarray, shape (N,)
+        Measured COM acceleration ``GRF / M_h - g`` (m/s^2), Eq. 3.
+    timing : CycleTiming
+        Force-cycle boundaries (the phase of Eq. 4).
+    n_harmonics : int
+        Harmonics ``n`` of Eq. 4.
+    variation : {"independent", "random_walk", "both"}
+        How the force coefficients change from cycle to cycle.
+    process_noise : bool
+        Add a white force on the COM with an estimated level.
+    regressors : tuple of Regressor
+        Effects' known signals with unknown coefficients.
+    """
+
+    time: np.ndarray
+    y: np.ndarray
+    timing: CycleTiming
+    n_harmonics: int = 4
+    variation: str = "independent"
+    process_noise: bool = False
+    drift: bool = False
+    regressors: tuple = ()
+    _phase: tuple = field(init=False, repr=False)
+
+    def __post_init__(self):
+        if self.variation not in VARIATIONS:
+            raise OptionError(f"variation {self.variation!r} is not one of: {', '.join(VARIATIONS)}")
+        self.time = np.asarray(self.time, dtype=float)
+        self.y = np.asarray(self.y, dtype=float)
+        cycle, theta, rate = self.timing.locate(self.time)
+        reset = np.zeros(self.time.size, dtype=np.bool_)
+        reset[1:] = cycle[1:] != cycle[:-1]
+        self._phase = (cycle, theta, rate, reset)
+        orders = np.arange(1, self.n_harmonics + 1)
+        angle = theta[:, None] * orders
+        basis = np.empty((self.time.size, self.n_coefficients))
+        basis[:, 0] = 1.0
+        basis[:, 1::2] = np.cos(angle)
+        basis[:, 2::2] = np.sin(angle)
+        self._H = G * basis
+        self._rotation = np.exp(1j * angle)  # (N, n)
+        self._X_obs = np.column_stack([r.values for r in self.regressors]) if self.regressors else np.zeros(
+            (self.time.size, 0))
+
+    # ------------------------------------------------------------------ layout
+    @property
+    def n_coefficients(self) -> int:
+        """``p = 2 n + 1`` force coefficients per cycle."""
+        return 2 * self.n_harmonics + 1
+
+    @property
+    def dt(self) -> float:
+        """Sampling interval (s)."""
+        return float(self.time[1] - self.time[0])
+
+    @property
+    def coefficient_names(self) -> list:
+        """Names of the force coefficients, ``a0, a1, b1, ...``."""
+        return coefficient_names(self.n_harmonics)
+
+    @property
+    def delta_names(self) -> list:
+        """Names of the concentrated linear unknowns: ``u0, u_dot0``, the template, the regressors' coefficients."""
+        return ["u0", "u_dot0"] + [f"template_{c}" for c in self.coefficient_names] + [
+            r.name for r in self.regressors]
+
+    @property
+    def variance_groups(self) -> list:
+        """Names of the variance groups: ``0`` (a0) and ``1..n`` (harmonics)."""
+        return list(range(self.n_harmonics + 1))
+
+    @property
+    def param_names(self) -> list:
+        """Names of the parameters searched by maximum likelihood."""
+        names = ["f_h", "xi_h"]
+        if self.variation in ("independent", "both"):
+            names += [f"log_var_d_{i}" for i in self.variance_groups]
+        if self.variation in ("random_walk", "both"):
+            names += [f"log_var_e_{i}" for i in self.variance_groups]
+        if self.drift:
+            names += [f"log_var_s_{i}" for i in self.variance_groups]
+        if self.process_noise:
+            names.append("log_var_w")
+        return names
+
+    @property
+    def bounds(self) -> list:
+        """Search bounds of the parameters, in the order of :attr:`param_names`."""
+        return [F_H_BOUNDS, XI_H_BOUNDS] + [LOG_VAR_BOUNDS] * (len(self.param_names) - 2)
+
+    def start_params(self, f_h=2.5, xi_h=0.3, log_var=-3.0) -> np.ndarray:
+        """A starting point: the given ``f_h``, ``xi_h`` and one log variance ratio for every group."""
+        values = np.full(len(self.param_names), float(log_var))
+        values[0], values[1] = f_h, xi_h
+        return values
+
+    # ------------------------------------------------------------------ system
+    def _variances(self, params):
+        """``D``, ``E`` (per coefficient) and the process-noise rate from the parameter vector."""
+        named = dict(zip(self.param_names, params))
+        group = np.concatenate([[0], np.repeat(np.arange(1, self.n_harmonics + 1), 2)])
+        D = np.zeros(self.n_coefficients)
+        E = np.zeros(self.n_coefficients)
+        if "log_var_d_0" in named:
+            D = np.exp([named[f"log_var_d_{g}"] for g in group])
+        if "log_var_e_0" in named:
+            E = np.exp([named[f"log_var_e_{g}"] for g in group])
+        S = np.exp([named[f"log_var_s_{g}"] for g in group]) if "log_var_s_0" in named else np.zeros(
+            self.n_coefficients)
+        w = float(np.exp(named["log_var_w"])) if "log_var_w" in named else 0.0
+        return D, E, S, w
+
+    def system(self, params) -> dict:
+        """The arrays of the compiled pass for a parameter vector.
+
+        Returns
+        -------
+        dict
+            ``hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift`` as
+            :func:`~smd_statespace.person.kalman.augmented_pass` takes them.
+        """
+        f_h, xi_h = float(params[0]), float(params[1])
+        omega = 2.0 * np.pi * f_h
+        a_c = np.array([[0.0, 1.0], [-omega**2, -2.0 * xi_h * omega]])  # Eq. 2
+        dt = self.dt
+        phi = linalg.expm(a_c * dt)
+        b_c = np.array([0.0, 1.0])
+        # constant input over a step: A^-1 (Phi - I) B
+        g0 = np.linalg.solve(a_c, (phi - np.eye(2)) @ b_c)
+        # harmonic input exp(j nu s): (j nu I - A)^-1 (exp(j nu dt) I - Phi) B, per cycle rate and order
+        cycle, _, rate, reset = self._phase
+        orders = np.arange(1, self.n_harmonics + 1)
+        nu = self.timing_rates()[:, None] * orders  # (J, n)
+        gain = _harmonic_step_gain(a_c, phi, nu, dt)  # (J, n, 2)
+        per_sample = gain[cycle] * self._rotation[..., None]  # (N, n, 2)
+        gam = np.empty((self.time.size, 2, self.n_coefficients))
+        gam[:, :, 0] = g0
+        gam[:, :, 1::2] = per_sample.real.transpose(0, 2, 1)
+        gam[:, :, 2::2] = per_sample.imag.transpose(0, 2, 1)
+        gam *= G
+        D, E, S, w = self._variances(params)
+        qx = w * _integrated_white_noise(a_c, dt) if w > 0 else np.zeros((2, 2))
+        x_tr = _regressor_steps(a_c, phi, self._X_obs, dt)
+        return {
+            "hx": a_c[1].copy(),
+            "H": self._H,
+            "Phi": phi,
+            "Gam": gam,
+            "Qx": qx,
+            "X_obs": self._X_obs,
+            "X_tr": x_tr,
+            "reset": reset,
+            "code": VARIATIONS[self.variation],
+            "D": D,
+            "E": E,
+            "drift": S,
+        }
+
+    def timing_rates(self) -> np.ndarray:
+        """Phase rate ``2 pi f_b`` of every cycle (rad/s), shape (J,)."""
+        return 2.0 * np.pi * self.timing.f_b
+
+    # ------------------------------------------------------------------ likelihood
+    def filter(self, params) -> dict:
+        """Run the compiled pass and concentrate; returns the pass's arrays and :func:`kalman.concentrate`'s."""
+        sys = self.system(params)
+        e, Ev, f, S, s, ee = kalman.augmented_pass(
+            self.y, sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["X_obs"], sys["X_tr"],
+            sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"])
+        out = kalman.concentrate(S, s, ee, f, self.y.size)
+        out.update(innovations_raw=e, innovation_regression=Ev, innovation_variance_unscaled=f)
+        return out
+
+    def loglike(self, params) -> float:
+        """Profile log-likelihood: template, initial state, regressors and ``sigma^2`` at their maximum."""
+        return self.filter(params)["loglike"]
+
+    def innovations(self, params, fitted=None) -> tuple:
+        """Standardised one-step innovations and their raw values (m/s^2) at the fitted ``delta``."""
+        fitted = self.filter(params) if fitted is None else fitted
+        raw = fitted["innovations_raw"] - fitted["innovation_regression"] @ fitted["delta"]
+        standard = raw / np.sqrt(fitted["innovation_variance_unscaled"] * fitted["sigma2"])
+        return standard, raw
+
+
+def _harmonic_step_gain(a_c, phi, nu, dt):
+    """``(j nu I - A)^-1 (exp(j nu dt) I - Phi) B`` for every ``nu``, shape nu.shape + (2,)."""
+    # 2x2 inverse in closed form, B = [0, 1]
+    a, b, c, d = a_c[0, 0], a_c[0, 1], a_c[1, 0], a_c[1, 1]
+    jn = 1j * nu
+    m00, m01, m10, m11 = jn - a, -b, -c, jn - d
+    det = m00 * m11 - m01 * m10
+    e = np.exp(jn * dt)
+    r0 = -phi[0, 1] + 0.0 * e  # (e I - Phi) B = [-Phi01, e - Phi11]
+    r1 = e - phi[1, 1]
+    g_u = (m11 * r0 - m01 * r1) / det
+    g_v = (-m10 * r0 + m00 * r1) / det
+    return np.stack([g_u, g_v], axis=-1)
+
+
+def _integrated_white_noise(a_c, dt):
+    """Covariance over one step of a unit-intensity white force on ``u''`` (Van Loan's method)."""
+    n = 2
+    block = np.zeros((2 * n, 2 * n))
+    block[:n, :n] = -a_c
+    block[:n, n:] = np.array([[0.0, 0.0], [0.0, 1.0]])
+    block[n:, n:] = a_c.T
+    e = linalg.expm(block * dt)
+    phi = e[n:, n:].T
+    return phi @ e[:n, n:]
+
+
+def _regressor_steps(a_c, phi, x_obs, dt):
+    """Effect of the regressors' acceleration terms on ``[u, u']`` over a step (trapezoidal hold)."""
+    if x_obs.shape[1] == 0:
+        return np.zeros((x_obs.shape[0], 2, 0))
+    g0 = np.linalg.solve(a_c, (phi - np.eye(2)) @ np.array([0.0, 1.0]))
+    nxt = np.vstack([x_obs[1:], x_obs[-1:]])
+    return (0.5 * (x_obs + nxt))[:, None, :] * g0[None, :, None]
