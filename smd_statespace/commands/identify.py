@@ -40,8 +40,19 @@ def add_identify(subparsers):
                         help="CSV with columns file,mass: one body mass per record (files relative to it)")
     parser.add_argument("--resume", action="store_true",
                         help="continue a killed batch run in --out: finished records are kept, not recomputed")
-    parser.add_argument("--estimator", choices=sorted(ESTIMATORS), default=DEFAULT_ESTIMATOR,
-                        help=f"pf (the article's particle filter), rbpf, ukf, ekf or grid (default {DEFAULT_ESTIMATOR})")
+    parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default=None,
+                        help="record (default for one record: one f_h, xi_h for the whole record, noise levels by "
+                             "maximum likelihood; writes DIR/person.json) or a per-cycle estimator: pf (the "
+                             f"article's particle filter), rbpf, ukf, ekf or grid (default for a batch: "
+                             f"{DEFAULT_ESTIMATOR})")
+    parser.add_argument("--variation", choices=("independent", "both", "random_walk", "auto"), default="independent",
+                        help="record estimator: how the force coefficients vary from cycle to cycle (default "
+                             "independent; auto fits independent and both and keeps the lower AIC)")
+    parser.add_argument("--timing", choices=("template", "peaks"), default="template",
+                        help="record estimator: force-cycle starts aligned on the mean cycle (default) or GRF peaks")
+    parser.add_argument("--intervals", choices=("wald", "profile"), default="wald",
+                        help="record estimator: 90 %% intervals of f_h, xi_h from the standard errors (default) or "
+                             "the profile likelihood (slower)")
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--jobs", type=_count, default=1, metavar="N", help="parallel processes (default 1)")
@@ -160,12 +171,43 @@ def run_batch_identify(args) -> int:
     return 1 if summary.failed_records else 0
 
 
+def run_person(args) -> int:
+    """``identify --estimator record``: the person from the whole record; person.json, results.csv, figures."""
+    from ..io import read_record
+    from ..person import identify_person
+    from ..person.output import write_person
+
+    if args.effect:
+        raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
+                          "(--estimator ekf) to identify with an effect")
+    directory = out_dir(args.out)
+    record = read_record(args.record, args.mass)
+    started = time.perf_counter()
+    result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
+                             intervals=args.intervals)
+    seconds = time.perf_counter() - started
+    print(f"{record.source}: record-level model ({seconds:.1f} s)")
+    print(result.summary())
+    options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
+               "harmonics": args.harmonics}
+    written = write_person(directory, result, options, truth=truth_values(load_truth(args.truth)))
+    print("wrote " + ", ".join(str(path) for path in written))
+    return 0
+
+
 def run_identify(args) -> int:
     """Run ``smd-statespace identify``."""
     if is_batch(args):
+        if args.estimator == "record":
+            raise OptionError("--estimator record identifies one record at a time; a batch uses a per-cycle "
+                              f"estimator (default {DEFAULT_ESTIMATOR})")
+        args.estimator = args.estimator or DEFAULT_ESTIMATOR
         return run_batch_identify(args)
     if args.mass is None:
         raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
+    args.estimator = args.estimator or "record"
+    if args.estimator == "record":
+        return run_person(args)
     directory = out_dir(args.out)
     model = build_model(args)
     truth = truth_values(load_truth(args.truth))

@@ -1,0 +1,17 @@
+"""Identify the person from a whole record: the record-level model.
+
+One ``f_h``, one ``xi_h`` per record; the force's Fourier coefficients vary
+from cycle to cycle around the person's template; noise levels by maximum
+likelihood. Modules: :mod:`.timing` (force-cycle boundaries), :mod:`.model`
+(the state-space model), :mod:`.kalman` (the compiled likelihood),
+:mod:`.statespace` (the statsmodels twin), :mod:`.fit` (:func:`identify_person`),
+:mod:`.results` (:class:`PersonResult`).
+"""
+
+from .fit import FitError, identify_person
+from .model import RecordModel, Regressor
+from .results import PersonResult
+from .timing import CycleTiming, estimate_timing
+
+__all__ = ["identify_person", "PersonResult", "RecordModel", "Regressor", "CycleTiming", "estimate_timing",
+           "FitError"]

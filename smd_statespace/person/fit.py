@@ -1,0 +1,276 @@
+"""Identify the person from a whole record: maximum likelihood on the record-level model.
+
+:func:`identify_person` estimates one ``f_h``, one ``xi_h`` and the force's
+template and cycle-to-cycle variation from a whole bouncing record
+(:mod:`smd_statespace.person.model`), with standard errors from the observed
+information and profile-likelihood intervals for ``f_h`` and ``xi_h``, and
+returns a :class:`~smd_statespace.person.results.PersonResult`.
+
+Steps:
+
+1. COM acceleration ``y = GRF / M_h - g`` (Eq. 3), not filtered;
+2. force-cycle boundaries (:func:`~smd_statespace.person.timing.estimate_timing`);
+3. for each variation model, a coarse search over ``f_h`` and ``xi_h`` and then
+   L-BFGS-B on the profile likelihood (template, initial state, offset and
+   ``sigma^2`` concentrated out); the variation model with the lowest AIC wins;
+4. the observed information (numerical Hessian of the profile likelihood) and,
+   for ``f_h`` and ``xi_h``, the profile-likelihood interval (every other
+   parameter re-maximised at each point).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import optimize, stats
+
+from ..errors import CycleError, SMDInputError
+from ..io import G, Record
+from .model import VARIATIONS, Regressor, RecordModel
+from .timing import estimate_timing
+
+__all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "profile_interval"]
+
+MIN_CYCLES = 8
+"""Fewest force cycles for the record-level model (the cycle-to-cycle spread needs several)."""
+
+START_F_H = (1.2, 1.7, 2.3, 3.0, 3.9, 5.0)
+"""Starting values of ``f_h`` (Hz) of the coarse search."""
+
+START_XI_H = (0.15, 0.45)
+"""Starting values of ``xi_h`` of the coarse search."""
+
+AUTO_VARIATIONS = ("independent", "both")
+"""Variation models compared by ``variation="auto"``."""
+
+
+class FitError(SMDInputError):
+    """The maximum-likelihood fit failed (no convergence, information not positive definite)."""
+
+
+def fit_model(model: RecordModel, start=None) -> dict:
+    """Maximise the profile likelihood of ``model``.
+
+    Parameters
+    ----------
+    model : RecordModel
+    start : ndarray, optional
+        Starting parameters; default the best of a coarse search over
+        :data:`START_F_H` x :data:`START_XI_H`.
+
+    Returns
+    -------
+    dict
+        ``params`` (ndarray), ``loglike``, ``n_evaluations``, ``converged``
+        (bool), ``message``.
+    """
+    count = [0]
+
+    def negative(params):
+        count[0] += 1
+        value = model.loglike(params)
+        return -value if np.isfinite(value) else 1e300
+
+    if start is None:
+        candidates = [model.start_params(f, x) for f in START_F_H for x in START_XI_H]
+        start = min(candidates, key=negative)
+    result = optimize.minimize(negative, start, method="L-BFGS-B", bounds=model.bounds)
+    # L-BFGS-B with numerical gradients often stops on its line search at the optimum; a
+    # restart from there that gains nothing confirms it
+    if not result.success:
+        again = optimize.minimize(negative, result.x, method="L-BFGS-B", bounds=model.bounds)
+        converged = again.success or abs(again.fun - result.fun) < 1e-3
+        result = again if again.fun <= result.fun else result
+    else:
+        converged = True
+    return {"params": result.x, "loglike": -float(result.fun), "n_evaluations": count[0], "converged": bool(converged),
+            "message": str(result.message)}
+
+
+def _hessian(func, x, steps):
+    """Central-difference Hessian of ``func`` at ``x``."""
+    n = x.size
+    hess = np.empty((n, n))
+    f0 = func(x)
+    for i in range(n):
+        ei = np.zeros(n)
+        ei[i] = steps[i]
+        hess[i, i] = (func(x + ei) - 2.0 * f0 + func(x - ei)) / steps[i] ** 2
+        for j in range(i):
+            ej = np.zeros(n)
+            ej[j] = steps[j]
+            value = (func(x + ei + ej) - func(x + ei - ej) - func(x - ei + ej) + func(x - ei - ej)) / (
+                4.0 * steps[i] * steps[j])
+            hess[i, j] = hess[j, i] = value
+    return hess
+
+
+def information(model: RecordModel, params) -> tuple:
+    """Covariance of the estimates from the observed information; parameters at a bound are held fixed.
+
+    Returns
+    -------
+    cov : ndarray, shape (k, k)
+        NaN rows and columns for parameters at a bound.
+    free : ndarray of bool, shape (k,)
+        Parameters not at a bound.
+    """
+    params = np.asarray(params, dtype=float)
+    bounds = np.asarray(model.bounds)
+    steps = np.where(np.arange(params.size) < 2, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3)
+    free = (params - steps > bounds[:, 0]) & (params + steps < bounds[:, 1])
+    free[:2] = True
+    index = np.flatnonzero(free)
+
+    def sub(values):
+        full = params.copy()
+        full[index] = values
+        return model.loglike(full)
+
+    hess = _hessian(sub, params[index], steps[index])
+    cov = np.full((params.size, params.size), np.nan)
+    w, v = np.linalg.eigh(-hess)
+    if np.any(w <= 0):
+        core = -hess[:2, :2]
+        if np.any(np.linalg.eigvalsh(core) <= 0):
+            raise FitError("the likelihood is not curved in f_h and xi_h at the estimate (information not positive "
+                           "definite): the record does not determine them; use a longer record or a per-cycle "
+                           "estimator (--estimator ekf)")
+        w = np.maximum(w, w.max() * 1e-10)
+    cov[np.ix_(index, index)] = (v / w) @ v.T
+    return cov, free
+
+
+def profile_interval(model: RecordModel, params, loglike, which, se, level=0.9):
+    """Profile-likelihood interval of ``f_h`` (``which=0``) or ``xi_h`` (``which=1``).
+
+    At each trial value the other parameters are re-maximised (warm start);
+    the interval's ends are where twice the fall of the profile likelihood
+    equals the chi-square(1) quantile of ``level``, found by bracketing and
+    linear interpolation. An end that reaches the search bound is returned as
+    the bound (the record does not exclude it).
+
+    Returns
+    -------
+    tuple of float
+        ``(low, high)``.
+    """
+    target = stats.chi2.ppf(level, 1) / 2.0
+    bounds = model.bounds
+    lo_bound, hi_bound = bounds[which]
+    others = [i for i in range(len(params)) if i != which]
+    sub_bounds = [bounds[i] for i in others]
+    step = se if np.isfinite(se) and se > 0 else 0.05 * abs(params[which]) + 0.01
+    ends = []
+    for sign in (-1.0, 1.0):
+        warm = np.asarray(params, dtype=float)[others]
+        previous_value, previous_drop = params[which], 0.0
+        value = params[which]
+        found = None
+        for k in range(12):
+            value = float(np.clip(params[which] + sign * step * (1.2 + 0.6 * k), lo_bound, hi_bound))
+
+            def negative(sub, v=value):
+                full = np.empty(len(params))
+                full[which] = v
+                full[others] = sub
+                out = model.loglike(full)
+                return -out if np.isfinite(out) else 1e300
+
+            res = optimize.minimize(negative, warm, method="L-BFGS-B", bounds=sub_bounds, options={"maxiter": 60})
+            warm = res.x
+            drop = loglike + res.fun
+            if drop >= target:
+                frac = (target - previous_drop) / max(drop - previous_drop, 1e-12)
+                found = previous_value + frac * (value - previous_value)
+                break
+            if value in (lo_bound, hi_bound):
+                found = value
+                break
+            previous_value, previous_drop = value, drop
+        ends.append(found if found is not None else value)
+    return tuple(ends)
+
+
+def identify_person(record: Record, n_harmonics=4, variation="independent", timing="template", process_noise=False,
+                    intervals="profile", level=0.9, regressors=()):
+    """Identify one person's SMD model from a whole bouncing record.
+
+    Parameters
+    ----------
+    record : Record
+        The measurement (``time``, ``force`` in N, ``mass`` in kg).
+    n_harmonics : int
+        Harmonics ``n`` of the force, Eq. 4.
+    variation : {"auto", "independent", "random_walk", "both"}
+        Cycle-to-cycle variation of the force coefficients; ``"auto"`` fits
+        :data:`AUTO_VARIATIONS` and keeps the lowest AIC.
+    timing : {"template", "peaks"}
+        How the force-cycle boundaries are placed
+        (:func:`~smd_statespace.person.timing.estimate_timing`).
+    process_noise : bool
+        Add a white force on the COM with an estimated level.
+    intervals : {"profile", "wald"}
+        ``"profile"``: profile-likelihood intervals for ``f_h`` and ``xi_h``
+        (about 1-2 s more); ``"wald"``: estimate +- z * standard error only.
+    level : float
+        Confidence level of the intervals.
+    regressors : sequence of Regressor
+        Effects' signals with unknown coefficients (a constant offset, for an
+        imprecise body mass or plate zero, is always included).
+
+    Returns
+    -------
+    PersonResult
+
+    Raises
+    ------
+    CycleError
+        No bouncing cycles, or fewer than :data:`MIN_CYCLES`.
+    OptionError
+        Unknown ``variation``, ``timing`` or ``intervals``.
+    FitError
+        The fit does not converge or does not determine ``f_h`` and ``xi_h``.
+    """
+    from ..errors import OptionError
+    from .results import PersonResult
+
+    if variation != "auto" and variation not in VARIATIONS:
+        raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
+    if intervals not in ("profile", "wald"):
+        raise OptionError(f"intervals {intervals!r} is not one of: profile, wald")
+    y = record.force / record.mass - G  # Eq. 3
+    cycle_timing = estimate_timing(record.time, record.force, n_harmonics, timing, source=record.source)
+    inside = np.sum((cycle_timing.boundaries > record.time[0]) & (cycle_timing.boundaries < record.time[-1]))
+    if inside - 1 < MIN_CYCLES:
+        raise CycleError(f"{record.source}: {max(inside - 1, 0)} whole bouncing cycles found; the record-level model "
+                         f"needs at least {MIN_CYCLES} to estimate the cycle-to-cycle variation: use a longer record "
+                         "or a per-cycle estimator (--estimator ekf)")
+    offset = Regressor("offset", np.ones_like(y), "m/s^2")
+    all_regressors = (offset,) + tuple(regressors)
+    names = AUTO_VARIATIONS if variation == "auto" else (variation,)
+    fits = []
+    for name in names:
+        model = RecordModel(record.time, y, cycle_timing, n_harmonics, name, process_noise, regressors=all_regressors)
+        fits.append((model, fit_model(model)))
+    comparison = [{"variation": m.variation, "loglike": f["loglike"], "n_params": len(f["params"]),
+                   "aic": 2 * len(f["params"]) - 2 * f["loglike"], "converged": f["converged"]} for m, f in fits]
+    best = int(np.argmin([row["aic"] for row in comparison]))
+    model, fitted = fits[best]
+    if not fitted["converged"]:
+        raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
+                       "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
+    params = fitted["params"]
+    cov, free = information(model, params)
+    se = np.sqrt(np.diag(cov))
+    z = stats.norm.ppf(0.5 + level / 2.0)
+    interval = {}
+    for which, name in enumerate(("f_h", "xi_h")):
+        wald = (params[which] - z * se[which], params[which] + z * se[which])
+        if intervals == "profile":
+            interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
+        else:
+            interval[name] = wald
+    return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
+                        intervals=interval, interval_method=intervals, level=level, comparison=comparison,
+                        n_evaluations=fitted["n_evaluations"])
+

@@ -1,0 +1,68 @@
+"""Files of a record-level identification: person.json, results.csv, run.json and figures.
+
+``person.json`` is written last and atomically (a temporary file renamed), so a
+killed or failed run never leaves a half-written answer.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+
+__all__ = ["write_person", "atomic_write_text"]
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file in the same folder."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def _plain(value):
+    """JSON-able version of numpy scalars and containers."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        return float(value) if np.isfinite(value) else None
+    return value
+
+
+def write_person(directory, result, options: dict, truth=None) -> list:
+    """Write a :class:`~smd_statespace.person.results.PersonResult`'s files into ``directory``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        ``person.json``, ``results.csv`` (one row per force cycle),
+        ``run.json``, ``person_fit.png``, ``person_diagnostics.png``.
+    """
+    directory = Path(directory)
+    person = result.to_dict()
+    if truth:
+        person["truth"] = {k: truth[k] for k in ("f_h", "xi_h") if k in truth}
+    cycles = directory / "results.csv"
+    table = result.cycles.copy()
+    table.insert(0, "status", np.where(table["whole"], "ok", "partial"))
+    table.to_csv(cycles, index=False)
+    run = directory / "run.json"
+    atomic_write_text(run, json.dumps({"version": __version__, "command": "identify", "estimator": "record",
+                                       "record": str(result.record.source), "mass": result.record.mass,
+                                       "options": options}, indent=2))
+    fit_png, diag_png = directory / "person_fit.png", directory / "person_diagnostics.png"
+    result.plot_fit(fit_png)
+    result.plot_diagnostics(diag_png)
+    path = directory / "person.json"
+    atomic_write_text(path, json.dumps(_plain(person), indent=2))
+    return [path, cycles, run, fit_png, diag_png]

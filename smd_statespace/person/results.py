@@ -1,0 +1,367 @@
+"""What the record-level identification found: the person, with intervals, and its own tests.
+
+:class:`PersonResult` is returned by
+:func:`~smd_statespace.person.fit.identify_person`. Like statsmodels'
+``MLEResults`` it carries its tests (``test_serial_correlation``,
+``test_normality``, ``test_heteroskedasticity``) and ``plot_diagnostics``,
+delegated to statsmodels' results at the estimate
+(:class:`~smd_statespace.person.statespace.RecordStateSpace`), plus what a
+structural engineer needs: ``f_h``, ``xi_h``, ``K_h``, ``C_h`` (Eq. 17-18) and
+the force template's load factors (Eq. 5) with standard errors and their
+cycle-to-cycle spread, one row per cycle from the smoother (:attr:`cycles`),
+and plain-word warnings (:attr:`warnings`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+import pandas as pd
+
+from ..io import G
+from .model import RecordModel
+
+__all__ = ["PersonResult", "DETERMINED_FRACTION", "PRIOR_SD"]
+
+PRIOR_SD = {"f_h": 3.0 / np.sqrt(12.0), "xi_h": 1.0 / np.sqrt(12.0)}
+"""Yardstick widths: the sd of the article's uniform initial ranges (``f_h`` 1-4 Hz, ``xi_h`` 0-1)."""
+
+DETERMINED_FRACTION = 0.25
+"""A parameter is 'determined' when its standard error is below this fraction of :data:`PRIOR_SD`
+(the same rule as the per-cycle table)."""
+
+WHITENESS_ALPHA = 0.01
+"""Level at which the Ljung-Box test's rejection is reported as a warning."""
+
+
+@dataclass
+class PersonResult:
+    """One person identified from one record.
+
+    Attributes
+    ----------
+    record : Record
+    model : RecordModel
+        The fitted model (its timing, variation model, regressors).
+    params : ndarray
+        Maximum-likelihood estimates in the order of ``model.param_names``.
+    cov : ndarray
+        Their covariance from the observed information (NaN for parameters
+        held at a bound).
+    free : ndarray of bool
+        Parameters not at a search bound.
+    loglike : float
+        Profile log-likelihood at the estimate.
+    intervals : dict
+        ``{"f_h": (low, high), "xi_h": (low, high)}`` at ``level``.
+    interval_method : str
+        ``"profile"`` or ``"wald"``.
+    level : float
+    comparison : list of dict
+        The variation models tried: log-likelihood, parameters, AIC.
+    n_evaluations : int
+        Likelihood evaluations of the search.
+    """
+
+    record: object
+    model: RecordModel
+    params: np.ndarray
+    cov: np.ndarray
+    free: np.ndarray
+    loglike: float
+    intervals: dict
+    interval_method: str
+    level: float
+    comparison: list
+    n_evaluations: int = 0
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    # ------------------------------------------------------------------ estimates
+    @cached_property
+    def filtered(self) -> dict:
+        """The compiled pass at the estimate (:meth:`RecordModel.filter`)."""
+        return self.model.filter(self.params)
+
+    @property
+    def f_h(self) -> float:
+        """SMD natural frequency ``f_h`` (Hz)."""
+        return float(self.params[0])
+
+    @property
+    def xi_h(self) -> float:
+        """SMD damping ratio ``xi_h`` (-)."""
+        return float(self.params[1])
+
+    @property
+    def se(self) -> np.ndarray:
+        """Standard errors of :attr:`params`."""
+        return np.sqrt(np.diag(self.cov))
+
+    @property
+    def sigma(self) -> float:
+        """Estimated observation-noise sd of ``GRF / M_h`` (m/s^2)."""
+        return float(np.sqrt(self.filtered["sigma2"]))
+
+    @property
+    def n_cycles(self) -> int:
+        """Whole force cycles inside the record."""
+        b = self.model.timing.boundaries
+        return int(np.sum((b > self.record.time[0]) & (b < self.record.time[-1])) - 1)
+
+    def _delta(self):
+        out = self.filtered
+        return out["delta"], out["delta_cov_unscaled"] * out["sigma2"]
+
+    @property
+    def template(self) -> pd.DataFrame:
+        """Record-level force coefficients (g) with their sds (conditional on ``f_h``, ``xi_h``)."""
+        delta, cov = self._delta()
+        p = self.model.n_coefficients
+        return pd.DataFrame({"value": delta[2:2 + p], "sd": np.sqrt(np.diag(cov)[2:2 + p])},
+                            index=self.model.coefficient_names)
+
+    def template_blf(self) -> pd.DataFrame:
+        """Load factors ``BLF_i`` of the template (Eq. 5), sds by the delta method (g)."""
+        delta, cov = self._delta()
+        rows = []
+        for i in range(1, self.model.n_harmonics + 1):
+            ia, ib = 2 + 2 * i - 1, 2 + 2 * i
+            a, b = delta[ia], delta[ib]
+            value = float(np.hypot(a, b))
+            grad = np.array([a, b]) / max(value, 1e-12)
+            sd = float(np.sqrt(grad @ cov[np.ix_([ia, ib], [ia, ib])] @ grad))
+            rows.append({"harmonic": i, "blf": value, "sd": sd, "spread": self.spread()[i]})
+        return pd.DataFrame(rows).set_index("harmonic")
+
+    def spread(self, kind="d") -> np.ndarray:
+        """Cycle-to-cycle sd of each harmonic's coefficients (g): ``kind`` "d" (independent) or "e" (random walk).
+
+        Index 0 is ``a0``; zeros when the variation model has no such part.
+        """
+        named = dict(zip(self.model.param_names, self.params))
+        out = np.zeros(self.model.n_harmonics + 1)
+        for i in range(out.size):
+            key = f"log_var_{kind}_{i}"
+            if key in named:
+                out[i] = np.sqrt(np.exp(named[key]) * self.filtered["sigma2"])
+        return out
+
+    def regressor_coefficients(self) -> pd.DataFrame:
+        """Coefficients of the regressors (the offset, effects) with sds."""
+        delta, cov = self._delta()
+        start = 2 + self.model.n_coefficients
+        names = [r.name for r in self.model.regressors]
+        return pd.DataFrame({"value": delta[start:], "sd": np.sqrt(np.diag(cov)[start:])}, index=names)
+
+    def determined(self, name) -> bool:
+        """True when the standard error of ``f_h`` or ``xi_h`` is below :data:`DETERMINED_FRACTION` of its yardstick
+        and the estimate is not at a search bound."""
+        which = {"f_h": 0, "xi_h": 1}[name]
+        low, high = self.model.bounds[which]
+        at_bound = min(self.params[which] - low, high - self.params[which]) < 1e-3 * (high - low)
+        return bool(np.isfinite(self.se[which]) and self.se[which] < DETERMINED_FRACTION * PRIOR_SD[name]
+                    and not at_bound)
+
+    def derived(self) -> dict:
+        """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds."""
+        mass, f_h, xi_h = self.record.mass, self.f_h, self.xi_h
+        cov = self.cov[:2, :2]
+        k = mass * (2 * np.pi * f_h) ** 2  # Eq. 17
+        c = 2 * xi_h * mass * 2 * np.pi * f_h  # Eq. 18
+        gk = np.array([2 * k / f_h, 0.0])
+        gc = np.array([c / f_h, c / xi_h])
+        return {"k_h": k, "k_h_sd": float(np.sqrt(gk @ cov @ gk)), "c_h": c, "c_h_sd": float(np.sqrt(gc @ cov @ gc))}
+
+    # ------------------------------------------------------------------ statsmodels view
+    @cached_property
+    def statespace_results(self):
+        """statsmodels' ``MLEResults`` at the estimate (smoother, tests, ``plot_diagnostics``)."""
+        from .statespace import RecordStateSpace
+
+        ssm = RecordStateSpace(self.model, self.filtered["delta"])
+        return ssm.smooth(self.params, cov_type="none")
+
+    @cached_property
+    def cycles(self) -> pd.DataFrame:
+        """One row per force cycle: times, ``f_b``, smoothed coefficients and load factors with sds."""
+        res = self.statespace_results
+        model = self.model
+        cycle, _, _, _ = model._phase
+        p, n = model.n_coefficients, model.n_harmonics
+        first = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
+        last = np.r_[first[1:] - 1, cycle.size - 1]
+        mid = (first + last) // 2
+        state = res.smoothed_state[2:2 + p, mid].T
+        state_cov = res.smoothed_state_cov[2:2 + p, 2:2 + p, mid].transpose(2, 0, 1) * self.filtered["sigma2"]
+        b = model.timing.boundaries
+        j = cycle[first]
+        table = pd.DataFrame({"cycle": j, "t_start": b[j], "t_end": b[j + 1], "f_b": 1.0 / (b[j + 1] - b[j]),
+                              "whole": (b[j] >= self.record.time[0]) & (b[j + 1] <= self.record.time[-1])})
+        for k, name in enumerate(model.coefficient_names):
+            table[name] = state[:, k]
+        for i in range(1, n + 1):
+            a, bb = state[:, 2 * i - 1], state[:, 2 * i]
+            value = np.hypot(a, bb)
+            grad = np.stack([a, bb], axis=1) / np.maximum(value, 1e-12)[:, None]
+            sub = state_cov[:, 2 * i - 1:2 * i + 1, 2 * i - 1:2 * i + 1]
+            table[f"blf_{i}"] = value
+            table[f"blf_{i}_sd"] = np.sqrt(np.einsum("ci,cij,cj->c", grad, sub, grad))
+        return table
+
+    def standardized_innovations(self) -> np.ndarray:
+        """One-step innovations divided by their predicted sd (white N(0, 1) if the model fits)."""
+        return self.model.innovations(self.params, self.filtered)[0]
+
+    def test_serial_correlation(self, lags=None):
+        """Ljung-Box test of the standardised innovations (statsmodels ``test_serial_correlation``)."""
+        lags = lags if lags is not None else self.default_lags()
+        return self.statespace_results.test_serial_correlation("ljungbox", lags=lags)
+
+    def default_lags(self) -> int:
+        """Lags of the residual tests: one bouncing cycle's samples, at least 10."""
+        return int(max(10, round(self.record.fs / np.median(self.model.timing.f_b))))
+
+    def test_normality(self):
+        """Jarque-Bera test of the standardised innovations."""
+        return self.statespace_results.test_normality("jarquebera")
+
+    def test_heteroskedasticity(self):
+        """Test of a change of innovation variance between the first and last third."""
+        return self.statespace_results.test_heteroskedasticity("breakvar")
+
+    def test_pvalues(self) -> dict:
+        """``ljung_box_p``, ``jarque_bera_p``, ``heteroskedasticity_p`` and the innovations' kurtosis."""
+        lb = self.test_serial_correlation()
+        lags = self.default_lags()
+        innov = self.standardized_innovations()
+        centred = innov - innov.mean()
+        return {
+            "ljung_box_p": float(lb[0, 1, lags - 1]),
+            "ljung_box_lags": lags,
+            "jarque_bera_p": float(self.test_normality()[0, 1]),
+            "heteroskedasticity_p": float(self.test_heteroskedasticity()[0, 1]),
+            "kurtosis": float(np.mean(centred**4) / np.mean(centred**2) ** 2),
+        }
+
+    # ------------------------------------------------------------------ words
+    @property
+    def warnings(self) -> list:
+        """Plain-word warnings: parameters at a bound or not determined, residual tests that reject."""
+        out = []
+        for which, name in enumerate(("f_h", "xi_h")):
+            low, high = self.model.bounds[which]
+            value = self.params[which]
+            if min(value - low, high - value) < 1e-3 * (high - low):
+                out.append(f"{name} = {value:.3g} sits on its search bound ({low:g}-{high:g}): not an estimate; "
+                           "the model may not fit this record (run diagnose)")
+            elif not self.determined(name):
+                out.append(f"{name} is not determined by this record (sd {self.se[which]:.3g} against a yardstick "
+                           f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
+        if self.xi_h > 1.0:
+            out.append(f"xi_h = {self.xi_h:.2f} > 1 (over-damped): outside what bouncing people show (0.1-0.6)")
+        tests = self.test_pvalues()
+        if tests["ljung_box_p"] < WHITENESS_ALPHA:
+            out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): "
+                       "the model misses something; run `smd-statespace diagnose`")
+        return out
+
+    def to_dict(self) -> dict:
+        """Flat JSON-able summary (the content of ``person.json``)."""
+        se = self.se
+        out = {"f_h": self.f_h, "f_h_sd": float(se[0]), "xi_h": self.xi_h, "xi_h_sd": float(se[1])}
+        for name in ("f_h", "xi_h"):
+            low, high = self.intervals[name]
+            out[f"{name}_low"], out[f"{name}_high"] = float(low), float(high)
+            out[f"{name}_determined"] = self.determined(name)
+        out["interval_level"] = self.level
+        out["interval_method"] = self.interval_method
+        out.update(self.derived())
+        blf = self.template_blf()
+        for i, row in blf.iterrows():
+            out[f"blf_{i}"] = float(row["blf"])
+            out[f"blf_{i}_sd"] = float(row["sd"])
+            out[f"blf_{i}_spread"] = float(row["spread"])
+        walk = self.spread("e")
+        for i in range(1, self.model.n_harmonics + 1):
+            out[f"blf_{i}_walk"] = float(walk[i])
+        out["a0_spread"] = float(self.spread()[0])
+        out["noise_sd"] = self.sigma
+        out["noise_bw"] = self.sigma / G
+        for name, row in self.regressor_coefficients().iterrows():
+            out[name], out[f"{name}_sd"] = float(row["value"]), float(row["sd"])
+        out["variation"] = self.model.variation
+        out["timing"] = self.model.timing.method
+        out["f_b"] = float(np.median(self.model.timing.f_b))
+        out["n_harmonics"] = self.model.n_harmonics
+        out["log_likelihood"] = self.loglike
+        out["n_params"] = int(len(self.params))
+        out["n_cycles"] = self.n_cycles
+        out["n_samples"] = int(self.model.y.size)
+        out.update(self.test_pvalues())
+        out["warnings"] = self.warnings
+        out["variation_models"] = self.comparison
+        return out
+
+    def summary(self) -> str:
+        """The person in a few lines: the answer first, then noise, force, tests, warnings."""
+        d = self.to_dict()
+        pct = int(round(100 * self.level))
+        lines = [
+            f"person from {d['n_cycles']} cycles (f_b {d['f_b']:.2f} Hz, {self.model.variation} variation, "
+            f"{self.model.timing.method} timing):",
+            f"  f_h  = {d['f_h']:.3f} Hz  (sd {d['f_h_sd']:.3f}; {pct} % {self.interval_method} interval "
+            f"{d['f_h_low']:.3f}-{d['f_h_high']:.3f}){'' if d['f_h_determined'] else '  NOT DETERMINED'}",
+            f"  xi_h = {d['xi_h']:.3f}     (sd {d['xi_h_sd']:.3f}; {pct} % {self.interval_method} interval "
+            f"{d['xi_h_low']:.3f}-{d['xi_h_high']:.3f}){'' if d['xi_h_determined'] else '  NOT DETERMINED'}",
+            f"  K_h  = {d['k_h']:.0f} N/m (sd {d['k_h_sd']:.0f}), C_h = {d['c_h']:.0f} N s/m (sd {d['c_h_sd']:.0f})",
+            "  BLF (g): " + ", ".join(f"{i}: {d[f'blf_{i}']:.3f} +- {d[f'blf_{i}_sd']:.3f} (cycle spread "
+                                      f"{d[f'blf_{i}_spread']:.3f})" for i in range(1, self.model.n_harmonics + 1)),
+            f"  noise sd {d['noise_sd']:.3f} m/s^2 ({100 * d['noise_bw']:.2f} % BW); log-likelihood "
+            f"{d['log_likelihood']:.1f}",
+            f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
+            f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
+        ]
+        lines += [f"warning: {w}" for w in d["warnings"]]
+        return "\n".join(lines)
+
+    # ------------------------------------------------------------------ figures
+    def plot_diagnostics(self, path=None, lags=None):
+        """statsmodels' four-panel residual diagnostics of the standardised innovations; saved as PNG if ``path``."""
+        fig = self.statespace_results.plot_diagnostics(lags=lags or min(self.default_lags(), 40), figsize=(10, 7))
+        fig.suptitle(f"record-level model: innovations of GRF/M - g ({self.record.source})")
+        if path is not None:
+            fig.savefig(path, dpi=110)
+        return fig
+
+    def plot_fit(self, path=None, seconds=4.0):
+        """Measured against one-step predicted ``GRF / M_h - g`` over a window, and every cycle's BLFs."""
+        from matplotlib.figure import Figure
+
+        _, raw = self.model.innovations(self.params, self.filtered)
+        t, y = self.model.time, self.model.y
+        start = t[0] + 0.5 * (t[-1] - t[0]) - seconds / 2
+        window = (t >= start) & (t <= start + seconds)
+        fig = Figure(figsize=(10, 6.5), layout="constrained")
+        ax, bx = fig.subplots(2, 1)
+        ax.plot(t[window], y[window], color="0.3", lw=1.2, label="measured")
+        ax.plot(t[window], (y - raw)[window], color="C1", lw=1.0, label="predicted one step ahead")
+        ax.plot(t[window], raw[window], color="C3", lw=0.8, label="innovation")
+        for b in self.model.timing.boundaries:
+            if start <= b <= start + seconds:
+                ax.axvline(b, color="0.8", lw=0.6, zorder=0)
+        ax.set(xlabel="time (s)", ylabel="GRF/M - g (m/s$^2$)",
+               title=f"f_h {self.f_h:.2f} Hz, xi_h {self.xi_h:.2f}; grey lines: estimated force-cycle starts")
+        ax.legend(loc="upper right", fontsize=8, ncol=3)
+        cycles = self.cycles
+        blf = self.template_blf()
+        for i in range(1, self.model.n_harmonics + 1):
+            bx.errorbar(cycles["t_start"], cycles[f"blf_{i}"], yerr=cycles[f"blf_{i}_sd"], fmt="o", ms=3,
+                        color=f"C{i - 1}", label=f"BLF{i}")
+            bx.axhline(blf.loc[i, "blf"], color=f"C{i - 1}", lw=0.8)
+        bx.set(xlabel="cycle start (s)", ylabel="BLF (g)", title="every cycle's load factors (smoother); lines: template")
+        bx.legend(loc="upper right", fontsize=8, ncol=4)
+        if path is not None:
+            fig.savefig(path, dpi=110)
+        return fig
