@@ -245,7 +245,7 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
         raise CycleError(f"{record.source}: {max(inside - 1, 0)} whole bouncing cycles found; the record-level model "
                          f"needs at least {MIN_CYCLES} to estimate the cycle-to-cycle variation: use a longer record "
                          "or a per-cycle estimator (--estimator ekf)")
-    offset = Regressor("offset", np.ones_like(y), "m/s^2")
+    offset = Regressor("offset", np.ones_like(y), "m/s^2", dynamic=False)
     all_regressors = (offset,) + tuple(regressors)
     names = AUTO_VARIATIONS if variation == "auto" else (variation,)
     fits = []

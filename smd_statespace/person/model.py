@@ -95,11 +95,16 @@ class Regressor:
         The signal at the samples (m/s^2 per unit coefficient).
     unit : str
         Unit of the coefficient.
+    dynamic : bool
+        True (default): a term of the person's acceleration, so it moves
+        ``u`` and ``u'`` too. False: a term of the measurement only (a force
+        offset, a wrong body mass), which the COM does not feel.
     """
 
     name: str
     values: np.ndarray
     unit: str = "-"
+    dynamic: bool = True
 
 
 @dataclass
@@ -252,7 +257,8 @@ class RecordModel:
         gam *= G
         D, E, S, w = self._variances(params)
         qx = w * _integrated_white_noise(a_c, dt) if w > 0 else np.zeros((2, 2))
-        x_tr = _regressor_steps(a_c, phi, self._X_obs, dt)
+        dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
+        x_tr = _regressor_steps(a_c, phi, self._X_obs * dynamic, dt)
         return {
             "hx": a_c[1].copy(),
             "H": self._H,

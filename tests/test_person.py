@@ -1,0 +1,172 @@
+"""The record-level model: exact discretisation, exact likelihood, recovery of a known person, the CLI's answer."""
+
+import json
+
+import numpy as np
+import pytest
+from scipy import linalg
+
+from smd_statespace.cli import main
+from smd_statespace.errors import CycleError
+from smd_statespace.io import G, make_record
+from smd_statespace.person import CycleTiming, RecordModel, Regressor, estimate_timing, identify_person
+from smd_statespace.person.fit import fit_model, information
+from smd_statespace.person.results import PersonResult
+from smd_statespace.person.statespace import RecordStateSpace
+from smd_statespace.simulate import simulate_bouncing
+
+
+@pytest.fixture(scope="module")
+def short_sim():
+    return simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=8, seed=1)
+
+
+@pytest.fixture(scope="module")
+def long_sim():
+    """A 40 s record with little noise; its true force-cycle boundaries are known."""
+    return simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=40, noise=0.002, seed=11)
+
+
+def true_timing(sim):
+    cycles = sim.cycles
+    return CycleTiming(np.append(cycles.t_start.values, cycles.t_end.values[-1]), "truth")
+
+
+def acceleration(sim):
+    return sim.record.force / sim.record.mass - G
+
+
+def test_step_is_the_exact_solution_of_eq2_under_a_harmonic_force():
+    """One step of [u, u'] under cos/sin of the phase equals the matrix exponential of the augmented system."""
+    t = np.arange(0.0, 1.0, 0.01)
+    timing = CycleTiming(np.array([-0.1, 0.45, 1.2]))
+    model = RecordModel(t, np.zeros_like(t), timing, n_harmonics=2)
+    params = model.start_params(2.7, 0.2)
+    sys = model.system(params)
+    _, theta, rate, _ = model._phase
+    w = 2 * np.pi * params[0]
+    for k in (3, 30, 77):
+        for order in (1, 2):
+            nu = order * rate[k]
+            # [u, u', c, s]: c = cos(order theta), s = sin(order theta) rotate at nu; c drives a_i, s drives b_i
+            a = np.zeros((4, 4))
+            a[0, 1] = 1.0
+            a[1, :2] = [-w**2, -2 * params[1] * w]
+            a[2, 3], a[3, 2] = -nu, nu
+            x0 = np.array([0.0, 0.0, np.cos(order * theta[k]), np.sin(order * theta[k])])
+            for column, drive in ((2 * order - 1, 2), (2 * order, 3)):
+                a[1, 2:] = 0.0
+                a[1, drive] = 1.0
+                exact = linalg.expm(a * 0.01) @ x0
+                assert np.allclose(sys["Gam"][k, :, column] / G, exact[:2], rtol=1e-9, atol=1e-15)
+    # the constant a0: A^-1 (Phi - I) B
+    a2 = np.array([[0.0, 1.0], [-w**2, -2 * params[1] * w]])
+    big = np.zeros((3, 3))
+    big[:2, :2], big[1, 2] = a2, 1.0
+    assert np.allclose(sys["Gam"][5, :, 0] / G, (linalg.expm(big * 0.01) @ [0, 0, 1.0])[:2], rtol=1e-9)
+
+
+@pytest.mark.parametrize("options", [
+    {},
+    {"variation": "random_walk"},
+    {"variation": "both", "drift": True},
+    {"process_noise": True},
+])
+def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options):
+    """The concentrated likelihood of the compiled pass is statsmodels' exact Kalman likelihood at the same point."""
+    sim = short_sim
+    y = acceleration(sim)
+    regressors = (Regressor("offset", np.ones_like(y), dynamic=False), Regressor("ramp", sim.record.time / 10.0))
+    model = RecordModel(sim.record.time, y, estimate_timing(sim.record.time, sim.record.force), regressors=regressors,
+                        **options)
+    params = model.start_params(2.3, 0.25, -2.0)
+    out = model.filter(params)
+    reference = RecordStateSpace(model, out["delta"]).loglike(params)
+    assert out["loglike"] == pytest.approx(reference, rel=1e-9)  # rounding of the GLS solve: ~1e-10
+    # moving delta away from its GLS value lowers statsmodels' likelihood: the concentration really maximises
+    shifted = out["delta"].copy()
+    shifted[2] += 0.01
+    assert RecordStateSpace(model, shifted).loglike(params) < reference
+
+
+def test_maximum_likelihood_recovers_the_person_with_true_cycle_starts(long_sim):
+    """With the true force-cycle boundaries, f_h and xi_h come back within their intervals and a few percent."""
+    sim = long_sim
+    y = acceleration(sim)
+    model = RecordModel(sim.record.time, y, true_timing(sim), regressors=(Regressor("offset", np.ones_like(y), dynamic=False),))
+    fitted = fit_model(model)
+    assert fitted["converged"]
+    f_h, xi_h = fitted["params"][:2]
+    assert f_h == pytest.approx(2.8, rel=0.03)
+    assert xi_h == pytest.approx(0.25, abs=0.03)
+    # the noise level is estimated, not assumed: about 0.2 % of body weight
+    sigma = np.sqrt(model.filter(fitted["params"])["sigma2"])
+    assert sigma / G == pytest.approx(0.002, rel=0.25)
+
+
+def test_smoother_recovers_every_cycles_load_factors(long_sim):
+    """At the true person, the per-cycle BLFs from statsmodels' smoother follow the simulator's per-cycle truth."""
+    sim = long_sim
+    y = acceleration(sim)
+    model = RecordModel(sim.record.time, y, true_timing(sim), regressors=(Regressor("offset", np.ones_like(y), dynamic=False),))
+    fitted = fit_model(model)
+    params = fitted["params"].copy()
+    params[:2] = 2.8, 0.25  # the true person: BLF1 inherits any error of f_h (docs/benchmarks.md)
+    cov, free = information(model, params)
+    result = PersonResult(sim.record, model, params, cov, free, model.loglike(params), {}, "wald", 0.9, [])
+    cycles = result.cycles[result.cycles.whole]
+    truth = sim.cycles.set_index("cycle")
+    # match each estimated cycle to the true cycle with the nearest middle
+    mid_true = 0.5 * (truth.t_start + truth.t_end).values
+    mid = 0.5 * (cycles.t_start + cycles.t_end).values
+    nearest = np.abs(mid[:, None] - mid_true[None, :]).argmin(axis=1)
+    for i in (1, 2):
+        estimated = cycles[f"blf_{i}"].values
+        true = truth[f"blf{i}"].values[nearest]
+        assert np.corrcoef(estimated, true)[0, 1] > 0.8
+        assert np.median(np.abs(estimated - true)) < 0.05 * np.mean(true)
+
+
+def test_result_reports_the_person_with_intervals_and_tests(long_sim):
+    result = identify_person(long_sim.record)
+    d = result.to_dict()
+    for key in ("f_h", "f_h_sd", "xi_h", "xi_h_sd", "k_h", "c_h", "blf_1", "blf_4", "blf_1_spread", "noise_sd",
+                "log_likelihood", "n_cycles", "ljung_box_p", "jarque_bera_p", "offset"):
+        assert key in d
+    assert d["f_h_low"] < d["f_h"] < d["f_h_high"]
+    assert d["k_h"] == pytest.approx(70 * (2 * np.pi * d["f_h"]) ** 2)  # Eq. 17
+    assert d["n_cycles"] >= 80
+    assert d["noise_bw"] >= 0.0019  # estimated, not assumed; template timing adds its misfit (docs/person-benchmark.md)
+    assert "f_h" in result.summary().splitlines()[1]
+
+
+def test_too_short_a_record_is_refused_in_one_line():
+    sim = simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=3, seed=2)
+    with pytest.raises(CycleError, match="at least 8"):
+        identify_person(sim.record)
+
+
+def test_cli_writes_person_json_first_and_refuses_short_records(tmp_path, long_sim, capsys):
+    path = tmp_path / "rec.csv"
+    long_sim.write(path)
+    assert main(["identify", str(path), "--mass", "70", "--out", str(tmp_path / "out")]) == 0
+    printed = capsys.readouterr().out
+    assert printed.splitlines()[1].startswith("person from")
+    person = json.loads((tmp_path / "out" / "person.json").read_text())
+    assert 1.0 < person["f_h"] < 6.0
+    assert person["f_h_low"] < person["f_h"] < person["f_h_high"]
+    assert (tmp_path / "out" / "person_fit.png").stat().st_size > 10_000
+    short = simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=3, seed=2)
+    short.write(tmp_path / "short.csv")
+    assert main(["identify", str(tmp_path / "short.csv"), "--mass", "70", "--out", str(tmp_path / "s")]) == 2
+    assert "at least 8" in capsys.readouterr().err
+    assert not (tmp_path / "s" / "person.json").exists()
+
+
+def test_constant_offset_absorbs_a_wrong_body_mass():
+    """A 2 % error in the mass shifts GRF/M - g by a constant; the offset regressor takes it, f_h stays."""
+    sim = simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30, seed=4)
+    good = identify_person(sim.record)
+    wrong = identify_person(make_record(sim.record.time, sim.record.force, 70 * 1.02))
+    assert wrong.regressor_coefficients().loc["offset", "value"] == pytest.approx(-G * 0.02 / 1.02, rel=0.05)
+    assert wrong.f_h == pytest.approx(good.f_h, rel=0.03)
