@@ -6,11 +6,13 @@ so that it can check the estimators:
 
 - Eq. 2, ``u'' + 2 xi_h w_h u' + w_h^2 u = g F(t)``, integrated with
   :func:`scipy.integrate.solve_ivp` (DOP853, ``rtol`` 1e-10), restarted at every
-  force-cycle boundary because the force coefficients jump there;
+  force-cycle boundary when the force coefficients jump there;
 - Eq. 4, the biomechanical force in units of g,
   ``F = a0 + sum_i [a_i cos(i phi) + b_i sin(i phi)]`` with a bouncing phase
-  ``phi`` that advances by 2 pi per force cycle; every cycle has its own
-  frequency and coefficients (cycle-to-cycle variation);
+  ``phi`` that advances by 2 pi per force cycle, with cycle-to-cycle variation
+  of two kinds (:data:`VARIATIONS`): every cycle has its own frequency and
+  coefficients, jumping at the cycle boundaries (``"jumps"``), or the
+  frequency and coefficients drift smoothly in time (``"smooth"``);
 - Eq. 3, ``GRF = M_h (g + u'')``, plus white measurement noise;
 - optional physical effects beyond the base model: a vibrating floor mode
   (human-structure interaction, Section 6), force harmonics above ``n`` and a
@@ -35,12 +37,16 @@ symbol       name         unit     meaning
 Phase convention: harmonic ``i`` of a cycle is
 ``a_i cos(i theta) + b_i sin(i theta) = BLF_i cos(i theta - psi_i)`` with
 ``theta = 2 pi f_b (t - t_start)``, i.e. ``a_i = BLF_i cos psi_i`` and
-``b_i = BLF_i sin psi_i``; ``phases`` are the ``psi_i`` (rad).
+``b_i = BLF_i sin psi_i``; ``phases`` are the ``psi_i`` (rad). With
+``variation="smooth"`` ``theta(t)`` is the continuous phase
+``2 pi int f_b(t) dt``, a multiple of 2 pi at every cycle start.
 
 Random numbers come only from a :class:`numpy.random.Generator` built with
 :func:`numpy.random.default_rng` from the ``seed`` argument, and are drawn in a
 fixed order of fixed-size blocks, so switching an effect on or off does not
-change the random numbers used by the rest of the record.
+change the random numbers used by the rest of the record (with
+``variation="smooth"`` the knots of the smooth processes take the place of the
+cycles, and the knots of the run-in before the record come last).
 """
 
 from __future__ import annotations
@@ -50,11 +56,13 @@ import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 from scipy import optimize
 from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicSpline, PPoly
 
 from . import article
 from .errors import OptionError
@@ -62,6 +70,8 @@ from .io import G, Record, check_mass, make_record, write_record
 
 __all__ = [
     "EFFECTS",
+    "VARIATIONS",
+    "SMOOTH_CORRELATION_CYCLES",
     "DEFAULT_BLF",
     "GRF_PHASE_LAG",
     "POPULATION_BOUNDS",
@@ -86,6 +96,56 @@ ATOL = 1e-13
 
 TRUNCATION_SD = 3.0
 """Cycle-to-cycle variations are normal, truncated at this many standard deviations."""
+
+VARIATIONS = ("jumps", "smooth")
+"""Generators of the cycle-to-cycle force variation (``variation`` of :func:`simulate_bouncing`).
+
+``"jumps"``
+    Each force cycle ``j`` has its own frequency ``f_b (1 + eps_j)`` and
+    harmonics (amplitude ``BLF_i (1 + delta_ij)``, phase ``psi_i + eta_ij``),
+    constant within the cycle and jumping at its boundaries.
+``"smooth"``
+    The frequency ``f_b (1 + eps(t))`` and every harmonic's ``delta_i(t)`` and
+    ``eta_i(t)`` are smooth random processes of time with the same standard
+    deviations, correlated over :data:`SMOOTH_CORRELATION_CYCLES` cycles: the
+    force has no jump anywhere.
+"""
+
+SMOOTH_CORRELATION_CYCLES = 2.5
+"""Correlation time of the ``"smooth"`` variation, in mean bouncing cycles ``1 / f_b``.
+
+Each process (``eps``, ``delta_i``, ``eta_i``) is made from independent
+standard normals truncated at :data:`TRUNCATION_SD`, one per knot, the knots
+``1 / f_b`` apart; a Gaussian kernel of standard deviation
+``s = SMOOTH_CORRELATION_CYCLES / (2 f_b)`` sums them, divided at every time by
+the root-sum-square of the kernel weights, so that the variance is the knots'
+(that of the jumps) at every time. The autocorrelation is then
+``exp(-tau^2 / (4 s^2))``: 1/e at ``tau = 2 s``, the correlation time (2.5
+cycles: 0.85 at one cycle's lag, 0.53 at two, 0.24 at three, 0.02 at five). The smoothed
+values, clipped at :data:`TRUNCATION_SD`, are sampled :data:`SMOOTH_GRID`
+times per mean cycle and joined by a cubic spline (twice continuously
+differentiable); the phase is its exact integral.
+"""
+
+SMOOTH_GRID = 32
+"""Samples per mean bouncing cycle of the ``"smooth"`` processes (joined by a cubic spline)."""
+
+SMOOTH_RUN_IN_DECAYS = 5.0
+"""Run-in of the ``"smooth"`` variation, in decay times of the slowest mode.
+
+A smoothly drifting force has no periodic steady state to start from, so the
+integration starts this many decay times ``1 / (xi w)`` (the person's and,
+with ``floor_mode``, the floor's) before the record, at most
+:data:`SMOOTH_RUN_IN_MAX`, from the periodic steady state of the cycle there:
+what is left of the mismatch at ``t = 0`` is ``exp(-5)`` = 0.7 % of it (the
+mismatch itself is a few per cent of the COM motion).
+"""
+
+SMOOTH_RUN_IN_MAX = 60.0
+"""Longest run-in (s) of the ``"smooth"`` variation (see :data:`SMOOTH_RUN_IN_DECAYS`)."""
+
+_KERNEL_REACH = 6.0
+"""The Gaussian kernel of the smooth processes is cut at this many standard deviations."""
 
 DEFAULT_BLF = (0.25, 0.15, 0.05, 0.02)
 """Default harmonic amplitudes ``BLF_1..BLF_4`` of the biomechanical force (g)."""
@@ -144,7 +204,9 @@ EFFECTS = {
     0.24 over 30 seeds) against 0.94 m/s^2 (SD 0.18) over the last 5 s of
     30 s records; seed 1 builds up from 0.44 to 1.07 m/s^2. Drop the first
     ~15 s, or set ``fb_variation=0``, where a stationary floor response
-    matters.
+    matters. With ``variation="smooth"`` the integration starts a run-in of
+    up to 60 s (about 5 floor decay times, :data:`SMOOTH_RUN_IN_DECAYS`)
+    before the record, so the floor has settled by ``t = 0``.
 
     ``ambient`` (m/s^2, default 0) adds what other occupants, walkers or
     machines do to the floor: a random excitation of the mode, white in the
@@ -701,6 +763,11 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
     for j in np.unique(cycle_index):
         mask = cycle_index == j
         force_g[mask] = G * forces[j](time[mask])
+    return _states_frame(system, time, cycle_index, states, force_g, floor_excitation)
+
+
+def _states_frame(system, time, cycle_index, states, force_g, floor_excitation):
+    """The states table of :func:`integrate_response`; accelerations from the equations of motion."""
     excitation = 0.0 if floor_excitation is None else floor_excitation(time)
     u_ddot, z_ddot = system.accelerations(states, force_g, excitation)
     frame = {
@@ -717,7 +784,7 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
 
 
 # ---------------------------------------------------------------------------
-# the public simulator
+# the simulated record
 
 
 @dataclass(frozen=True)
@@ -807,6 +874,409 @@ def _draw_cycles(rng_blocks, duration, f_b, blf, phases, fb_variation, coef_vari
     return t_start, t_end, frequency, amplitude, phase
 
 
+def _cycles_frame(t_start, t_end, frequency, a0, a, b, blf):
+    """The cycles table: ``cycle, t_start, t_end, f_b, a0, a1, b1, ..., blf1, ...``."""
+    n_cycles, n_total = a.shape
+    columns = {
+        "cycle": np.arange(n_cycles),
+        "t_start": t_start,
+        "t_end": t_end,
+        "f_b": frequency,
+        "a0": np.full(n_cycles, a0),
+    }
+    for i in range(n_total):
+        columns[f"a{i + 1}"] = a[:, i]
+        columns[f"b{i + 1}"] = b[:, i]
+    for i in range(n_total):
+        columns[f"blf{i + 1}"] = blf[:, i]
+    return pd.DataFrame(columns)
+
+
+# ---------------------------------------------------------------------------
+# the smooth variation (VARIATIONS, SMOOTH_CORRELATION_CYCLES)
+
+
+def _smooth_geometry(duration, f_b, fb_variation):
+    """Grid and knots of the smooth processes: ``(t_lo, n_knots, reach)``.
+
+    The grid ``t_lo + k / (SMOOTH_GRID f_b)`` starts a whole number of mean
+    cycles before the earliest possible start of the first cycle and ends
+    after the latest possible end of the last (``duration`` plus the longest
+    cycle); the knots, one per mean cycle, start ``reach`` knots before the
+    grid and end ``reach`` knots after it. All of it depends only on
+    ``duration``, ``f_b`` and ``fb_variation``, so the number of random
+    numbers drawn does too.
+    """
+    period = 1.0 / f_b
+    longest = period / (1.0 - TRUNCATION_SD * fb_variation)
+    before = int(np.ceil(longest / period)) + 1
+    n_span = before + int(np.ceil((duration + longest) / period)) + 1
+    reach = int(np.ceil(_KERNEL_REACH * 0.5 * SMOOTH_CORRELATION_CYCLES))
+    return -before * period, n_span + 2 * reach + 1, reach
+
+
+def _smooth_normals(knots, reach):
+    """Gaussian-kernel smoothing of knot values onto the grid (:data:`SMOOTH_CORRELATION_CYCLES`).
+
+    Parameters
+    ----------
+    knots : ndarray, shape (n_knots, m)
+        Truncated standard normals, one per mean cycle.
+    reach : int
+        Knots beyond each end of the grid (the kernel's half-width in knots).
+
+    Returns
+    -------
+    ndarray, shape ((n_knots - 1 - 2 reach) SMOOTH_GRID + 1, m)
+        The processes at :data:`SMOOTH_GRID` points per knot interval, from
+        knot ``reach`` to knot ``n_knots - 1 - reach``: the kernel-weighted
+        sum of the knots divided by the root-sum-square of the weights (the
+        knots' variance at every point), clipped at :data:`TRUNCATION_SD`.
+    """
+    width = 0.5 * SMOOTH_CORRELATION_CYCLES * SMOOTH_GRID  # kernel SD in grid steps
+    offsets = np.arange(-reach * SMOOTH_GRID, reach * SMOOTH_GRID + 1)
+    kernel = np.exp(-0.5 * (offsets / width) ** 2)
+    spikes = np.zeros((knots.shape[0] - 1) * SMOOTH_GRID + 1)
+    spikes[::SMOOTH_GRID] = 1.0
+    scale = np.sqrt(np.convolve(spikes, kernel**2, mode="valid"))
+    values = np.empty((scale.size, knots.shape[1]))
+    for column in range(knots.shape[1]):
+        spikes[::SMOOTH_GRID] = knots[:, column]
+        values[:, column] = np.convolve(spikes, kernel, mode="valid") / scale
+    return np.clip(values, -TRUNCATION_SD, TRUNCATION_SD)
+
+
+class _SmoothForce:
+    """Biomechanical force (g) of Eq. 4 with a smoothly varying frequency and coefficients.
+
+    ``F(t) = a0 + sum_i A_i(t) cos(i theta(t) - phi_i(t))``, with the phase
+    ``theta = theta_0 + 2 pi f_b (t + fb_variation E(t))``, ``E = int_0^t eps``,
+    the amplitudes ``A_i = BLF_i max(1 + coef_variation delta_i(t), 0)`` and
+    the phases ``phi_i = psi_i + coef_variation eta_i(t)``. ``pieces`` holds
+    ``[E, eps, delta_1..m, eta_1..m]`` as one piecewise polynomial (degree 4,
+    uniform breakpoints).
+    """
+
+    def __init__(self, pieces, theta_0, f_b, fb_variation, a0, blf, phases, coef_variation):
+        self.pieces = pieces
+        self.theta_0 = float(theta_0)
+        self.f_b = float(f_b)
+        self.omega = 2.0 * np.pi * self.f_b
+        self.fb_variation = float(fb_variation)
+        self.a0 = float(a0)
+        self.blf = np.asarray(blf, dtype=float)
+        self.phases = np.asarray(phases, dtype=float)
+        self.coef_variation = float(coef_variation)
+        self.orders = np.arange(1, self.blf.size + 1, dtype=float)
+        self._breaks = pieces.x.tolist()
+        self._step = (pieces.x[-1] - pieces.x[0]) / (pieces.x.size - 1)
+        self._local = np.ascontiguousarray(np.moveaxis(pieces.c, 1, 0).transpose(0, 2, 1))  # (interval, column, power)
+        self._terms = tuple(zip(self.blf.tolist(), self.phases.tolist()))
+        self._interval, self._columns = -1, None  # the interval last used by scalar() and its coefficients
+
+    def _parts(self, columns, t):
+        """``(theta, A, phi)`` from the columns (shape (..., 2 + 2m)) at times ``t`` (shape (...))."""
+        m = self.blf.size
+        theta = self.theta_0 + self.omega * (t + self.fb_variation * columns[..., 0])
+        amplitude = self.blf * np.maximum(1.0 + self.coef_variation * columns[..., 2 : 2 + m], 0.0)
+        return theta, amplitude, self.phases + self.coef_variation * columns[..., 2 + m :]
+
+    def scalar(self, t):
+        """Force (g) at one time ``t`` (s): the fast path for the ODE solver (plain floats)."""
+        interval = min(max(int((t - self._breaks[0]) / self._step), 0), len(self._breaks) - 2)
+        if interval != self._interval:  # the solver mostly stays in one interval for several calls
+            self._interval, self._columns = interval, self._local[interval].tolist()
+        dt = t - self._breaks[interval]
+        values = [(((c0 * dt + c1) * dt + c2) * dt + c3) * dt + c4 for c0, c1, c2, c3, c4 in self._columns]
+        theta = self.theta_0 + self.omega * (t + self.fb_variation * values[0])
+        variation, m = self.coef_variation, len(self._terms)
+        total = self.a0
+        for i, (blf_i, psi_i) in enumerate(self._terms):
+            amplitude = blf_i * max(1.0 + variation * values[2 + i], 0.0)
+            total += amplitude * math.cos((i + 1) * theta - psi_i - variation * values[2 + m + i])
+        return total
+
+    def __call__(self, t):
+        """Force (g) at times ``t`` (s), any shape."""
+        t = np.asarray(t, dtype=float)
+        theta, amplitude, phase = self._parts(self.pieces(t), t)
+        return self.a0 + np.sum(amplitude * np.cos(self.orders * theta[..., None] - phase), axis=-1)
+
+    def theta(self, t):
+        """Bouncing phase ``theta(t)`` (rad), continuous; a cycle is one advance by 2 pi."""
+        t = np.asarray(t, dtype=float)
+        return self.theta_0 + self.omega * (t + self.fb_variation * self.pieces(t)[..., 0])
+
+    def frequency(self, t):
+        """Instantaneous bouncing frequency ``f_b (1 + fb_variation eps(t))`` (Hz)."""
+        return self.f_b * (1.0 + self.fb_variation * self.pieces(np.asarray(t, dtype=float))[..., 1])
+
+    def coefficients(self, t):
+        """``(a, b)`` at times ``t``, shape (..., m): ``a_i = A_i cos phi_i``, ``b_i = A_i sin phi_i`` (g)."""
+        t = np.asarray(t, dtype=float)
+        _, amplitude, phase = self._parts(self.pieces(t), t)
+        return amplitude * np.cos(phase), amplitude * np.sin(phase)
+
+
+def _smooth_run_in(f_h, xi_h, effects):
+    """Run-in (s) before the record in smooth mode (:data:`SMOOTH_RUN_IN_DECAYS`)."""
+    decay = 1.0 / (xi_h * 2.0 * np.pi * f_h)
+    if "floor_mode" in effects:
+        floor = effects["floor_mode"]
+        damping = floor["damping"] * 2.0 * np.pi * floor["frequency"]
+        decay = max(decay, 1.0 / damping if damping > 0 else np.inf)
+    return min(SMOOTH_RUN_IN_DECAYS * decay, SMOOTH_RUN_IN_MAX)
+
+
+def _smooth_force(rng_blocks, run_in_knots, geometry, f_b, fb_variation, a0, blf, phases, coef_variation):
+    """The :class:`_SmoothForce` made from pre-drawn truncated standard normals at the knots.
+
+    ``rng_blocks`` holds the start fraction and the knots of the record
+    (columns ``eps``, ``delta_i``, ``eta_i``); ``run_in_knots`` (shape
+    (n_run, 1 + 2m)) extends them into the past, nearest knot first, so the
+    processes over the record do not depend on them.
+    """
+    start_fraction, eps, amp_noise, phase_noise = rng_blocks
+    t_lo, _, reach = geometry
+    knots = np.concatenate([run_in_knots[::-1], np.column_stack([eps, amp_noise, phase_noise])])
+    values = _smooth_normals(knots, reach)
+    grid = t_lo - run_in_knots.shape[0] / f_b + np.arange(values.shape[0]) / (SMOOTH_GRID * f_b)
+    spline = CubicSpline(grid, values, axis=0)
+    integral = spline.antiderivative()
+    coefficients = np.zeros((5, grid.size - 1, values.shape[1] + 1))
+    coefficients[:, :, 0] = integral.c[:, :, 0]
+    coefficients[-1, :, 0] -= integral(0.0)[0]  # E(0) = 0
+    coefficients[1:, :, 1:] = spline.c
+    pieces = PPoly(coefficients, grid)
+    return _SmoothForce(pieces, 2.0 * np.pi * start_fraction, f_b, fb_variation, a0, blf, phases, coef_variation)
+
+
+def _smooth_cycles(force, first, duration, nodes=24):
+    """Cycles ``first, first + 1, ...`` of a smooth force: ``(t_start, t_end, f_b, a, b)``.
+
+    Cycle ``j`` is the advance of ``theta`` from ``2 pi j`` to ``2 pi (j + 1)``
+    (boundaries by Newton's method from a linear interpolation on the grid):
+    cycle 0 starts at or before ``t = 0``, the last one ends after
+    ``duration``. ``f_b = 1 / (t_end - t_start)``; ``a, b`` (shape
+    (n_cycles, m)) are the time-averages over the cycle of ``a_i(t)`` and
+    ``b_i(t)`` (Gauss-Legendre quadrature with ``nodes`` points).
+    """
+    last = int(np.floor(force.theta(duration) / (2.0 * np.pi))) + 1
+    targets = 2.0 * np.pi * np.arange(first, last + 1)
+    breaks = force.pieces.x
+    times = np.interp(targets, force.theta(breaks), breaks)
+    for _ in range(8):
+        times = times - (force.theta(times) - targets) / (2.0 * np.pi * force.frequency(times))
+    if np.abs(force.theta(times) - targets).max() > 1e-8:
+        raise RuntimeError("the cycle boundaries of the smooth variation did not converge")  # pragma: no cover
+    t_start, t_end = times[:-1], times[1:]
+    points, weights = np.polynomial.legendre.leggauss(nodes)
+    inside = 0.5 * (t_start + t_end)[:, None] + 0.5 * (t_end - t_start)[:, None] * points
+    a, b = force.coefficients(inside)
+    return t_start, t_end, 1.0 / (t_end - t_start), 0.5 * weights @ a, 0.5 * weights @ b
+
+
+def _smooth_states(force, run_in, cycles, time, f_h, xi_h, mass, effects, floor_excitation):
+    """Integrate Eq. 2 under a smooth force: one DOP853 run through the run-in and the record.
+
+    ``run_in`` is the cycle that starts the run-in, ``(t_start, t_end, f_b,
+    a, b)``; the integration starts there, in the periodic steady state of
+    that cycle's averaged coefficients at its frequency, the nearest periodic
+    force to the smooth one (:data:`SMOOTH_RUN_IN_DECAYS`).
+    """
+    system = _build_system(f_h, xi_h, mass, effects, floor_excitation)
+    t_start, t_end, f_first, a, b = run_in
+    state = _periodic_state(system, _CycleForce(t_start, f_first, force.a0, a, b), 1.0 / f_first, t_start)
+    states, _ = _integrate_cycle(system, force, state, t_start, float(cycles["t_end"].iloc[-1]), time)
+    cycle_index = np.searchsorted(cycles["t_start"].to_numpy(), time, side="right") - 1
+    return _states_frame(system, time, cycle_index, states, G * force(time), floor_excitation)
+
+
+# ---------------------------------------------------------------------------
+# the public simulator's parts
+
+
+def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_variation, coef_variation, noise,
+                      effects, variation):
+    """Validate the arguments of :func:`simulate_bouncing`; return them checked and completed (a namespace)."""
+    mass = check_mass(mass, source="mass")
+    f_b = _number(f_b, "f_b (Hz)", positive=True)
+    f_h = _number(f_h, "f_h (Hz)", positive=True)
+    xi_h = _number(xi_h, "xi_h", positive=True)
+    duration = _number(duration, "duration (s)", positive=True)
+    fs = _number(fs, "fs (Hz)", positive=True)
+    blf = _vector(blf, "blf (g)", nonnegative=True)
+    a0 = _number(a0, "a0 (g)")
+    fb_variation = _number(fb_variation, "fb_variation", nonnegative=True)
+    coef_variation = _number(coef_variation, "coef_variation", nonnegative=True)
+    noise = _number(noise, "noise", nonnegative=True)
+    if fb_variation > 0.2:
+        raise OptionError(f"simulate_bouncing: fb_variation must be 0-0.2 (relative), got {fb_variation!r}")
+    if coef_variation > 1.0:
+        raise OptionError(f"simulate_bouncing: coef_variation must be 0-1 (relative), got {coef_variation!r}")
+    if not isinstance(variation, str) or variation not in VARIATIONS:
+        raise OptionError(
+            f"simulate_bouncing: variation must be one of {', '.join(map(repr, VARIATIONS))}, got {variation!r}"
+        )
+    if duration < 1.0 / f_b:
+        raise OptionError(
+            f"simulate_bouncing: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)"
+        )
+    effects = _check_effects(effects)
+    extra_blf = np.asarray(effects["harmonics"]["blf"]) if "harmonics" in effects else np.empty(0)
+    n_base, n_extra = blf.size, extra_blf.size
+    highest = (n_base + n_extra) * f_b
+    if "floor_mode" in effects:
+        highest = max(highest, effects["floor_mode"]["frequency"])
+    if fs < 4.0 * highest:
+        raise OptionError(
+            f"simulate_bouncing: fs {fs:g} Hz is too low; it must be at least 4 x the highest frequency "
+            f"({highest:g} Hz), i.e. >= {4 * highest:g} Hz"
+        )
+    default_base, default_extra = default_phases(blf, f_b, f_h, xi_h, extra_blf)
+    if phases is None:
+        phases = default_base
+    else:
+        phases = _vector(phases, "phases (rad)")
+        if phases.size != n_base:
+            raise OptionError(f"simulate_bouncing: phases has {phases.size} values, blf has {n_base}")
+    if n_extra:
+        given = effects["harmonics"]["phases"]
+        extra_phases = default_extra if given is None else np.asarray(given, dtype=float)
+        effects["harmonics"]["phases"] = tuple(float(v) for v in extra_phases)
+    else:
+        extra_phases = np.empty(0)
+    return SimpleNamespace(
+        mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=duration, fs=fs, blf=blf, phases=phases, a0=a0,
+        fb_variation=fb_variation, coef_variation=coef_variation, noise=noise, effects=effects,
+        variation=variation, all_blf=np.concatenate([blf, extra_blf]),
+        all_phases=np.concatenate([phases, extra_phases]),
+    )
+
+
+def _draw_blocks(rng, n_rows, n_base, n_extra, n_samples):
+    """All random numbers but the ambient floor's, in their fixed order of fixed-size blocks.
+
+    Returns ``((start_fraction, eps, amp_noise, phase_noise), grf_noise,
+    floor_noise)``: ``n_rows`` truncated normals per cycle-variation quantity
+    (cycles in jumps mode, knots in smooth mode), base harmonics' before the
+    noise, extra harmonics' after it.
+    """
+
+    def normals(shape):
+        return np.clip(rng.standard_normal(shape), -TRUNCATION_SD, TRUNCATION_SD)
+
+    start_fraction = rng.random()
+    eps = normals(n_rows)
+    base_blocks = (normals((n_rows, n_base)), normals((n_rows, n_base)))
+    grf_noise = rng.standard_normal(n_samples)
+    floor_noise = rng.standard_normal(n_samples)
+    extra_blocks = (normals((n_rows, n_extra)), normals((n_rows, n_extra)))
+    amp_noise = np.concatenate([base_blocks[0], extra_blocks[0]], axis=1)
+    phase_noise = np.concatenate([base_blocks[1], extra_blocks[1]], axis=1)
+    return (start_fraction, eps, amp_noise, phase_noise), grf_noise, floor_noise
+
+
+def _ambient_excitation(rng, effects, duration):
+    """The ambient floor excitation (drawn last, so that it leaves every other random number unchanged)."""
+    if "floor_mode" not in effects:
+        return None
+    floor = effects["floor_mode"]
+    ambient_phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(floor["frequency"], duration))
+    return ambient_floor_excitation(floor["ambient"], floor["frequency"], floor["damping"], duration, ambient_phases)
+
+
+def _jump_record(settings, rng_blocks, time, excitation):
+    """``(cycles, states)`` of the jumps variation."""
+    s = settings
+    t_start, t_end, frequency, amplitude, phase = _draw_cycles(
+        rng_blocks, s.duration, s.f_b, s.all_blf, s.all_phases, s.fb_variation, s.coef_variation,
+    )
+    n_total = amplitude.shape[1]
+    a = np.column_stack([amplitude[:, i] * np.cos(phase[:, i]) for i in range(n_total)])
+    b = np.column_stack([amplitude[:, i] * np.sin(phase[:, i]) for i in range(n_total)])
+    cycles = _cycles_frame(t_start, t_end, frequency, s.a0, a, b, amplitude)
+    dynamics = {name: params for name, params in s.effects.items() if name != "harmonics"}
+    states = integrate_response(cycles, time, s.f_h, s.xi_h, mass=s.mass, effects=dynamics,
+                                floor_excitation=excitation)
+    return cycles, states
+
+
+def _smooth_record(settings, rng_blocks, run_in_knots, geometry, time, excitation):
+    """``(cycles, states)`` of the smooth variation (``geometry`` from :func:`_smooth_geometry`)."""
+    s = settings
+    force = _smooth_force(rng_blocks, run_in_knots, geometry, s.f_b, s.fb_variation, s.a0, s.all_blf,
+                          s.all_phases, s.coef_variation)
+    first = int(np.floor(float(force.theta(force.pieces.x[0])) / (2.0 * np.pi))) + 1  # the run-in's first cycle
+    t_start, t_end, frequency, a, b = _smooth_cycles(force, min(first, 0), s.duration)
+    run_in = (t_start[0], t_end[0], frequency[0], a[0], b[0])
+    keep = slice(-min(first, 0), None)  # cycles 0, 1, ...: the one holding t = 0 and the later ones
+    cycles = _cycles_frame(t_start[keep], t_end[keep], frequency[keep], s.a0, a[keep], b[keep],
+                           np.hypot(a[keep], b[keep]))
+    dynamics = {name: params for name, params in s.effects.items() if name != "harmonics"}
+    states = _smooth_states(force, run_in, cycles, time, s.f_h, s.xi_h, s.mass, dynamics, excitation)
+    return cycles, states
+
+
+def _measured_record(settings, states, grf_noise, floor_noise):
+    """The :class:`Record` an estimator sees: Eq. 3 plus noise (and the noisy floor acceleration)."""
+    s = settings
+    weight = s.mass * G
+    force = s.mass * (G + states["u_ddot"].to_numpy()) + s.noise * weight * grf_noise  # Eq. 3
+    floor_acc = None
+    if "floor_mode" in s.effects:
+        z_ddot = states["z_ddot"].to_numpy()
+        floor_noise_level = s.effects["floor_mode"]["noise"]
+        floor_noise_level = s.noise if floor_noise_level is None else floor_noise_level
+        floor_acc = z_ddot + floor_noise_level * float(np.sqrt(np.mean(z_ddot**2))) * floor_noise
+    return make_record(states["time"].to_numpy(), force, s.mass, floor_acc=floor_acc, source="synthetic")
+
+
+def _truth(settings, seed_record, n_cycles):
+    """The JSON-serialisable truth of :attr:`SyntheticRecord.truth`."""
+    s = settings
+    variations = {
+        "fb_variation": s.fb_variation,
+        "coef_variation": s.coef_variation,
+        "phase_jitter_rad": s.coef_variation,
+        "truncation_sd": TRUNCATION_SD,
+        "generator": s.variation,
+    }
+    if s.variation == "smooth":
+        variations["correlation_cycles"] = SMOOTH_CORRELATION_CYCLES
+        variations["correlation_time_s"] = SMOOTH_CORRELATION_CYCLES / s.f_b
+    return {
+        "source": "smd_statespace.simulate.simulate_bouncing",
+        "mass": s.mass,
+        "f_b": s.f_b,
+        "f_h": s.f_h,
+        "xi_h": s.xi_h,
+        "K_h": float(_stiffness(s.mass, s.f_h)),  # Eq. 17
+        "C_h": float(_damping_coefficient(s.mass, s.f_h, s.xi_h)),  # Eq. 18
+        "n_harmonics": int(s.blf.size),
+        "n_force_harmonics": int(s.all_blf.size),
+        "blf": [float(v) for v in s.blf],
+        "phases": [float(v) for v in s.phases],
+        "a0": s.a0,
+        "effects": {name: {k: (list(v) if isinstance(v, tuple) else v) for k, v in params.items()}
+                    for name, params in s.effects.items()},
+        "seed": seed_record,
+        "fs": s.fs,
+        "duration": s.duration,
+        "noise": s.noise,
+        "variations": variations,
+        "n_cycles": int(n_cycles),
+        "units": {
+            "mass": "kg", "f_b": "Hz", "f_h": "Hz", "xi_h": "-", "K_h": "N/m", "C_h": "N*s/m",
+            "blf": "g", "a0": "g", "phases": "rad", "fs": "Hz", "duration": "s", "noise": "body weight",
+        },
+    }
+
+
+# ---------------------------------------------------------------------------
+# the public simulator
+
+
 def simulate_bouncing(
     mass=70.0,
     f_b=2.0,
@@ -822,21 +1292,53 @@ def simulate_bouncing(
     noise=0.01,
     effects=None,
     seed=None,
+    variation="jumps",
 ):
     """Simulate one person bouncing: GRF record plus the truth behind it.
 
     The COM obeys Eq. 2 under the biomechanical force of Eq. 4, integrated
-    accurately (:func:`integrate_response`), and the GRF is Eq. 3 plus noise.
-    Each force cycle ``j`` has its own frequency ``f_b (1 + eps_j)``,
-    ``eps_j ~ N(0, fb_variation)``, and its own harmonics: amplitude
-    ``BLF_i (1 + delta)``, ``delta ~ N(0, coef_variation)``, phase
-    ``psi_i + eta``, ``eta ~ N(0, coef_variation)`` rad (together a complex
-    perturbation of relative size ``coef_variation``); all normals truncated
-    at :data:`TRUNCATION_SD`, constant within a cycle. ``a0`` is the same in
-    every cycle. The record starts at a random point of the first cycle, in
-    the periodic steady state of that cycle's force, so it has no start-up
-    transient (but see ``floor_mode`` in :data:`EFFECTS`: with cycle-to-cycle
-    variation a lightly damped floor needs its decay time to settle).
+    accurately (DOP853, ``rtol`` :data:`RTOL`), and the GRF is Eq. 3 plus
+    noise. The force varies from cycle to cycle in one of two ways
+    (:data:`VARIATIONS`):
+
+    ``variation="jumps"`` (default)
+        Each force cycle ``j`` has its own frequency ``f_b (1 + eps_j)``,
+        ``eps_j ~ N(0, fb_variation)``, and its own harmonics: amplitude
+        ``BLF_i (1 + delta)``, ``delta ~ N(0, coef_variation)``, phase
+        ``psi_i + eta``, ``eta ~ N(0, coef_variation)`` rad (together a
+        complex perturbation of relative size ``coef_variation``); all normals
+        truncated at :data:`TRUNCATION_SD`, constant within a cycle, jumping at
+        its boundaries (integrated by :func:`integrate_response`, restarted at
+        each boundary).
+    ``variation="smooth"``
+        The same quantities are smooth processes of time with the same
+        standard deviations and truncation, correlated over
+        :data:`SMOOTH_CORRELATION_CYCLES` mean cycles (how they are made is
+        described there): ``F(t) = a0 + sum_i BLF_i (1 + delta_i(t)) cos(i
+        theta(t) - psi_i - eta_i(t))``, amplitudes floored at 0, with the
+        continuous phase ``theta(t) = 2 pi int f_b (1 + eps(t)) dt``. A cycle
+        is one advance of ``theta`` by 2 pi; its row of :attr:`cycles
+        <SyntheticRecord.cycles>` has ``f_b = 1 / (t_end - t_start)`` and the
+        time-averages over the cycle of ``a_i(t) = A_i(t) cos phi_i(t)`` and
+        ``b_i(t) = A_i(t) sin phi_i(t)`` (referred to the cycle's own start,
+        where ``theta`` is a multiple of 2 pi), so Eq. 4 with a cycle's row
+        reproduces the force within the drift of the coefficients and
+        frequency inside that cycle. The per-cycle ``f_b`` spread is about
+        0.97 ``fb_variation`` (0.99 with jumps, from the truncation; a
+        smooth cycle also averages the frequency over its length), and
+        neighbouring cycles are alike (correlation about 0.85). One
+        integration covers the run-in and the record.
+
+    ``a0`` is the same at all times. The record starts at a random point of
+    the first cycle without a start-up transient: with ``"jumps"`` in the
+    periodic steady state of that cycle's force (but see ``floor_mode`` in
+    :data:`EFFECTS`: with cycle-to-cycle variation a lightly damped floor
+    needs its decay time to settle); with ``"smooth"`` the integration starts
+    :data:`SMOOTH_RUN_IN_DECAYS` decay times earlier (at most
+    :data:`SMOOTH_RUN_IN_MAX`), in the periodic steady state of the
+    averaged coefficients of the cycle there, so that the mismatch has
+    decayed by ``t = 0``. The effects of :data:`EFFECTS` work with both
+    variations (extra harmonics vary like the base ones).
 
     Parameters
     ----------
@@ -875,7 +1377,14 @@ def simulate_bouncing(
     seed : None, int, numpy.random.SeedSequence or numpy.random.Generator
         Source of randomness (through :func:`numpy.random.default_rng`). With
         None a fresh SeedSequence is made and its entropy stored in the truth,
-        so every record can be reproduced.
+        so every record can be reproduced. The same seed gives the same
+        record; with ``"smooth"`` the knots take the place of the cycles in
+        the fixed order of blocks, so effects still leave the other random
+        numbers unchanged.
+    variation : {"jumps", "smooth"}
+        Generator of the cycle-to-cycle variation (see above); the truth's
+        ``variations["generator"]`` records it (with ``"smooth"`` also
+        ``correlation_cycles`` and ``correlation_time_s``).
 
     Returns
     -------
@@ -888,143 +1397,32 @@ def simulate_bouncing(
     OptionError
         Any other invalid argument (the message names it).
     """
-    mass = check_mass(mass, source="mass")
-    f_b = _number(f_b, "f_b (Hz)", positive=True)
-    f_h = _number(f_h, "f_h (Hz)", positive=True)
-    xi_h = _number(xi_h, "xi_h", positive=True)
-    duration = _number(duration, "duration (s)", positive=True)
-    fs = _number(fs, "fs (Hz)", positive=True)
-    blf = _vector(blf, "blf (g)", nonnegative=True)
-    a0 = _number(a0, "a0 (g)")
-    fb_variation = _number(fb_variation, "fb_variation", nonnegative=True)
-    coef_variation = _number(coef_variation, "coef_variation", nonnegative=True)
-    noise = _number(noise, "noise", nonnegative=True)
-    if fb_variation > 0.2:
-        raise OptionError(f"simulate_bouncing: fb_variation must be 0-0.2 (relative), got {fb_variation!r}")
-    if coef_variation > 1.0:
-        raise OptionError(f"simulate_bouncing: coef_variation must be 0-1 (relative), got {coef_variation!r}")
-    if duration < 1.0 / f_b:
-        raise OptionError(
-            f"simulate_bouncing: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)"
-        )
-    effects = _check_effects(effects)
-    extra_blf = np.asarray(effects["harmonics"]["blf"]) if "harmonics" in effects else np.empty(0)
-    n_base, n_extra = blf.size, extra_blf.size
-    highest = (n_base + n_extra) * f_b
-    if "floor_mode" in effects:
-        highest = max(highest, effects["floor_mode"]["frequency"])
-    if fs < 4.0 * highest:
-        raise OptionError(
-            f"simulate_bouncing: fs {fs:g} Hz is too low; it must be at least 4 x the highest frequency "
-            f"({highest:g} Hz), i.e. >= {4 * highest:g} Hz"
-        )
-    default_base, default_extra = default_phases(blf, f_b, f_h, xi_h, extra_blf)
-    if phases is None:
-        phases = default_base
-    else:
-        phases = _vector(phases, "phases (rad)")
-        if phases.size != n_base:
-            raise OptionError(f"simulate_bouncing: phases has {phases.size} values, blf has {n_base}")
-    if n_extra:
-        given = effects["harmonics"]["phases"]
-        extra_phases = default_extra if given is None else np.asarray(given, dtype=float)
-        effects["harmonics"]["phases"] = tuple(float(v) for v in extra_phases)
-    else:
-        extra_phases = np.empty(0)
-
+    s = _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_variation, coef_variation, noise,
+                          effects, variation)
     rng, seed_record = _resolve_seed(seed)
-    n_samples = int(np.floor(duration * fs + 1e-9)) + 1
-    time = np.arange(n_samples) / fs
+    n_samples = int(np.floor(s.duration * s.fs + 1e-9)) + 1
+    time = np.arange(n_samples) / s.fs
     # Fixed-size blocks in a fixed order (see the module docstring).
-    shortest = 1.0 / (f_b * (1.0 + TRUNCATION_SD * fb_variation))
-    longest = 1.0 / (f_b * (1.0 - TRUNCATION_SD * fb_variation))
-    n_max = int(np.ceil((duration + longest) / shortest)) + 2
-
-    def normals(shape):
-        return np.clip(rng.standard_normal(shape), -TRUNCATION_SD, TRUNCATION_SD)
-
-    start_fraction = rng.random()
-    eps = normals(n_max)
-    base_blocks = (normals((n_max, n_base)), normals((n_max, n_base)))
-    grf_noise = rng.standard_normal(n_samples)
-    floor_noise = rng.standard_normal(n_samples)
-    extra_blocks = (normals((n_max, n_extra)), normals((n_max, n_extra)))
-
-    all_blf = np.concatenate([blf, extra_blf])
-    all_phases = np.concatenate([phases, extra_phases])
-    amp_noise = np.concatenate([base_blocks[0], extra_blocks[0]], axis=1)
-    phase_noise = np.concatenate([base_blocks[1], extra_blocks[1]], axis=1)
-    t_start, t_end, frequency, amplitude, phase = _draw_cycles(
-        (start_fraction, eps, amp_noise, phase_noise), duration, f_b, all_blf, all_phases,
-        fb_variation, coef_variation,
-    )
-    n_cycles, n_total = amplitude.shape
-    columns = {
-        "cycle": np.arange(n_cycles),
-        "t_start": t_start,
-        "t_end": t_end,
-        "f_b": frequency,
-        "a0": np.full(n_cycles, a0),
-    }
-    for i in range(n_total):
-        columns[f"a{i + 1}"] = amplitude[:, i] * np.cos(phase[:, i])
-        columns[f"b{i + 1}"] = amplitude[:, i] * np.sin(phase[:, i])
-    for i in range(n_total):
-        columns[f"blf{i + 1}"] = amplitude[:, i]
-    cycles = pd.DataFrame(columns)
-
-    dynamics = {name: params for name, params in effects.items() if name != "harmonics"}
-    excitation = None
-    if "floor_mode" in effects:
-        floor = effects["floor_mode"]
-        # Drawn last, so that the ambient floor vibration leaves every other random number unchanged.
-        ambient_phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(floor["frequency"], duration))
-        excitation = ambient_floor_excitation(floor["ambient"], floor["frequency"], floor["damping"], duration,
-                                              ambient_phases)
-    states = integrate_response(cycles, time, f_h, xi_h, mass=mass, effects=dynamics, floor_excitation=excitation)
-
-    weight = mass * G
-    force = mass * (G + states["u_ddot"].to_numpy()) + noise * weight * grf_noise  # Eq. 3
-    floor_acc = None
-    if "floor_mode" in effects:
-        z_ddot = states["z_ddot"].to_numpy()
-        floor_noise_level = effects["floor_mode"]["noise"]
-        floor_noise_level = noise if floor_noise_level is None else floor_noise_level
-        floor_acc = z_ddot + floor_noise_level * float(np.sqrt(np.mean(z_ddot**2))) * floor_noise
-    record = make_record(time, force, mass, floor_acc=floor_acc, source="synthetic")
-
-    truth = {
-        "source": "smd_statespace.simulate.simulate_bouncing",
-        "mass": mass,
-        "f_b": f_b,
-        "f_h": f_h,
-        "xi_h": xi_h,
-        "K_h": float(_stiffness(mass, f_h)),  # Eq. 17
-        "C_h": float(_damping_coefficient(mass, f_h, xi_h)),  # Eq. 18
-        "n_harmonics": int(n_base),
-        "n_force_harmonics": int(n_total),
-        "blf": [float(v) for v in blf],
-        "phases": [float(v) for v in phases],
-        "a0": a0,
-        "effects": {name: {k: (list(v) if isinstance(v, tuple) else v) for k, v in params.items()}
-                    for name, params in effects.items()},
-        "seed": seed_record,
-        "fs": fs,
-        "duration": duration,
-        "noise": noise,
-        "variations": {
-            "fb_variation": fb_variation,
-            "coef_variation": coef_variation,
-            "phase_jitter_rad": coef_variation,
-            "truncation_sd": TRUNCATION_SD,
-        },
-        "n_cycles": int(n_cycles),
-        "units": {
-            "mass": "kg", "f_b": "Hz", "f_h": "Hz", "xi_h": "-", "K_h": "N/m", "C_h": "N*s/m",
-            "blf": "g", "a0": "g", "phases": "rad", "fs": "Hz", "duration": "s", "noise": "body weight",
-        },
-    }
-    return SyntheticRecord(record=record, truth=truth, states=states, cycles=cycles)
+    if s.variation == "jumps":
+        shortest = 1.0 / (s.f_b * (1.0 + TRUNCATION_SD * s.fb_variation))
+        longest = 1.0 / (s.f_b * (1.0 - TRUNCATION_SD * s.fb_variation))
+        n_rows = int(np.ceil((s.duration + longest) / shortest)) + 2
+    else:
+        geometry = _smooth_geometry(s.duration, s.f_b, s.fb_variation)
+        n_rows = geometry[1]
+    rng_blocks, grf_noise, floor_noise = _draw_blocks(rng, n_rows, s.blf.size, s.all_blf.size - s.blf.size,
+                                                      n_samples)
+    excitation = _ambient_excitation(rng, s.effects, s.duration)
+    if s.variation == "jumps":
+        cycles, states = _jump_record(s, rng_blocks, time, excitation)
+    else:
+        # Drawn last: the run-in's length depends on the effects; the record's processes do not use them.
+        n_run = int(np.ceil(_smooth_run_in(s.f_h, s.xi_h, s.effects) * s.f_b))
+        run_in_knots = np.clip(rng.standard_normal((n_run, 1 + 2 * s.all_blf.size)), -TRUNCATION_SD,
+                               TRUNCATION_SD)
+        cycles, states = _smooth_record(s, rng_blocks, run_in_knots, geometry, time, excitation)
+    record = _measured_record(s, states, grf_noise, floor_noise)
+    return SyntheticRecord(record=record, truth=_truth(s, seed_record, len(cycles)), states=states, cycles=cycles)
 
 
 # ---------------------------------------------------------------------------

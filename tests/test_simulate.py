@@ -497,3 +497,202 @@ def test_ambient_floor_vibration_has_the_requested_rms_and_leaves_the_rest_uncha
     assert not np.allclose(quiet.record.floor_acc, lively.record.floor_acc)
     with pytest.raises(OptionError, match="ambient"):
         simulate_bouncing(duration=5.0, effects={"floor_mode": {"ambient": -1.0}})
+
+
+# ---------------------------------------------------------------------------
+# smooth cycle-to-cycle variation (variation="smooth")
+
+SMOOTH = dict(variation="smooth")
+
+
+def table_force(cycles, states):
+    """Eq. 4 with each sample's cycle row, referred to the cycle's own start (g)."""
+    n = sum(1 for column in cycles.columns if column.startswith("blf"))
+    time = states["time"].to_numpy()
+    row = cycles.iloc[states["cycle"].to_numpy()]
+    theta = 2 * np.pi * row["f_b"].to_numpy() * (time - row["t_start"].to_numpy())
+    force = row["a0"].to_numpy().copy()
+    for i in range(1, n + 1):
+        force += row[f"a{i}"].to_numpy() * np.cos(i * theta) + row[f"b{i}"].to_numpy() * np.sin(i * theta)
+    return force
+
+
+def fourth_order_derivative(signal, dt):
+    """Central 4th-order difference at samples 2..T-3."""
+    return (-signal[4:] + 8 * signal[3:-1] - 8 * signal[1:-3] + signal[:-4]) / (12 * dt)
+
+
+def test_smooth_variation_is_reproducible_and_jumps_stay_the_default():
+    first = simulate_bouncing(duration=4.0, seed=21, **SMOOTH)
+    again = simulate_bouncing(duration=4.0, seed=np.random.SeedSequence(21), **SMOOTH)
+    assert np.array_equal(first.record.force, again.record.force)
+    pd.testing.assert_frame_equal(first.cycles, again.cycles)
+    assert first.truth["variations"]["generator"] == "smooth"
+    assert first.truth["variations"]["correlation_cycles"] == 2.5
+    default = simulate_bouncing(duration=4.0, seed=21)
+    jumps = simulate_bouncing(duration=4.0, seed=21, variation="jumps")
+    assert np.array_equal(default.record.force, jumps.record.force)
+    pd.testing.assert_frame_equal(default.cycles, jumps.cycles)
+    assert default.truth["variations"]["generator"] == "jumps"
+    assert not np.allclose(first.record.force, default.record.force)
+    assert list(first.states.columns) == list(default.states.columns)
+    assert list(first.cycles.columns) == list(default.cycles.columns)
+    json.dumps(first.truth)
+
+
+def test_smooth_force_has_no_jumps_at_cycle_boundaries():
+    fs, f_b, blf = 1000.0, 2.0, np.array([0.25, 0.15, 0.05, 0.02])
+    smooth = simulate_bouncing(f_b=f_b, duration=6.0, fs=fs, seed=3, noise=0.0, **SMOOTH)
+    jumps = simulate_bouncing(f_b=f_b, duration=6.0, fs=fs, seed=3, noise=0.0)
+    # second difference of a smooth force: at most F'' / fs^2, harmonic i bounded by BLF_i (1 + 3 cv) (w_i / fs)^2
+    bound = np.sum(blf * 1.3 * (2 * np.pi * np.arange(1, 5) * f_b * 1.1 / fs) ** 2)
+    curvature = {name: np.abs(np.diff(sim.states["force_bio"].to_numpy() / G, 2)).max()
+                 for name, sim in (("smooth", smooth), ("jumps", jumps))}
+    assert curvature["smooth"] < bound < 0.1 * curvature["jumps"]
+    # the smooth force at the cycle boundaries: the same on both sides (sample before vs sample after)
+    force = smooth.states["force_bio"].to_numpy() / G
+    boundary = np.nonzero(np.diff(smooth.states["cycle"].to_numpy()))[0]
+    steps = np.abs(force[boundary + 1] - force[boundary])
+    assert steps.max() < np.abs(np.diff(force)).max() + 1e-12  # no larger than anywhere else
+    assert steps.max() < 2 * np.pi * np.sum(np.arange(1, 5) * 1.1 * f_b * blf * 1.3) / fs
+
+
+def test_smooth_states_satisfy_eq2_across_cycle_boundaries():
+    f_h, xi_h, fs = 2.5, 0.3, 1000.0
+    for variation, tolerance in (("smooth", 1e-6), ("jumps", None)):
+        sim = simulate_bouncing(f_h=f_h, xi_h=xi_h, duration=6.0, fs=fs, seed=5, noise=0.0, variation=variation)
+        u, u_dot, u_ddot, force = (sim.states[c].to_numpy() for c in ("u", "u_dot", "u_ddot", "force_bio"))
+        wh = 2 * np.pi * f_h
+        assert np.allclose(u_ddot + 2 * xi_h * wh * u_dot + wh**2 * u, force, rtol=0, atol=1e-12)  # Eq. 2
+        # u' and u'' (from Eq. 2 with the recorded force) are the derivatives of the integrated u and u'
+        velocity_error = np.abs(fourth_order_derivative(u, 1 / fs) - u_dot[2:-2]).max() / np.abs(u_dot).max()
+        acceleration_error = np.abs(fourth_order_derivative(u_dot, 1 / fs) - u_ddot[2:-2]).max() / np.abs(u_ddot).max()
+        if tolerance is not None:
+            assert velocity_error < tolerance and acceleration_error < tolerance
+        else:  # the jumps' force is discontinuous, so u'' is too: the same check fails at the boundaries
+            assert acceleration_error > 1e-3
+
+
+def test_smooth_cycles_are_phase_cycles_whose_coefficients_reproduce_the_force():
+    sim = simulate_bouncing(duration=30.0, fs=400.0, seed=2, noise=0.0, **SMOOTH)
+    cycles, states = sim.cycles, sim.states
+    time = states["time"].to_numpy()
+    assert np.allclose(cycles["t_start"][1:], cycles["t_end"][:-1], rtol=0, atol=0)
+    assert cycles["t_start"][0] <= 0.0 < cycles["t_end"][0]
+    assert cycles["t_end"].iloc[-1] > time[-1]
+    assert np.array_equal(cycles["cycle"], np.arange(len(cycles))) and sim.truth["n_cycles"] == len(cycles)
+    assert np.allclose(cycles["f_b"], 1 / (cycles["t_end"] - cycles["t_start"]), rtol=1e-12)
+    index = np.searchsorted(cycles["t_start"].to_numpy(), time, side="right") - 1
+    assert np.array_equal(index, states["cycle"].to_numpy())
+    for i in range(1, 5):
+        assert np.allclose(cycles[f"blf{i}"], np.hypot(cycles[f"a{i}"], cycles[f"b{i}"]), rtol=1e-12)
+    # each cycle's Eq. 4 reproduces the force up to the drift within the cycle: far better than the
+    # mean cycle, and better than the neighbouring cycles' coefficients
+    force = states["force_bio"].to_numpy() / G
+    residual = np.sqrt(np.mean((table_force(cycles, states) - force) ** 2))
+    mean_cycle = cycles.copy()
+    shifted = cycles.copy()
+    for column in cycles.columns:
+        if column[0] in "ab" and column[1:].isdigit():
+            mean_cycle[column] = cycles[column].mean()
+            shifted[column] = np.roll(cycles[column].to_numpy(), 1)
+    variation = np.sqrt(np.mean((table_force(mean_cycle, states) - force) ** 2))
+    neighbour = np.sqrt(np.mean((table_force(shifted, states) - force) ** 2))
+    assert residual < 0.35 * variation
+    assert residual < 0.7 * neighbour
+    # without variation the smooth force is periodic and every row reproduces it exactly
+    still = simulate_bouncing(duration=5.0, fs=400.0, seed=2, noise=0.0, fb_variation=0.0, coef_variation=0.0,
+                              **SMOOTH)
+    assert np.allclose(still.cycles["f_b"], 2.0, rtol=1e-12)
+    assert np.allclose(still.cycles["a1"], still.cycles["a1"][0], rtol=1e-12)
+    assert np.abs(table_force(still.cycles, still.states) - still.states["force_bio"] / G).max() < 1e-12
+    plain = simulate_bouncing(duration=5.0, fs=400.0, seed=2, noise=0.0, fb_variation=0.0, coef_variation=0.0)
+    assert np.allclose(still.cycles[["a1", "b1", "a4", "b4"]], plain.cycles[["a1", "b1", "a4", "b4"]], atol=1e-12)
+
+
+def test_smooth_cycle_coefficients_are_averages_over_the_cycle():
+    # At a constant frequency a cycle's least-squares Fourier fit of the force is close to the average of
+    # the drifting coefficients over the cycle (the value at its middle), not to the value at its start
+    # (about half a cycle's change away).
+    sim = simulate_bouncing(duration=20.0, fs=400.0, seed=3, noise=0.0, fb_variation=0.0, **SMOOTH)
+    cycles, states = sim.cycles, sim.states
+    time, force = states["time"].to_numpy(), states["force_bio"].to_numpy() / G
+    names = [f"{kind}{i}" for kind in "ab" for i in range(1, 5)]
+    ratios = []
+    for j in range(1, len(cycles) - 1):
+        inside = (states["cycle"] == j).to_numpy()
+        fitted, _ = harmonic_fit(time[inside], force[inside], 2.0, cycles["t_start"][j], 4)
+        table = cycles.loc[j, names].to_numpy(dtype=float)
+        change = np.abs(cycles.loc[j + 1, names].to_numpy(dtype=float) - table).max()
+        ratios.append(np.abs(np.concatenate([fitted.real, -fitted.imag]) - table).max() / change)
+    assert np.median(ratios) < 0.35
+
+
+def test_smooth_variation_has_the_jumps_spread_but_is_correlated_over_cycles():
+    f_b, spread = 2.0, {"smooth": [], "jumps": []}
+    for variation in spread:
+        for seed in range(4 if variation == "smooth" else 2):
+            cycles = simulate_bouncing(f_b=f_b, duration=30.0, seed=seed, noise=0.0, variation=variation).cycles
+            deviation = cycles["f_b"].to_numpy() / f_b - 1
+            blf1 = cycles["blf1"].to_numpy() / 0.25 - 1
+            lag1 = np.corrcoef(deviation[:-1], deviation[1:])[0, 1]
+            spread[variation].append((np.mean(deviation**2), np.mean(blf1**2), lag1, np.mean(blf1)))
+    smooth, jumps = np.array(spread["smooth"]), np.array(spread["jumps"])
+    assert np.sqrt(smooth[:, 0].mean()) == pytest.approx(0.02, rel=0.25)
+    assert np.sqrt(smooth[:, 1].mean()) == pytest.approx(0.10, rel=0.25)
+    assert abs(smooth[:, 3].mean()) < 0.03
+    assert np.sqrt(jumps[:, 0].mean()) == pytest.approx(0.02, rel=0.25)
+    # a correlation time of 2.5 cycles: neighbouring cycles alike (about 0.85), unlike the jumps' (about 0)
+    assert smooth[:, 2].mean() > 0.6 and abs(jumps[:, 2].mean()) < 0.3
+
+
+def test_smooth_variation_with_effects_keeps_the_other_random_numbers():
+    base = simulate_bouncing(f_b=1.75, duration=4.0, seed=8, **SMOOTH)
+    extra = simulate_bouncing(f_b=1.75, duration=4.0, seed=8, effects={"harmonics": {}}, **SMOOTH)
+    floor = simulate_bouncing(f_b=1.75, duration=4.0, seed=8, effects={"floor_mode": {"ambient": 0.2}}, **SMOOTH)
+    hard = simulate_bouncing(f_b=1.75, duration=4.0, seed=8, effects={"cubic_stiffness": {}}, **SMOOTH)
+    columns = ["t_start", "t_end", "f_b", "a1", "b1", "a4", "b4"]
+    for other in (extra, floor, hard):
+        pd.testing.assert_frame_equal(other.cycles[columns], base.cycles[columns])
+        noise = other.record.force - other.record.mass * (G + other.states["u_ddot"].to_numpy())
+        assert np.allclose(noise, base.record.force - base.record.mass * (G + base.states["u_ddot"].to_numpy()),
+                           rtol=0, atol=1e-9)
+    # the extra harmonics vary smoothly too; the floor and the cubic spring change the response
+    assert extra.truth["n_force_harmonics"] == 6 and np.ptp(extra.cycles["blf5"]) > 0
+    assert floor.record.floor_acc is not None and np.abs(floor.states["z_ddot"]).max() > 0.05
+    assert not np.allclose(hard.states["u"], base.states["u"])
+
+
+def test_smooth_record_starts_without_a_transient(monkeypatch):
+    from smd_statespace import simulate as module
+
+    settings = dict(f_h=2.5, xi_h=0.1, duration=3.0, seed=12, noise=0.0, **SMOOTH)
+    started = simulate_bouncing(**settings)
+    monkeypatch.setattr(module, "SMOOTH_RUN_IN_DECAYS", 10.0)  # twice the run-in: the same force over the record
+    longer = simulate_bouncing(**settings)
+    pd.testing.assert_frame_equal(started.cycles, longer.cycles)
+    u_ddot = started.states["u_ddot"].to_numpy()
+    assert np.abs(u_ddot - longer.states["u_ddot"].to_numpy()).max() < 2e-4 * np.ptp(u_ddot)
+    monkeypatch.setattr(module, "SMOOTH_RUN_IN_DECAYS", 0.0)  # no run-in (but the grid's one or two cycles)
+    abrupt = simulate_bouncing(**settings)
+    assert np.abs(abrupt.states["u_ddot"].to_numpy() - longer.states["u_ddot"].to_numpy()).max() > 2e-3 * np.ptp(u_ddot)
+
+
+def test_variation_is_checked_and_on_the_command_line(tmp_path, capsys):
+    from smd_statespace.cli import main
+
+    for bad in ("smoth", None, 1):
+        with pytest.raises(OptionError, match=r"variation must be one of 'jumps', 'smooth', got") as info:
+            simulate_bouncing(duration=2.0, variation=bad)
+        assert repr(bad) in str(info.value) and "\n" not in str(info.value)
+    argv = ["simulate", "--mass", "70", "--fb", "2", "--fh", "2.5", "--xi", "0.3", "--duration", "3", "--seed", "1",
+            "--out", str(tmp_path / "r.csv")]
+    assert main(argv + ["--variation", "smoth"]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "--variation" in error[0] and "'jumps', 'smooth'" in error[0]
+    assert main(argv + ["--variation", "smooth"]) == 0
+    assert "smooth variation" in capsys.readouterr().out
+    truth = json.loads((tmp_path / "r_truth.json").read_text())
+    assert truth["variations"]["generator"] == "smooth"
+    expected = simulate_bouncing(mass=70, f_b=2, f_h=2.5, xi_h=0.3, duration=3, seed=1, **SMOOTH)
+    assert np.allclose(read_record(tmp_path / "r.csv", 70).force, expected.record.force, atol=1e-6)

@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import OptionError, SMDInputError
+from ..simulate import VARIATIONS
 from .common import _nonnegative, _numbers, _positive, _seed, parse_effect
-
 
 
 def add_simulate(subparsers):
@@ -37,6 +37,10 @@ def add_simulate(subparsers):
                         help="cycle-to-cycle relative SD of f_b (default 0.02)")
     parser.add_argument("--coef-variation", type=_nonnegative, default=0.10, metavar="FRAC",
                         help="cycle-to-cycle relative SD of the force harmonics (default 0.10)")
+    parser.add_argument("--variation", choices=VARIATIONS, default=VARIATIONS[0],
+                        help="how the force varies from cycle to cycle: jumps (each cycle its own frequency and "
+                             "harmonics, jumping at the boundaries; default) or smooth (frequency and harmonics "
+                             "drift continuously, correlated over about 2.5 cycles)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="physical effect, repeatable: floor_mode, harmonics, cubic_stiffness "
                              "(e.g. floor_mode:frequency=3.48, floor_mode:frequency=9.5,ambient=1.0 or "
@@ -75,6 +79,7 @@ def run_simulate(args) -> int:
             noise=args.noise,
             effects=effects or None,
             seed=args.seed,
+            variation=args.variation,
         )
     except SMDInputError as exc:
         # The simulator names itself ("simulate_bouncing: ..."); on the command line that is noise.
@@ -82,6 +87,7 @@ def run_simulate(args) -> int:
     csv_path, truth_path = synthetic.write(out, truth)
     record, info = synthetic.record, synthetic.truth
     extra = f", effects {', '.join(effects)}" if effects else ""
+    extra += ", smooth variation" if args.variation == "smooth" else ""
     seed = f"seed {info['seed']}" if args.seed is not None else "random seed (in the truth file)"
     print(
         f"wrote {csv_path}: {record.duration:.2f} s at {record.fs:g} Hz, {info['n_cycles']} force cycles "
