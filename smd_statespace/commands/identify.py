@@ -178,6 +178,7 @@ def run_person(args) -> int:
     from ..person.output import write_person
 
     if args.effect:
+        build_model(args)  # an unknown or malformed effect is named first
         raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
                           "(--estimator ekf) to identify with an effect")
     directory = out_dir(args.out)

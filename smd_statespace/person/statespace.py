@@ -66,6 +66,20 @@ class RecordStateSpace(MLEModel):
         return self.record_model.start_params()
 
     def update(self, params, **kwargs):
+        """Fill the state-space matrices for ``params`` (in the order of ``param_names``).
+
+        Parameters
+        ----------
+        params : array_like
+            ``f_h``, ``xi_h`` and the log variance ratios.
+        **kwargs
+            Passed to :meth:`statsmodels.tsa.statespace.mlemodel.MLEModel.update`.
+
+        Returns
+        -------
+        ndarray
+            The parameters.
+        """
         params = super().update(params, **kwargs)
         model = self.record_model
         sys = model.system(params)
@@ -124,3 +138,4 @@ class RecordStateSpace(MLEModel):
             mean[base] = tau
             cov[alpha, alpha] = D
         self.ssm.initialize_known(mean, cov)
+        return params
