@@ -11,6 +11,7 @@ from smd_statespace.errors import CycleError
 from smd_statespace.io import G, make_record
 from smd_statespace.person import CycleTiming, RecordModel, Regressor, estimate_timing, identify_person
 from smd_statespace.person.fit import fit_model, information
+from smd_statespace.person.model import expm2
 from smd_statespace.person.results import PersonResult
 from smd_statespace.person.statespace import RecordStateSpace
 from smd_statespace.simulate import simulate_bouncing
@@ -34,6 +35,13 @@ def true_timing(sim):
 
 def acceleration(sim):
     return sim.record.force / sim.record.mass - G
+
+
+@pytest.mark.parametrize("xi_h", [1e-3, 0.3, 1.0, 1.7])
+def test_closed_form_exponential_equals_scipy(xi_h):
+    w = 2 * np.pi * 2.5
+    a = np.array([[0.0, 1.0], [-w**2, -2 * xi_h * w]])
+    assert np.allclose(expm2(a, 0.01), linalg.expm(a * 0.01), rtol=1e-12, atol=1e-15)
 
 
 def test_step_is_the_exact_solution_of_eq2_under_a_harmonic_force():
@@ -71,6 +79,7 @@ def test_step_is_the_exact_solution_of_eq2_under_a_harmonic_force():
     {"variation": "random_walk"},
     {"variation": "both", "drift": True},
     {"process_noise": True},
+    {"phase_template": np.array([0.0, -0.2, 0.1, 0.1, 0.05, 0.03, 0.0, 0.01, 0.0])},
 ])
 def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options):
     """The concentrated likelihood of the compiled pass is statsmodels' exact Kalman likelihood at the same point."""
@@ -80,6 +89,8 @@ def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options
     model = RecordModel(sim.record.time, y, estimate_timing(sim.record.time, sim.record.force), regressors=regressors,
                         **options)
     params = model.start_params(2.3, 0.25, -2.0)
+    if "phase_template" in options:
+        params[-2:] = -3.0, 0.0  # phase (rad^2) and rate ((rad/s)^2) variance ratios
     out = model.filter(params)
     reference = RecordStateSpace(model, out["delta"]).loglike(params)
     assert out["loglike"] == pytest.approx(reference, rel=1e-9)  # rounding of the GLS solve: ~1e-10

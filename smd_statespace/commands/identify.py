@@ -48,8 +48,9 @@ def add_identify(subparsers):
     parser.add_argument("--variation", choices=("independent", "both", "random_walk", "auto"), default="independent",
                         help="record estimator: how the force coefficients vary from cycle to cycle (default "
                              "independent; auto fits independent and both and keeps the lower AIC)")
-    parser.add_argument("--timing", choices=("template", "peaks"), default="template",
-                        help="record estimator: force-cycle starts aligned on the mean cycle (default) or GRF peaks")
+    parser.add_argument("--timing", choices=("model", "template", "peaks"), default="model",
+                        help="record estimator: force-cycle starts placed by the model's own phase errors (default), "
+                             "aligned on the mean cycle (template), or at GRF peaks (the article's cycles)")
     parser.add_argument("--intervals", choices=("wald", "profile"), default="wald",
                         help="record estimator: 90 %% intervals of f_h, xi_h from the standard errors (default) or "
                              "the profile likelihood (slower)")

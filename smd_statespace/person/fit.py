@@ -26,7 +26,7 @@ from scipy import optimize, stats
 from ..errors import CycleError, SMDInputError
 from ..io import G, Record
 from .model import VARIATIONS, Regressor, RecordModel
-from .timing import estimate_timing
+from .timing import TIMING_METHODS, CycleTiming, estimate_timing
 
 __all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "profile_interval"]
 
@@ -42,12 +42,18 @@ START_XI_H = (0.15, 0.45)
 AUTO_VARIATIONS = ("independent", "both")
 """Variation models compared by ``variation="auto"``."""
 
+TIMING_ITERATIONS = 3
+"""Re-placements of the cycle starts from the model's own phase and rate errors (``timing="model"``)."""
+
+PHASE_VARIANCE_STARTS = ((-8.0, -5.0, -2.0, 1.0), (-6.0, -3.0, 0.0, 3.0))
+"""Starting log variance ratios of the phase and rate errors tried before the first timing fit."""
+
 
 class FitError(SMDInputError):
     """The maximum-likelihood fit failed (no convergence, information not positive definite)."""
 
 
-def fit_model(model: RecordModel, start=None) -> dict:
+def fit_model(model: RecordModel, start=None, quick=False) -> dict:
     """Maximise the profile likelihood of ``model``.
 
     Parameters
@@ -56,6 +62,8 @@ def fit_model(model: RecordModel, start=None) -> dict:
     start : ndarray, optional
         Starting parameters; default the best of a coarse search over
         :data:`START_F_H` x :data:`START_XI_H`.
+    quick : bool
+        Stop at a relative change of 1e-7 of the likelihood (intermediate fits).
 
     Returns
     -------
@@ -64,6 +72,7 @@ def fit_model(model: RecordModel, start=None) -> dict:
         (bool), ``message``.
     """
     count = [0]
+    start = None if start is None else np.asarray(start, dtype=float)
 
     def negative(params):
         count[0] += 1
@@ -73,7 +82,11 @@ def fit_model(model: RecordModel, start=None) -> dict:
     if start is None:
         candidates = [model.start_params(f, x) for f in START_F_H for x in START_XI_H]
         start = min(candidates, key=negative)
-    result = optimize.minimize(negative, start, method="L-BFGS-B", bounds=model.bounds)
+    options = {"ftol": 1e-7} if quick else {}
+    result = optimize.minimize(negative, start, method="L-BFGS-B", bounds=model.bounds, options=options)
+    if quick:
+        return {"params": result.x, "loglike": -float(result.fun), "n_evaluations": count[0], "converged": True,
+                "message": str(result.message)}
     # L-BFGS-B with numerical gradients often stops on its line search at the optimum; a
     # restart from there that gains nothing confirms it
     if not result.success:
@@ -191,8 +204,70 @@ def profile_interval(model: RecordModel, params, loglike, which, se, level=0.9):
     return tuple(ends)
 
 
-def identify_person(record: Record, n_harmonics=4, variation="independent", timing="template", process_noise=False,
-                    intervals="profile", level=0.9, regressors=()):
+def corrected_timing(model: RecordModel, params) -> CycleTiming:
+    """Cycle starts moved by the smoothed phase and rate errors of a model with a phase template.
+
+    The force of cycle ``j`` is ``F(theta + phi_j + rho_j (t - t_mid))`` to first
+    order, so its true start is where that corrected phase reaches ``2 pi j``.
+    Each boundary is placed from both cycles that meet there and the two
+    placements are averaged. Returns the new :class:`CycleTiming`.
+    """
+    from .statespace import RecordStateSpace
+
+    fitted = model.filter(params)
+    smoothed = RecordStateSpace(model, fitted["delta"]).smooth(params, cov_type="none").smoothed_state
+    cycle = model._phase[0]
+    p = model.n_coefficients
+    b = model.timing.boundaries
+    first = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
+    phi = np.full(b.size - 1, np.nan)
+    rho = np.full(b.size - 1, np.nan)
+    phi[cycle[first]] = smoothed[2 + p, first]
+    rho[cycle[first]] = smoothed[3 + p, first]
+    period, middle = np.diff(b), 0.5 * (b[:-1] + b[1:])
+
+    def start_from(j, at):  # where cycle j's corrected phase reaches its own start
+        return at - (phi[j] + rho[j] * (at - middle[j])) / (2.0 * np.pi / period[j] + rho[j])
+
+    inner = np.arange(1, b.size - 1)
+    placed = np.nanmean(np.vstack([start_from(inner, b[inner]), start_from(inner - 1, b[inner])]), axis=0)
+    new = b.copy()
+    new[inner] = np.where(np.isfinite(placed), placed, b[inner])
+    new[0] = new[1] - (new[2] - new[1])
+    new[-1] = new[-2] + (new[-2] - new[-3])
+    if np.any(np.diff(new) <= 0):
+        return model.timing
+    return CycleTiming(new, "model")
+
+
+def _fit_timing(model_for, timing, variation):
+    """Fit with a phase template and re-place the cycle starts; returns the best ``(model, fit)`` by likelihood."""
+    base = model_for(timing, variation, None)
+    fitted = fit_model(base, quick=True)
+    params = fitted["params"]
+    best = (base, fitted)
+    model = base
+    for iteration in range(TIMING_ITERATIONS + 1):
+        template = model.filter(params[:len(model.param_names)])["delta"][2:2 + model.n_coefficients]
+        model = model_for(timing, variation, template)
+        if iteration == 0:
+            n = len(params)
+            candidates = [np.r_[params[:n], a, b] for a in PHASE_VARIANCE_STARTS[0] for b in PHASE_VARIANCE_STARTS[1]]
+            start = max(candidates, key=model.loglike)
+        else:
+            start = params
+        fitted = fit_model(model, start, quick=True)
+        params = fitted["params"]
+        if fitted["loglike"] > best[1]["loglike"]:
+            best = (model, fitted)
+        if iteration < TIMING_ITERATIONS:
+            timing = corrected_timing(model, params)
+    model, fitted = best
+    return model, fit_model(model, fitted["params"])
+
+
+def identify_person(record: Record, n_harmonics=4, variation="independent", timing="model", process_noise=False,
+                    intervals="wald", level=0.9, regressors=()):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -204,9 +279,15 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
     variation : {"auto", "independent", "random_walk", "both"}
         Cycle-to-cycle variation of the force coefficients; ``"auto"`` fits
         :data:`AUTO_VARIATIONS` and keeps the lowest AIC.
-    timing : {"template", "peaks"}
-        How the force-cycle boundaries are placed
-        (:func:`~smd_statespace.person.timing.estimate_timing`).
+    timing : {"model", "template", "peaks"}
+        How the force-cycle boundaries are placed: ``"template"`` and
+        ``"peaks"`` as :func:`~smd_statespace.person.timing.estimate_timing`
+        places them; ``"model"`` (default) starts from the template
+        alignment and then lets the model place them: each cycle gets a
+        phase error and a phase-rate error (states of the model, drawn afresh
+        every cycle), and the starts are moved by their smoothed values,
+        :data:`TIMING_ITERATIONS` times; the fit with the highest likelihood
+        is kept.
     process_noise : bool
         Add a white force on the COM with an estimated level.
     intervals : {"profile", "wald"}
@@ -239,7 +320,10 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
     if intervals not in ("profile", "wald"):
         raise OptionError(f"intervals {intervals!r} is not one of: profile, wald")
     y = record.force / record.mass - G  # Eq. 3
-    cycle_timing = estimate_timing(record.time, record.force, n_harmonics, timing, source=record.source)
+    if timing not in ("model",) + TIMING_METHODS:
+        raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
+    first = "template" if timing == "model" else timing
+    cycle_timing = estimate_timing(record.time, record.force, n_harmonics, first, source=record.source)
     inside = np.sum((cycle_timing.boundaries > record.time[0]) & (cycle_timing.boundaries < record.time[-1]))
     if inside - 1 < MIN_CYCLES:
         raise CycleError(f"{record.source}: {max(inside - 1, 0)} whole bouncing cycles found; the record-level model "
@@ -248,10 +332,18 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
     offset = Regressor("offset", np.ones_like(y), "m/s^2", dynamic=False)
     all_regressors = (offset,) + tuple(regressors)
     names = AUTO_VARIATIONS if variation == "auto" else (variation,)
+
+    def model_for(timing_, variation_, template):
+        return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise,
+                           regressors=all_regressors, phase_template=template)
+
     fits = []
     for name in names:
-        model = RecordModel(record.time, y, cycle_timing, n_harmonics, name, process_noise, regressors=all_regressors)
-        fits.append((model, fit_model(model)))
+        if timing == "model":
+            fits.append(_fit_timing(model_for, cycle_timing, name))
+        else:
+            model = model_for(cycle_timing, name, None)
+            fits.append((model, fit_model(model)))
     comparison = [{"variation": m.variation, "loglike": f["loglike"], "n_params": len(f["params"]),
                    "aic": 2 * len(f["params"]) - 2 * f["loglike"], "converged": f["converged"]} for m, f in fits]
     best = int(np.argmin([row["aic"] for row in comparison]))

@@ -42,7 +42,7 @@ INDEPENDENT, RANDOM_WALK, BOTH = 0, 1, 2
 
 
 @numba.njit(cache=True)
-def _reset(code, a, A, P, p, D, E, n_free, step=True):
+def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
     """Draw the force coefficients again at a cycle boundary (in place)."""
     m = P.shape[0]
     q = A.shape[1]
@@ -51,7 +51,8 @@ def _reset(code, a, A, P, p, D, E, n_free, step=True):
             a[i] = 0.0
             for c in range(q):
                 A[i, c] = 0.0
-            A[i, n_free + i - 2] = 1.0
+            if i - 2 < n_template:
+                A[i, n_free + i - 2] = 1.0
             for c in range(m):
                 P[i, c] = 0.0
                 P[c, i] = 0.0
@@ -76,7 +77,7 @@ def _reset(code, a, A, P, p, D, E, n_free, step=True):
 
 
 @numba.njit(cache=True)
-def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift):
+def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift, n_template):
     """Run the augmented Kalman filter over one record.
 
     Parameters
@@ -107,6 +108,9 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
     drift : ndarray, shape (p,)
         Variance of a per-sample random walk of the coefficients, relative to
         ``sigma^2`` (0: coefficients constant within a cycle).
+    n_template : int
+        The first ``n_template`` force states have an unknown record-level
+        mean (a column of ``delta``); the others have mean zero.
 
     Returns
     -------
@@ -127,21 +131,21 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
     r = X_obs.shape[1]
     m = 2 + p if code != BOTH else 2 + 2 * p
     n_free = 2  # delta = [u0, u_dot0, template (p), beta (r)]
-    q = 2 + p + r
+    q = 2 + n_template + r
     a = np.zeros(m)
     A = np.zeros((m, q))
     P = np.zeros((m, m))
     A[0, 0] = 1.0
     A[1, 1] = 1.0
     if code == INDEPENDENT:
-        _reset(code, a, A, P, p, D, E, n_free)
+        _reset(code, a, A, P, p, D, E, n_free, n_template)
     elif code == RANDOM_WALK:
-        for i in range(p):
+        for i in range(n_template):
             A[2 + i, n_free + i] = 1.0
     else:
-        for i in range(p):
+        for i in range(n_template):
             A[2 + p + i, n_free + i] = 1.0
-        _reset(code, a, A, P, p, D, E, n_free, False)
+        _reset(code, a, A, P, p, D, E, n_free, n_template, False)
     e_out = np.empty(N)
     Ev_out = np.empty((N, q))
     f_out = np.empty(N)
@@ -206,10 +210,10 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
                 A[0, c] = v0
                 A[1, c] = v1
             for j in range(r):  # known regressors: the state's dependence on beta
-                A[0, 2 + p + j] += X_tr[k - 1, 0, j]
-                A[1, 2 + p + j] += X_tr[k - 1, 1, j]
+                A[0, 2 + n_template + j] += X_tr[k - 1, 0, j]
+                A[1, 2 + n_template + j] += X_tr[k - 1, 1, j]
             if reset[k]:
-                _reset(code, a, A, P, p, D, E, n_free)
+                _reset(code, a, A, P, p, D, E, n_free, n_template)
         # update with y_k
         h[0] = hx[0]
         h[1] = hx[1]
@@ -231,7 +235,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
                 v += h[i] * A[i, c]
             Ev[c] = v
         for j in range(r):
-            Ev[2 + p + j] += X_obs[k, j]
+            Ev[2 + n_template + j] += X_obs[k, j]
         inv_f = 1.0 / f
         e_out[k] = e
         f_out[k] = f

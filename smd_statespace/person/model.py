@@ -125,8 +125,17 @@ class RecordModel:
         How the force coefficients change from cycle to cycle.
     process_noise : bool
         Add a white force on the COM with an estimated level.
+    drift : bool
+        Let the force coefficients also wander within a cycle (a per-sample
+        random walk, one variance per harmonic group).
     regressors : tuple of Regressor
         Effects' known signals with unknown coefficients.
+    phase_template : ndarray, shape (2 n + 1,), optional
+        A force template (g). When given, two more force states correct the
+        cycle timing to first order: a phase shift ``phi_j`` (rad) and a
+        phase-rate error ``rho_j`` (rad/s) per cycle, each drawn afresh at
+        every cycle start, entering the force as
+        ``(phi_j + rho_j (t - t_mid)) dF/dtheta`` with ``F`` this template.
     """
 
     time: np.ndarray
@@ -137,6 +146,7 @@ class RecordModel:
     process_noise: bool = False
     drift: bool = False
     regressors: tuple = ()
+    phase_template: np.ndarray | None = None
     _phase: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -156,6 +166,7 @@ class RecordModel:
         basis[:, 2::2] = np.sin(angle)
         self._H = G * basis
         self._rotation = np.exp(1j * angle)  # (N, n)
+        self._timing_columns = self._phase_columns() if self.phase_template is not None else None
         self._X_obs = np.column_stack([r.values for r in self.regressors]) if self.regressors else np.zeros(
             (self.time.size, 0))
 
@@ -166,6 +177,30 @@ class RecordModel:
         return 2 * self.n_harmonics + 1
 
     @property
+    def n_force_states(self) -> int:
+        """Force states per cycle: the ``p`` coefficients, plus the phase and rate errors with a phase template."""
+        return self.n_coefficients + (2 if self.phase_template is not None else 0)
+
+    def _phase_columns(self):
+        """Observation and step columns of the phase and rate errors, ``(H (N, 2), mid-step values (N, 2))``."""
+        tau = np.asarray(self.phase_template, dtype=float)
+        cycle, theta, rate, _ = self._phase
+        b = self.timing.boundaries
+        middle = 0.5 * (b[cycle] + b[cycle + 1])
+        orders = np.arange(1, self.n_harmonics + 1)
+
+        def slope(angle):  # dF/dtheta of the template (g per rad)
+            a = angle[:, None] * orders
+            return (orders * (-tau[1::2] * np.sin(a) + tau[2::2] * np.cos(a))).sum(axis=1)
+
+        half = 0.5 * self.dt
+        at_sample = slope(theta)
+        at_middle = slope(theta + rate * half)
+        h = np.column_stack([at_sample, at_sample * (self.time - middle)])
+        step = np.column_stack([at_middle, at_middle * (self.time + half - middle)])
+        return G * h, G * step
+
+    @property
     def dt(self) -> float:
         """Sampling interval (s)."""
         return float(self.time[1] - self.time[0])
@@ -174,6 +209,11 @@ class RecordModel:
     def coefficient_names(self) -> list:
         """Names of the force coefficients, ``a0, a1, b1, ...``."""
         return coefficient_names(self.n_harmonics)
+
+    @property
+    def force_state_names(self) -> list:
+        """Names of the force states of a cycle: the coefficients, then ``phase``, ``rate`` with a phase template."""
+        return self.coefficient_names + (["phase", "rate"] if self.phase_template is not None else [])
 
     @property
     def delta_names(self) -> list:
@@ -194,6 +234,8 @@ class RecordModel:
             names += [f"log_var_d_{i}" for i in self.variance_groups]
         if self.variation in ("random_walk", "both"):
             names += [f"log_var_e_{i}" for i in self.variance_groups]
+        if self.phase_template is not None:
+            names += ["log_var_phase", "log_var_rate"]
         if self.drift:
             names += [f"log_var_s_{i}" for i in self.variance_groups]
         if self.process_noise:
@@ -225,6 +267,9 @@ class RecordModel:
         S = np.exp([named[f"log_var_s_{g}"] for g in group]) if "log_var_s_0" in named else np.zeros(
             self.n_coefficients)
         w = float(np.exp(named["log_var_w"])) if "log_var_w" in named else 0.0
+        if self.phase_template is not None:
+            timing = np.exp([named["log_var_phase"], named["log_var_rate"]])
+            D, E, S = np.r_[D, timing], np.r_[E, 0.0, 0.0], np.r_[S, 0.0, 0.0]
         return D, E, S, w
 
     def system(self, params) -> dict:
@@ -240,7 +285,7 @@ class RecordModel:
         omega = 2.0 * np.pi * f_h
         a_c = np.array([[0.0, 1.0], [-omega**2, -2.0 * xi_h * omega]])  # Eq. 2
         dt = self.dt
-        phi = linalg.expm(a_c * dt)
+        phi = expm2(a_c, dt)
         b_c = np.array([0.0, 1.0])
         # constant input over a step: A^-1 (Phi - I) B
         g0 = np.linalg.solve(a_c, (phi - np.eye(2)) @ b_c)
@@ -255,13 +300,18 @@ class RecordModel:
         gam[:, :, 1::2] = per_sample.real.transpose(0, 2, 1)
         gam[:, :, 2::2] = per_sample.imag.transpose(0, 2, 1)
         gam *= G
+        H = self._H
+        if self._timing_columns is not None:
+            h_timing, step_values = self._timing_columns
+            H = np.hstack([H, h_timing])
+            gam = np.concatenate([gam, g0[None, :, None] * step_values[:, None, :]], axis=2)
         D, E, S, w = self._variances(params)
         qx = w * _integrated_white_noise(a_c, dt) if w > 0 else np.zeros((2, 2))
         dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
         x_tr = _regressor_steps(a_c, phi, self._X_obs * dynamic, dt)
         return {
             "hx": a_c[1].copy(),
-            "H": self._H,
+            "H": H,
             "Phi": phi,
             "Gam": gam,
             "Qx": qx,
@@ -284,7 +334,7 @@ class RecordModel:
         sys = self.system(params)
         e, Ev, f, S, s, ee = kalman.augmented_pass(
             self.y, sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["X_obs"], sys["X_tr"],
-            sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"])
+            sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"], self.n_coefficients)
         out = kalman.concentrate(S, s, ee, f, self.y.size)
         out.update(innovations_raw=e, innovation_regression=Ev, innovation_variance_unscaled=f)
         return out
@@ -299,6 +349,24 @@ class RecordModel:
         raw = fitted["innovations_raw"] - fitted["innovation_regression"] @ fitted["delta"]
         standard = raw / np.sqrt(fitted["innovation_variance_unscaled"] * fitted["sigma2"])
         return standard, raw
+
+
+def expm2(a, t):
+    """``exp(a t)`` of a real 2 x 2 matrix in closed form.
+
+    ``exp(a t) = exp(s t) [cosh(q t) I + sinh(q t) / q (a - s I)]`` with
+    ``s = tr(a) / 2`` and ``q^2 = s^2 - det(a)`` (complex for an
+    under-damped oscillator); scipy's general ``expm`` costs about 1000 times
+    more on this size.
+    """
+    s = 0.5 * (a[0, 0] + a[1, 1])
+    det = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    q = np.sqrt(complex(s * s - det))
+    qt = q * t
+    cosh = np.cosh(qt)
+    sinhc = t * (1.0 + qt * qt / 6.0 + qt**4 / 120.0) if abs(qt) < 1e-4 else np.sinh(qt) / q
+    shifted = a - s * np.eye(2)
+    return (np.exp(s * t) * (cosh * np.eye(2) + sinhc * shifted)).real
 
 
 def _harmonic_step_gain(a_c, phi, nu, dt):

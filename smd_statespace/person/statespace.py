@@ -50,7 +50,7 @@ class RecordStateSpace(MLEModel):
     def __init__(self, model: RecordModel, delta):
         self.record_model = model
         self.delta = np.asarray(delta, dtype=float)
-        p = model.n_coefficients
+        p = model.n_force_states
         k_states = 2 + p if model.variation != "both" else 2 + 2 * p
         super().__init__(model.y, k_states=k_states, k_posdef=k_states)
         self.ssm.filter_concentrated = True
@@ -83,10 +83,13 @@ class RecordStateSpace(MLEModel):
         params = super().update(params, **kwargs)
         model = self.record_model
         sys = model.system(params)
-        n, p = model.y.size, model.n_coefficients
+        n, p = model.y.size, model.n_force_states
         m = self.k_states
         r = sys["X_obs"].shape[1]
-        u0, tau, beta = self.delta[:2], self.delta[2:2 + p], self.delta[2 + p:2 + p + r]
+        n_template = model.n_coefficients
+        u0, beta = self.delta[:2], self.delta[2 + n_template:2 + n_template + r]
+        tau = np.zeros(p)  # the phase and rate errors, if any, have mean zero
+        tau[:n_template] = self.delta[2:2 + n_template]
         alpha, base = slice(2, 2 + p), slice(2 + p, 2 + 2 * p)
         design = np.zeros((1, m, n))
         design[0, :2, :] = sys["hx"][:, None]

@@ -44,6 +44,11 @@ SEARCH_POINTS = 41
 ALIGN_ITERATIONS = 4
 """Template fits and boundary sweeps of the template alignment."""
 
+SUBHARMONIC_RATIO = 30.0
+"""A spectral line at ``f_b / 2`` or ``f_b / 3`` of the GRF this many times above the
+median power near it means the peaks found half or a third of the force cycle (a
+dominant 2nd or 3rd harmonic, e.g. ``f_h`` near ``2 f_b``): the cycles are regrouped."""
+
 
 @dataclass(frozen=True)
 class CycleTiming:
@@ -183,10 +188,36 @@ def estimate_timing(time, force, n_harmonics=4, method="template", *, fb_range=S
     time = np.asarray(time, dtype=float)
     force = np.asarray(force, dtype=float)
     peaks, _ = find_cycles(time, force, fb_range, source=source)
+    group = _cycles_per_peak(time, force, peaks, fb_range)
+    peaks = peaks[::group]
     boundaries = _extend(time[peaks], time[0], time[-1])
     if method == "peaks":
         return CycleTiming(boundaries, "peaks")
     return align_boundaries(time, force, boundaries, n_harmonics + 2, method="template")
+
+
+def _cycles_per_peak(time, force, peaks, fb_range):
+    """1, 2 or 3: how many GRF-peak intervals make one force cycle (a subharmonic line in the GRF says so)."""
+    if peaks.size < 7:
+        return 1
+    span = slice(int(peaks[0]), int(peaks[-1]) + 1)
+    x = force[span] - np.mean(force[span])
+    fs = 1.0 / (time[1] - time[0])
+    n = 4 * x.size
+    power = np.abs(np.fft.rfft(x * np.hanning(x.size), n)) ** 2
+    freq = np.fft.rfftfreq(n, 1.0 / fs)
+    f_peak = (peaks.size - 1) / (time[peaks[-1]] - time[peaks[0]])
+    best, best_ratio = 1, SUBHARMONIC_RATIO
+    for group in (2, 3):
+        f_sub = f_peak / group
+        if f_sub < fb_range[0] or (peaks.size - 1) // group < 3:
+            continue
+        line = (freq > f_sub * 0.93) & (freq < f_sub * 1.07)
+        near = (freq > f_sub * 0.6) & (freq < f_sub * 1.4) & ~((freq > f_sub * 0.85) & (freq < f_sub * 1.15))
+        ratio = power[line].max() / max(float(np.median(power[near])), 1e-300)
+        if ratio > best_ratio:
+            best, best_ratio = group, ratio
+    return best
 
 
 def align_boundaries(time, signal, boundaries, n_fit, method="template"):
