@@ -181,3 +181,29 @@ def test_constant_offset_absorbs_a_wrong_body_mass():
     wrong = identify_person(make_record(sim.record.time, sim.record.force, 70 * 1.02))
     assert wrong.regressor_coefficients().loc["offset", "value"] == pytest.approx(-G * 0.02 / 1.02, rel=0.05)
     assert wrong.f_h == pytest.approx(good.f_h, rel=0.03)
+
+
+@pytest.mark.parametrize("effects, expected", [
+    (None, None),
+    ({"harmonics": {"blf": (0.04, 0.03)}}, "harmonics"),
+    ({"floor_mode": {}}, "floor_measured"),
+])
+def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects, expected):
+    """Hidden extra harmonics and a floor with an accelerometer are ranked first; a clean record is adequate."""
+    from smd_statespace.person.diagnose import diagnose_person
+
+    sim = simulate_bouncing(mass=70, f_b=2.0 if effects is None or "harmonics" in effects else 1.75, f_h=2.5,
+                            xi_h=0.3, duration=30, seed=21, effects=effects)
+    base = identify_person(sim.record)
+    result = diagnose_person(base)
+    if expected is None:
+        assert result.adequate, result.table()
+        return
+    assert result.missing[0] == expected
+    row = result.table().loc[expected]
+    assert row["noise_change_%"] < 0
+    assert row["f_h"] == pytest.approx(2.5, rel=0.03)
+    if expected == "harmonics":  # the 5th harmonic's amplitude comes back
+        assert row["estimate"] == pytest.approx(0.04, rel=0.15)
+    else:  # the leg acts on the motion relative to the measured floor: coupling gain 1
+        assert row["estimate"] == pytest.approx(1.0, abs=3 * row["estimate_sd"])

@@ -24,8 +24,9 @@ def add_diagnose(subparsers):
                      "that is missing. With --effect, the fit without and with those effects is shown side by side."),
     )
     add_record_arguments(parser)
-    parser.add_argument("--estimator", choices=sorted(ESTIMATORS), default=DEFAULT_ESTIMATOR,
-                        help=f"estimator for every fit (default {DEFAULT_ESTIMATOR})")
+    parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default=DEFAULT_ESTIMATOR,
+                        help=f"estimator for every fit (default {DEFAULT_ESTIMATOR}); record: the record-level model, "
+                             "each candidate added with its record-level parameters and tested by likelihood ratio")
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--json", metavar="FILE", help="write the report as JSON")
@@ -55,9 +56,52 @@ def before_after(before, after) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def run_person_diagnose(args) -> int:
+    """``diagnose --estimator record``: candidate effects on the record-level model."""
+    from ..errors import OptionError
+    from ..io import read_record
+    from ..person import identify_person
+    from ..person.diagnose import diagnose_person
+
+    if args.effect:
+        raise OptionError("--effect is not available with --estimator record yet; the candidates are tried in turn")
+    directory = out_dir(args.out)
+    record = read_record(args.record, args.mass)
+    base = identify_person(record, n_harmonics=args.harmonics)
+    print(f"{record.source}: record-level model")
+    print(base.summary())
+    result = diagnose_person(base, alpha=args.alpha)
+    print("\ncandidate effects added to the record-level model (likelihood ratio, best first):")
+    columns = ["n_params", "lr", "p_value", "significant", "noise_change_%", "f_h_before", "f_h", "xi_h_before",
+               "xi_h", "estimate", "estimate_sd"]
+    with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 160):
+        print(result.table()[columns].to_string())
+    if result.adequate:
+        print("\nverdict: no candidate effect is a significant improvement at "
+              f"alpha {args.alpha:g} (Bonferroni over {len(result.rows)})")
+    else:
+        best = result.table().loc[result.missing[0]]
+        print(f"\nverdict: missing effect '{result.missing[0]}' (LR {best['lr']:.1f} on {int(best['n_params'])} "
+              f"parameters, p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} Hz, "
+              f"xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}")
+    for note in result.notes():
+        print(f"note: {note}")
+    written = [directory / "person_diagnostics.png"]
+    base.plot_diagnostics(written[0])
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as handle:
+            json.dump(result.report(), handle, indent=2, default=float)
+        written.append(args.json)
+    print("wrote " + ", ".join(str(path) for path in written))
+    return 0
+
+
 def run_diagnose(args) -> int:
     """Run ``smd-statespace diagnose``."""
     from ..diagnostics import check_model
+
+    if args.estimator == "record":
+        return run_person_diagnose(args)
     from ..missing import diagnose
     from ..plots import plot_before_after
 

@@ -117,8 +117,22 @@ def _hessian(func, x, steps):
     return hess
 
 
-def information(model: RecordModel, params) -> tuple:
-    """Covariance of the estimates from the observed information; parameters at a bound are held fixed.
+def information(model: RecordModel, params, cov_type="robust") -> tuple:
+    """Covariance of the estimates; parameters at a bound are held fixed.
+
+    Parameters
+    ----------
+    model : RecordModel
+    params : ndarray
+        The estimate.
+    cov_type : {"robust", "oim"}
+        ``"oim"``: the inverse observed information (numerical Hessian of the
+        profile likelihood), right when the model is right. ``"robust"``
+        (default): the sandwich ``H^-1 B H^-1`` with ``B`` the outer product
+        of the per-cycle score sums (clustered by force cycle), which stays
+        right when the innovations are not what the model says (heavy tails,
+        the cycle timing's own error); never narrower than needed for the
+        measured spread of the scores.
 
     Returns
     -------
@@ -149,8 +163,49 @@ def information(model: RecordModel, params) -> tuple:
                            "definite): the record does not determine them; use a longer record or a per-cycle "
                            "estimator (--estimator ekf)")
         w = np.maximum(w, w.max() * 1e-10)
-    cov[np.ix_(index, index)] = (v / w) @ v.T
+    inverse = (v / w) @ v.T
+    if cov_type == "robust":
+        inverse[:2, :2] = _robust_core(model, params, index, steps[index], -hess)
+    cov[np.ix_(index, index)] = inverse
     return cov, free
+
+
+def _robust_core(model, params, index, steps, info):
+    """Cycle-clustered sandwich covariance of ``(f_h, xi_h)`` with the other parameters profiled out.
+
+    Effective information ``I* = I_ff - I_fn I_nn^-1 I_nf`` and effective
+    scores ``s* = s_f - I_fn I_nn^-1 s_n`` summed per force cycle;
+    ``cov = I*^-1 (sum_j s*_j s*_j') I*^-1``.
+    """
+    per_cycle = _cluster_scores(model, params, index, steps)
+    if index.size > 2:
+        nuisance = info[2:, 2:]
+        w, v = np.linalg.eigh(nuisance)
+        w = np.maximum(w, w.max() * 1e-8)
+        coupling = info[:2, 2:] @ ((v / w) @ v.T)
+        effective_info = info[:2, :2] - coupling @ info[2:, :2]
+        effective_scores = per_cycle[:, :2] - per_cycle[:, 2:] @ coupling.T
+    else:
+        effective_info, effective_scores = info[:2, :2], per_cycle
+    bread = np.linalg.inv(effective_info)
+    return bread @ (effective_scores.T @ effective_scores) @ bread
+
+
+def _cluster_scores(model, params, index, steps):
+    """Per-cycle sums of the per-sample scores (central differences), shape (J, len(index))."""
+    fitted = model.filter(params)
+    delta, sigma2 = fitted["delta"], fitted["sigma2"]
+    cycle = model._phase[0]
+    scores = np.empty((cycle.size, index.size))
+    for column, (i, h) in enumerate(zip(index, steps)):
+        up, down = params.copy(), params.copy()
+        up[i] += h
+        down[i] -= h
+        scores[:, column] = (model.sample_loglike(up, delta, sigma2) - model.sample_loglike(down, delta, sigma2)) / (
+            2.0 * h)
+    per_cycle = np.zeros((cycle.max() + 1, index.size))
+    np.add.at(per_cycle, cycle, scores)
+    return per_cycle
 
 
 def profile_interval(model: RecordModel, params, loglike, which, se, level=0.9):
@@ -251,8 +306,13 @@ def _fit_timing(model_for, timing, variation):
         template = model.filter(params[:len(model.param_names)])["delta"][2:2 + model.n_coefficients]
         model = model_for(timing, variation, template)
         if iteration == 0:
-            n = len(params)
-            candidates = [np.r_[params[:n], a, b] for a in PHASE_VARIANCE_STARTS[0] for b in PHASE_VARIANCE_STARTS[1]]
+            named = dict(zip(base.param_names, params))
+
+            def start_for(phase, rate):
+                values = {**named, "log_var_phase": phase, "log_var_rate": rate}
+                return np.array([values[name] for name in model.param_names])
+
+            candidates = [start_for(a, b) for a in PHASE_VARIANCE_STARTS[0] for b in PHASE_VARIANCE_STARTS[1]]
             start = max(candidates, key=model.loglike)
         else:
             start = params
@@ -267,7 +327,7 @@ def _fit_timing(model_for, timing, variation):
 
 
 def identify_person(record: Record, n_harmonics=4, variation="independent", timing="model", process_noise=False,
-                    intervals="wald", level=0.9, regressors=()):
+                    intervals="wald", level=0.9, regressors=(), cov_type="oim", drift=False):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -298,6 +358,12 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
     regressors : sequence of Regressor
         Effects' signals with unknown coefficients (a constant offset, for an
         imprecise body mass or plate zero, is always included).
+    cov_type : {"robust", "oim"}
+        Covariance of the estimates (:func:`information`): inverse observed
+        information (default) or cycle-clustered sandwich.
+    drift : bool
+        Let the force coefficients also wander within cycles (a per-sample
+        random walk with one estimated variance per harmonic group).
 
     Returns
     -------
@@ -334,7 +400,7 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
     names = AUTO_VARIATIONS if variation == "auto" else (variation,)
 
     def model_for(timing_, variation_, template):
-        return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise,
+        return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise, drift=drift,
                            regressors=all_regressors, phase_template=template)
 
     fits = []
@@ -352,7 +418,9 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
         raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                        "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
     params = fitted["params"]
-    cov, free = information(model, params)
+    if cov_type not in ("robust", "oim"):
+        raise OptionError(f"cov_type {cov_type!r} is not one of: robust, oim")
+    cov, free = information(model, params, cov_type)
     se = np.sqrt(np.diag(cov))
     z = stats.norm.ppf(0.5 + level / 2.0)
     interval = {}
@@ -363,6 +431,7 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
         else:
             interval[name] = wald
     return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
-                        intervals=interval, interval_method=intervals, level=level, comparison=comparison,
+                        intervals=interval, interval_method=intervals if intervals == "profile" else f"wald ({cov_type})",
+                        level=level, comparison=comparison,
                         n_evaluations=fitted["n_evaluations"])
 

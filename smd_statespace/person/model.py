@@ -99,12 +99,17 @@ class Regressor:
         True (default): a term of the person's acceleration, so it moves
         ``u`` and ``u'`` too. False: a term of the measurement only (a force
         offset, a wrong body mass), which the COM does not feel.
+    observed : bool
+        True (default): the term is part of the measured ``GRF / M_h - g``.
+        False: it moves the state but is not measured (the floor's
+        acceleration when ``u`` is read relative to the floor).
     """
 
     name: str
     values: np.ndarray
     unit: str = "-"
     dynamic: bool = True
+    observed: bool = True
 
 
 @dataclass
@@ -167,8 +172,9 @@ class RecordModel:
         self._H = G * basis
         self._rotation = np.exp(1j * angle)  # (N, n)
         self._timing_columns = self._phase_columns() if self.phase_template is not None else None
-        self._X_obs = np.column_stack([r.values for r in self.regressors]) if self.regressors else np.zeros(
+        self._X = np.column_stack([r.values for r in self.regressors]) if self.regressors else np.zeros(
             (self.time.size, 0))
+        self._X_obs = self._X * np.array([r.observed for r in self.regressors], dtype=float)
 
     # ------------------------------------------------------------------ layout
     @property
@@ -308,7 +314,7 @@ class RecordModel:
         D, E, S, w = self._variances(params)
         qx = w * _integrated_white_noise(a_c, dt) if w > 0 else np.zeros((2, 2))
         dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
-        x_tr = _regressor_steps(a_c, phi, self._X_obs * dynamic, dt)
+        x_tr = _regressor_steps(a_c, phi, self._X * dynamic, dt)
         return {
             "hx": a_c[1].copy(),
             "H": H,
@@ -342,6 +348,19 @@ class RecordModel:
     def loglike(self, params) -> float:
         """Profile log-likelihood: template, initial state, regressors and ``sigma^2`` at their maximum."""
         return self.filter(params)["loglike"]
+
+    def sample_loglike(self, params, delta, sigma2) -> np.ndarray:
+        """Log-density of every one-step innovation at fixed linear unknowns ``delta`` and scale ``sigma2``.
+
+        Their sum is the profile log-likelihood when ``delta`` and ``sigma2``
+        are at their estimates; their derivatives there are the per-sample
+        scores (the envelope theorem), from which a cycle-clustered
+        (sandwich) covariance is built.
+        """
+        out = self.filter(params)
+        raw = out["innovations_raw"] - out["innovation_regression"] @ delta
+        variance = out["innovation_variance_unscaled"] * sigma2
+        return -0.5 * (np.log(2.0 * np.pi * variance) + raw**2 / variance)
 
     def innovations(self, params, fitted=None) -> tuple:
         """Standardised one-step innovations and their raw values (m/s^2) at the fitted ``delta``."""

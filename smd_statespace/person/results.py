@@ -264,7 +264,8 @@ class PersonResult:
         tests = self.test_pvalues()
         if tests["ljung_box_p"] < WHITENESS_ALPHA:
             out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): "
-                       "the model misses something; run `smd-statespace diagnose`")
+                       f"the model misses something; run `smd-statespace diagnose {self.record.source} --mass "
+                       f"{self.record.mass:g} --estimator record`")
         return out
 
     def to_dict(self) -> dict:
