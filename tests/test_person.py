@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import linalg
 
@@ -207,3 +208,17 @@ def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects,
         assert row["estimate"] == pytest.approx(0.04, rel=0.15)
     else:  # the leg acts on the motion relative to the measured floor: coupling gain 1
         assert row["estimate"] == pytest.approx(1.0, abs=3 * row["estimate_sd"])
+
+
+def test_compare_puts_the_person_beside_the_per_cycle_estimators(tmp_path, long_sim, capsys):
+    path = tmp_path / "rec.csv"
+    truth = tmp_path / "rec_truth.json"
+    long_sim.write(path, truth)
+    argv = ["compare", str(path), "--mass", "70", "--estimators", "record,ekf", "--max-passes", "1", "--quiet",
+            "--truth", str(truth), "--out", str(tmp_path / "c")]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    table = pd.read_csv(tmp_path / "c" / "compare_table.csv", index_col=0)
+    assert list(table.index) == ["record", "ekf"]
+    assert table.loc["record", "|err| f_h"] == pytest.approx(abs(table.loc["record", "f_h"] - 2.8))
+    assert "the person from the whole record" in out

@@ -23,8 +23,9 @@ def add_compare(subparsers):
                      "with --truth also the median absolute error. Writes DIR/compare.csv and DIR/compare.png."),
     )
     add_record_arguments(parser)
-    parser.add_argument("--estimators", default="pf,ukf,ekf,grid", metavar="LIST",
-                        help=f"comma-separated estimators among {','.join(sorted(ESTIMATORS))} (default pf,ukf,ekf,grid)")
+    parser.add_argument("--estimators", default="record,pf,ukf,ekf,grid", metavar="LIST",
+                        help=f"comma-separated estimators among record,{','.join(sorted(ESTIMATORS))} (default "
+                             "record,pf,ukf,ekf,grid; record: one f_h, xi_h for the whole record)")
     parser.add_argument("--truth", metavar="JSON", help="truth file of a synthetic record (simulate writes one)")
     add_model_arguments(parser)
     add_run_arguments(parser)
@@ -34,10 +35,10 @@ def add_compare(subparsers):
 def parse_estimators(text: str) -> list:
     """Estimator names from ``--estimators``, checked."""
     names = [name.strip() for name in text.split(",") if name.strip()]
-    unknown = [name for name in names if name not in ESTIMATORS]
+    unknown = [name for name in names if name not in ESTIMATORS and name != "record"]
     if unknown or not names:
-        raise OptionError(f"--estimators {text!r}: unknown {unknown[0]!r}; choose among {', '.join(sorted(ESTIMATORS))}"
-                          if unknown else "--estimators: give at least one estimator")
+        raise OptionError(f"--estimators {text!r}: unknown {unknown[0]!r}; choose among record, "
+                          f"{', '.join(sorted(ESTIMATORS))}" if unknown else "--estimators: give at least one estimator")
     if len(set(names)) != len(names):
         raise OptionError(f"--estimators {text!r}: an estimator is listed twice")
     return names
@@ -62,6 +63,22 @@ def comparison_table(tables: dict, seconds: dict, truth: dict | None = None) -> 
     return pd.DataFrame(rows).set_index("estimator")
 
 
+def person_row(person, seconds: float, truth: dict | None = None) -> dict:
+    """The record-level estimate as a row of the comparison: the person's values, not medians of cycles."""
+    d = person.to_dict()
+    row = {"estimator": "record", "cycles": d["n_cycles"], "failed": 0}
+    for parameter in COMPARED:
+        row[parameter] = d[parameter]
+    row["f_h_iqr"] = float("nan")
+    row["f_h_det_%"] = 100.0 * d["f_h_determined"]
+    row["xi_h_det_%"] = 100.0 * d["xi_h_determined"]
+    for parameter in COMPARED:
+        if truth and parameter in truth:
+            row[f"|err| {parameter}"] = abs(d[parameter] - truth[parameter])
+    row["s/cycle"] = seconds / max(d["n_cycles"], 1)
+    return row
+
+
 def run_compare(args) -> int:
     """Run ``smd-statespace compare``."""
     from ..plots import plot_comparison
@@ -72,17 +89,38 @@ def run_compare(args) -> int:
     truth = truth_values(load_truth(args.truth))
     record, preprocessed = prepare_record(args)
     tables, seconds = {}, {}
+    person = None
     for name in names:
+        if name == "record":
+            import time
+
+            from ..person import identify_person
+
+            started = time.perf_counter()
+            person = identify_person(record, n_harmonics=args.harmonics)
+            person_seconds = time.perf_counter() - started
+            continue
         _, tables[name], seconds[name] = identify(args, model, preprocessed, name)
-    result = comparison_table(tables, seconds, truth)
+    result = comparison_table(tables, seconds, truth) if tables else pd.DataFrame()
+    if person is not None:
+        row = pd.DataFrame([person_row(person, person_seconds, truth)]).set_index("estimator")
+        result = pd.concat([row, result])
     print(f"{record.source}: {len(preprocessed.valid_cycles)} cycles, {model}")
     with pd.option_context("display.float_format", "{:.3g}".format, "display.width", 160,
                            "display.max_columns", 30):
         print(result.to_string())
     if truth:
         print("truth: " + ", ".join(f"{k} {v:.4g}" for k, v in truth.items() if k in COMPARED))
-    combined = pd.concat(tables.values(), ignore_index=True)
-    combined.to_csv(directory / "compare.csv", index=False)
-    plot_comparison(tables, directory / "compare.png", truth=truth)
-    print(f"wrote {directory / 'compare.csv'}, {directory / 'compare.png'}")
+    if person is not None:
+        print("record: the person from the whole record (its 90 % interval of f_h "
+              f"{person.intervals['f_h'][0]:.3f}-{person.intervals['f_h'][1]:.3f} Hz; docs/person.md says how far "
+              "its intervals can be trusted); the other rows are medians over cycles")
+    written = [directory / "compare_table.csv"]
+    result.to_csv(written[0])
+    if tables:
+        combined = pd.concat(tables.values(), ignore_index=True)
+        combined.to_csv(directory / "compare.csv", index=False)
+        plot_comparison(tables, directory / "compare.png", truth=truth)
+        written += [directory / "compare.csv", directory / "compare.png"]
+    print("wrote " + ", ".join(str(path) for path in written))
     return 0

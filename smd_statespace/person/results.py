@@ -263,9 +263,10 @@ class PersonResult:
             out.append(f"xi_h = {self.xi_h:.2f} > 1 (over-damped): outside what bouncing people show (0.1-0.6)")
         tests = self.test_pvalues()
         if tests["ljung_box_p"] < WHITENESS_ALPHA:
-            out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): "
-                       f"the model misses something; run `smd-statespace diagnose {self.record.source} --mass "
-                       f"{self.record.mass:g} --estimator record`")
+            out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): the model "
+                       "misses something, and f_h, xi_h and their intervals may be biased (on simulated records whose "
+                       "force drifts smoothly within cycles, f_h was off by 16 % in the median; docs/person.md); run "
+                       f"`smd-statespace diagnose {self.record.source} --mass {self.record.mass:g} --estimator record`")
         return out
 
     def to_dict(self) -> dict:
