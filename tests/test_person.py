@@ -1,5 +1,6 @@
 """The record-level model: exact discretisation, exact likelihood, recovery of a known person, the CLI's answer."""
 
+import inspect
 import json
 
 import numpy as np
@@ -222,3 +223,31 @@ def test_compare_puts_the_person_beside_the_per_cycle_estimators(tmp_path, long_
     assert list(table.index) == ["record", "ekf"]
     assert table.loc["record", "|err| f_h"] == pytest.approx(abs(table.loc["record", "f_h"] - 2.8))
     assert "the person from the whole record" in out
+
+
+def test_likelihood_ratio_of_an_absent_effect_is_chi_square_1():
+    """Records drawn from the model itself (statsmodels' simulator); a regressor that is not there: LR ~ chi2(1)."""
+    from scipy import stats
+
+    t = np.arange(0.0, 8.0, 0.01)
+    timing = CycleTiming(np.arange(-0.5, 8.6, 0.5))
+    offset = Regressor("offset", np.ones_like(t), dynamic=False)
+    absent = Regressor("absent", np.sin(2 * np.pi * 0.7 * t + 0.3))
+    truth = RecordModel(t, np.zeros_like(t), timing, n_harmonics=2, regressors=(offset,))
+    params = np.array([2.6, 0.3, -6.0, -1.0, -3.0])
+    delta = np.zeros(2 + truth.n_coefficients + 1)
+    delta[2:2 + truth.n_coefficients] = [0.0, -0.25, 0.05, 0.1, 0.12]
+    simulator = RecordStateSpace(truth, delta)
+    rng = np.random.default_rng(np.random.SeedSequence(314))
+    keyword = "rng" if "rng" in inspect.signature(simulator.simulate).parameters else "random_state"
+    statistics = []
+    for _ in range(40):
+        y = simulator.simulate(params, t.size, **{keyword: rng})
+        base = RecordModel(t, y, timing, n_harmonics=2, regressors=(offset,))
+        bigger = RecordModel(t, y, timing, n_harmonics=2, regressors=(offset, absent))
+        without = fit_model(base, params)
+        with_ = fit_model(bigger, without["params"])
+        statistics.append(max(2.0 * (with_["loglike"] - without["loglike"]), 0.0))
+    statistics = np.array(statistics)
+    assert stats.kstest(statistics, stats.chi2(1).cdf).pvalue > 0.05
+    assert 0.5 < statistics.mean() < 1.6  # chi2(1) has mean 1; 40 draws give an sd of the mean of about 0.22
