@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import OptionError
+from ..errors import CycleError, OptionError
 from ..signals import SUPPORTED_FB, find_cycles
 
 __all__ = ["TIMING_METHODS", "CycleTiming", "estimate_timing"]
@@ -187,9 +187,16 @@ def estimate_timing(time, force, n_harmonics=4, method="template", *, fb_range=S
         raise OptionError(f"timing method {method!r} is not one of: {', '.join(TIMING_METHODS)}")
     time = np.asarray(time, dtype=float)
     force = np.asarray(force, dtype=float)
-    peaks, _ = find_cycles(time, force, fb_range, source=source)
+    lo, hi = fb_range
+    try:  # a dominant 2nd or 3rd harmonic puts GRF peaks up to three times per force cycle
+        peaks, _ = find_cycles(time, force, (lo, 3.0 * hi), source=source)
+    except CycleError:
+        peaks, _ = find_cycles(time, force, fb_range, source=source)  # its own message
     group = _cycles_per_peak(time, force, peaks, fb_range)
-    peaks = peaks[::group]
+    peaks = _main_peaks(force, peaks, group)
+    f_b = (peaks.size - 1) / (time[peaks[-1]] - time[peaks[0]]) if peaks.size > 1 else 0.0
+    if not lo <= f_b <= hi:
+        peaks, _ = find_cycles(time, force, fb_range, source=source)  # raises the library's own one-line error
     boundaries = _extend(time[peaks], time[0], time[-1])
     if method == "peaks":
         return CycleTiming(boundaries, "peaks")
@@ -218,6 +225,14 @@ def _cycles_per_peak(time, force, peaks, fb_range):
         if ratio > best_ratio:
             best, best_ratio = group, ratio
     return best
+
+
+def _main_peaks(force, peaks, group):
+    """Every ``group``-th peak, starting where the kept peaks are highest (the main peak of each force cycle)."""
+    if group == 1:
+        return peaks
+    offset = max(range(group), key=lambda k: float(np.mean(force[peaks[k::group]])))
+    return peaks[offset::group]
 
 
 def align_boundaries(time, signal, boundaries, n_fit, method="template"):
