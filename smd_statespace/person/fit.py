@@ -303,7 +303,7 @@ def _fit_timing(model_for, timing, variation):
     best = (base, fitted)
     model = base
     for iteration in range(TIMING_ITERATIONS + 1):
-        template = model.filter(params[:len(model.param_names)])["delta"][2:2 + model.n_coefficients]
+        template = model.filter(params)["delta"][2:2 + model.n_coefficients]
         model = model_for(timing, variation, template)
         if iteration == 0:
             named = dict(zip(base.param_names, params))

@@ -77,6 +77,24 @@ def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
 
 
 @numba.njit(cache=True)
+def _advance_rows(Phi, G, p, X):
+    """Rows 0-1 of ``X`` become ``Phi X[0:2] + G X[2:2+p]`` (in place): a step's effect on ``[u, u_dot]``.
+
+    Each column depends only on its own entries, so the columns are updated
+    one by one. Applied to ``P`` (rows: ``T P``), ``P.T`` (columns:
+    ``(T P) T'``), the mean and its ``delta``-columns.
+    """
+    for c in range(X.shape[1]):
+        v0 = Phi[0, 0] * X[0, c] + Phi[0, 1] * X[1, c]
+        v1 = Phi[1, 0] * X[0, c] + Phi[1, 1] * X[1, c]
+        for i in range(p):
+            v0 += G[0, i] * X[2 + i, c]
+            v1 += G[1, i] * X[2 + i, c]
+        X[0, c] = v0
+        X[1, c] = v1
+
+
+@numba.njit(cache=True)
 def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift, n_template):
     """Run the augmented Kalman filter over one record.
 
@@ -155,36 +173,12 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
     h = np.zeros(m)
     Ph = np.zeros(m)
     Ev = np.zeros(q)
-    row0 = np.zeros(m)
-    row1 = np.zeros(m)
     for k in range(N):
         if k > 0:
             # predict rows 0-1: x2 = Phi x2 + Gam alpha (+ X_tr beta)
             G = Gam[k - 1]
-            # T P: rows 0-1 change
-            for c in range(m):
-                v0 = Phi[0, 0] * P[0, c] + Phi[0, 1] * P[1, c]
-                v1 = Phi[1, 0] * P[0, c] + Phi[1, 1] * P[1, c]
-                for i in range(p):
-                    v0 += G[0, i] * P[2 + i, c]
-                    v1 += G[1, i] * P[2 + i, c]
-                row0[c] = v0
-                row1[c] = v1
-            for c in range(m):
-                P[0, c] = row0[c]
-                P[1, c] = row1[c]
-            # (T P) T': columns 0-1 change
-            for c in range(m):
-                v0 = Phi[0, 0] * P[c, 0] + Phi[0, 1] * P[c, 1]
-                v1 = Phi[1, 0] * P[c, 0] + Phi[1, 1] * P[c, 1]
-                for i in range(p):
-                    v0 += G[0, i] * P[c, 2 + i]
-                    v1 += G[1, i] * P[c, 2 + i]
-                row0[c] = v0
-                row1[c] = v1
-            for c in range(m):
-                P[c, 0] = row0[c]
-                P[c, 1] = row1[c]
+            _advance_rows(Phi, G, p, P)  # T P
+            _advance_rows(Phi, G, p, P.T)  # (T P) T'
             P[0, 0] += Qx[0, 0]
             P[0, 1] += Qx[0, 1]
             P[1, 0] += Qx[1, 0]
@@ -193,22 +187,8 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
                 P[2 + i, 2 + i] += drift[i]
                 if code == BOTH:
                     P[2 + p + i, 2 + p + i] += drift[i]
-            # the mean and its delta-columns
-            v0 = Phi[0, 0] * a[0] + Phi[0, 1] * a[1]
-            v1 = Phi[1, 0] * a[0] + Phi[1, 1] * a[1]
-            for i in range(p):
-                v0 += G[0, i] * a[2 + i]
-                v1 += G[1, i] * a[2 + i]
-            a[0] = v0
-            a[1] = v1
-            for c in range(q):
-                v0 = Phi[0, 0] * A[0, c] + Phi[0, 1] * A[1, c]
-                v1 = Phi[1, 0] * A[0, c] + Phi[1, 1] * A[1, c]
-                for i in range(p):
-                    v0 += G[0, i] * A[2 + i, c]
-                    v1 += G[1, i] * A[2 + i, c]
-                A[0, c] = v0
-                A[1, c] = v1
+            _advance_rows(Phi, G, p, a.reshape((m, 1)))  # the mean
+            _advance_rows(Phi, G, p, A)  # and its delta-columns
             for j in range(r):  # known regressors: the state's dependence on beta
                 A[0, 2 + n_template + j] += X_tr[k - 1, 0, j]
                 A[1, 2 + n_template + j] += X_tr[k - 1, 1, j]

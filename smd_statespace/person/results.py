@@ -14,7 +14,7 @@ and plain-word warnings (:attr:`warnings`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -76,7 +76,6 @@ class PersonResult:
     level: float
     comparison: list
     n_evaluations: int = 0
-    _cache: dict = field(default_factory=dict, repr=False)
 
     # ------------------------------------------------------------------ estimates
     @cached_property
