@@ -185,7 +185,7 @@ def demo_identification_section(pre, out_dir, truth, estimator: str = "ekf") -> 
 def demo_next_steps() -> str:
     """What to do next."""
     return _heading("Next") + "\n" + "\n".join([
-        "  smd-statespace identify REC.csv --mass KG [--estimator pf|rbpf|ukf|ekf|grid]  your own record",
+        "  smd-statespace identify REC.csv --mass KG                  the person from your own record (person.json)",
         "  smd-statespace compare REC.csv --mass KG --truth T.json   estimators side by side",
         "  smd-statespace simulate --out REC.csv ...                   synthetic records with known truth",
         "  smd-statespace diagnose REC.csv --mass KG [--json R.json]   where the model fails, which effect is missing",
