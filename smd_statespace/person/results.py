@@ -14,6 +14,7 @@ and plain-word warnings (:attr:`warnings`).
 
 from __future__ import annotations
 
+import shlex
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -265,7 +266,8 @@ class PersonResult:
             out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): the model "
                        "misses something, and f_h, xi_h and their intervals may be biased (on simulated records whose "
                        "force drifts smoothly within cycles, f_h was off by 16 % in the median; docs/person.md); run "
-                       f"`smd-statespace diagnose {self.record.source} --mass {self.record.mass:g} --estimator record`")
+                       f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g} "
+                       "--estimator record`")
         return out
 
     def to_dict(self) -> dict:
