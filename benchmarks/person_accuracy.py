@@ -111,6 +111,9 @@ _SIGNATURE = inspect.signature(identify_person).parameters
 DEFAULT_TIMING = _SIGNATURE["timing"].default
 """``identify_person``'s default ``timing``: the main table's fits."""
 
+DEFAULT_VARIATION = _SIGNATURE["variation"].default
+"""``identify_person``'s default ``variation`` (``--variation``' default)."""
+
 DEFAULT_INTERVALS = _SIGNATURE["intervals"].default
 """``identify_person``'s default interval method (``--intervals``' default)."""
 
@@ -203,10 +206,10 @@ def given_boundaries(boundaries):
         person_fit.estimate_timing = original
 
 
-def identify_with_boundaries(record, boundaries, intervals, level=LEVEL):
+def identify_with_boundaries(record, boundaries, intervals, variation, level=LEVEL):
     """:func:`identify_person` with given force-cycle boundaries (held fixed: ``timing="template"``)."""
     with given_boundaries(boundaries):
-        return identify_person(record, n_harmonics=N_HARMONICS, variation="independent", timing="template",
+        return identify_person(record, n_harmonics=N_HARMONICS, variation=variation, timing="template",
                                intervals=intervals, level=level)
 
 
@@ -237,16 +240,16 @@ def boundary_jitter(estimated, truth, record_time) -> dict:
             "cycles_true": n_true}
 
 
-def fit_row(person, generator, timing, sim, intervals) -> dict:
+def fit_row(person, generator, timing, sim, intervals, variation) -> dict:
     """Fit one record with one timing; never raises (failures are recorded)."""
     row = {"generator": generator, "timing": timing, **{k: person[k] for k in ("record", "f_b", "f_h", "xi_h",
                                                                                "mass")}}
     start = time.perf_counter()
     try:
         if timing == "true":
-            result = identify_with_boundaries(sim.record, true_boundaries(sim), intervals)
+            result = identify_with_boundaries(sim.record, true_boundaries(sim), intervals, variation)
         else:
-            result = identify_person(sim.record, n_harmonics=N_HARMONICS, variation="independent", timing=timing,
+            result = identify_person(sim.record, n_harmonics=N_HARMONICS, variation=variation, timing=timing,
                                      intervals=intervals, level=LEVEL)
         row["seconds"] = time.perf_counter() - start
         d = result.to_dict()
@@ -261,6 +264,7 @@ def fit_row(person, generator, timing, sim, intervals) -> dict:
         "f_h_low": float(f_lo), "f_h_high": float(f_hi), "xi_h_low": float(x_lo), "xi_h_high": float(x_hi),
         "ljung_box_p": d["ljung_box_p"], "kurtosis": d["kurtosis"], "noise_bw": d["noise_bw"],
         "n_cycles": d["n_cycles"], "f_b_est": d["f_b"], "warnings": len(d["warnings"]),
+        "variation": result.model.variation,
     })
     if timing == "true":
         b = true_boundaries(sim)
@@ -272,45 +276,47 @@ def fit_row(person, generator, timing, sim, intervals) -> dict:
     return row
 
 
-def run(people: pd.DataFrame, generators, intervals, timing_experiment, ablation_records=0) -> pd.DataFrame:
-    """Simulate and fit every record; one progress bar on stderr."""
+def _simulation_failed(person, generator, timing, exc) -> dict:
+    return {"generator": generator, "timing": timing, "record": int(person["record"]), "f_b": person["f_b"],
+            "f_h": person["f_h"], "xi_h": person["xi_h"], "mass": person["mass"], "seconds": np.nan,
+            "error": f"simulation: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"}
+
+
+def _task_rows(task) -> list:
+    """The rows of one task ``(person, generator, timings, overrides, intervals, variation)``: simulate, fit each timing."""
+    person, generator, timings, overrides, intervals, variation = task
+    try:
+        sim = simulate(person, "smooth" if overrides else generator, **overrides)
+    except Exception as exc:  # noqa: BLE001 - one record must never kill the run
+        return [_simulation_failed(person, generator, timing, exc) for timing in timings]
+    return [fit_row(person, generator, timing, sim, intervals, variation) for timing in timings]
+
+
+def run(people: pd.DataFrame, generators, intervals, timing_experiment, ablation_records=0,
+        variation=DEFAULT_VARIATION, jobs=1) -> pd.DataFrame:
+    """Simulate and fit every record (``jobs`` processes; the rows do not depend on it); one progress bar."""
     def timings_of(generator):
         return EXPERIMENT_TIMINGS[generator] if timing_experiment else (DEFAULT_TIMING,)
 
     ablation = people.iloc[:ablation_records] if "smooth" in generators else people.iloc[:0]
-    total = len(people) * sum(len(timings_of(g)) for g in generators) + len(ablation) * len(ABLATIONS)
+    tasks = [(person, generator, timings_of(generator), {}, intervals, variation)
+             for generator in generators for _, person in people.iterrows()]
+    tasks += [(person, name, ("true",), overrides, intervals, variation)
+              for name, overrides in ABLATIONS.items() for _, person in ablation.iterrows()]
     rows = []
-    with tqdm(total=total, desc="fits", unit="fit", file=sys.stderr, dynamic_ncols=True) as bar:
-        for generator in generators:
-            timings = timings_of(generator)
-            for _, person in people.iterrows():
-                bar.set_postfix_str(f"{generator} record {int(person['record'])}")
-                try:
-                    sim = simulate(person, generator)
-                except Exception as exc:  # noqa: BLE001
-                    message = f"simulation: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
-                    for timing in timings:
-                        rows.append({"generator": generator, "timing": timing, "record": int(person["record"]),
-                                     "f_b": person["f_b"], "f_h": person["f_h"], "xi_h": person["xi_h"],
-                                     "mass": person["mass"], "seconds": np.nan, "error": message})
-                        bar.update(1)
-                    continue
-                for timing in timings:
-                    rows.append(fit_row(person, generator, timing, sim, intervals))
-                    bar.update(1)
-        for name, overrides in ABLATIONS.items():
-            for _, person in ablation.iterrows():
-                bar.set_postfix_str(f"{name}, record {int(person['record'])}")
-                try:
-                    sim = simulate(person, "smooth", **overrides)
-                except Exception as exc:  # noqa: BLE001
-                    rows.append({"generator": name, "timing": "true", "record": int(person["record"]),
-                                 "f_b": person["f_b"], "f_h": person["f_h"], "xi_h": person["xi_h"],
-                                 "mass": person["mass"], "seconds": np.nan,
-                                 "error": f"simulation: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"})
-                else:
-                    rows.append(fit_row(person, name, "true", sim, intervals))
-                bar.update(1)
+    with tqdm(total=sum(len(t[2]) for t in tasks), desc="fits", unit="fit", file=sys.stderr,
+              dynamic_ncols=True) as bar:
+        with contextlib.ExitStack() as stack:
+            if jobs > 1:
+                from concurrent.futures import ProcessPoolExecutor
+
+                results = stack.enter_context(ProcessPoolExecutor(jobs)).map(_task_rows, tasks)
+            else:
+                results = map(_task_rows, tasks)
+            for task, task_rows in zip(tasks, results):  # in task order, whatever the number of jobs
+                rows += task_rows
+                bar.set_postfix_str(f"{task[1]} record {int(task[0]['record'])}")
+                bar.update(len(task_rows))
     frame = pd.DataFrame(rows)
     for column in ("f_h_est", "xi_h_est", "f_h_low", "f_h_high", "xi_h_low", "xi_h_high", "ljung_box_p", "kurtosis",
                    "jitter_ms", "jitter_pct", "shift_pct", "cycles_found", "cycles_true"):
@@ -350,6 +356,7 @@ def summarise(rows: pd.DataFrame) -> dict:
         "f_h_within_8": 100.0 * float((f_err <= TARGETS["f_h_worst"]).mean()),
         "count_off": int(np.sum(np.abs(ok["cycles_found"] / ok["cycles_true"] - 1.0) > COUNT_TOLERANCE)),
         "shifted": int(np.sum(ok["shift_pct"].abs() > SHIFT_LIMIT)),
+        "variations": ", ".join(f"{name} {count}" for name, count in Counter(ok["variation"]).most_common()),
     })
     return out
 
@@ -404,8 +411,8 @@ def extra_table(frame: pd.DataFrame, generators) -> list:
     """Bias, share within the worst-case target, and the coverages' sampling uncertainty."""
     lines = ["| generator | f_h median signed error | xi_h median signed error | records with f_h error ≤ 8 % "
              "| f_h coverage, 95 % Wilson interval | xi_h coverage, 95 % Wilson interval "
-             "| timing with the cycle count off by > 10 % |",
-             "|---|---|---|---|---|---|---|"]
+             "| timing with the cycle count off by > 10 % | variation model chosen (records) |",
+             "|---|---|---|---|---|---|---|---|"]
     for generator in generators:
         s = summarise(frame[(frame["generator"] == generator) & (frame["timing"] == DEFAULT_TIMING)])
         if s["fitted"] == 0:
@@ -413,7 +420,8 @@ def extra_table(frame: pd.DataFrame, generators) -> list:
         fc = coverage_interval(s["f_h_cov"], s["fitted"])
         xc = coverage_interval(s["xi_h_cov"], s["fitted"])
         lines.append(f"| {generator} | {s['f_h_bias']:+.1f} % | {s['xi_h_bias']:+.3f} | {s['f_h_within_8']:.0f} % "
-                     f"| {fc[0]:.0f}-{fc[1]:.0f} % | {xc[0]:.0f}-{xc[1]:.0f} % | {s['count_off']} |")
+                     f"| {fc[0]:.0f}-{fc[1]:.0f} % | {xc[0]:.0f}-{xc[1]:.0f} % | {s['count_off']} "
+                     f"| {s['variations']} |")
     return lines
 
 
@@ -687,9 +695,9 @@ def write_report(path: Path, frame: pd.DataFrame, args, generators, command: str
         f"uniform {RANGES['xi_h'][0]}-{RANGES['xi_h'][1]}, mass uniform {RANGES['mass'][0]:g}-{RANGES['mass'][1]:g} "
         f"kg, BLF_i = ({', '.join(f'{b:g}' for b in DEFAULT_BLF)}) g times uniform {BLF_FACTOR[0]}-{BLF_FACTOR[1]}, "
         "the simulator's default cycle-to-cycle variation (f_b 2 %, coefficients 10 %) and force phases.",
-        f"- Identification: `identify_person(record, n_harmonics={N_HARMONICS}, variation=\"independent\", "
+        f"- Identification: `identify_person(record, n_harmonics={N_HARMONICS}, variation=\"{args.variation}\", "
         f"timing=\"{DEFAULT_TIMING}\", intervals=\"{args.intervals}\", level={LEVEL})` (the library's default "
-        "timing); seconds are per call "
+        f"timing); {args.jobs} process(es); seconds are per call "
         "(`time.perf_counter`), the simulation excluded.",
         "",
         "## Accuracy per generator",
@@ -777,6 +785,10 @@ def parse_args(argv=None):
                              "one-drift fits)")
     parser.add_argument("--ablation-records", type=int, default=10,
                         help="smooth records refitted with one drift at a time (true boundaries; default the first 10)")
+    parser.add_argument("--variation", default=DEFAULT_VARIATION,
+                        help=f"variation model of identify_person (default {DEFAULT_VARIATION}, the library's)")
+    parser.add_argument("--jobs", type=int, default=1,
+                        help="processes (default 1); each record is seeded on its own, so the rows do not change")
     parser.add_argument("--quick", action="store_true", help="3 records per generator: a smoke run")
     args = parser.parse_args(argv)
     if args.records is None:
@@ -799,7 +811,8 @@ def main(argv=None):
     start = time.perf_counter()
     people = draw_people(args.records, args.seed)
     frame = run(people, generators, args.intervals, not args.no_timing_experiment,
-                0 if args.no_timing_experiment else min(args.ablation_records, args.records))
+                0 if args.no_timing_experiment else min(args.ablation_records, args.records), args.variation,
+                args.jobs)
     wall = time.perf_counter() - start
     if args.csv is not None:
         frame.to_csv(args.csv, index=False)

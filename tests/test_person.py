@@ -82,6 +82,9 @@ def test_step_is_the_exact_solution_of_eq2_under_a_harmonic_force():
     {"variation": "both", "drift": True},
     {"process_noise": True},
     {"phase_template": np.array([0.0, -0.2, 0.1, 0.1, 0.05, 0.03, 0.0, 0.01, 0.0])},
+    {"variation": "smooth"},
+    {"variation": "smooth", "drift": True,
+     "phase_template": np.array([0.0, -0.2, 0.1, 0.1, 0.05, 0.03, 0.0, 0.01, 0.0])},
 ])
 def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options):
     """The concentrated likelihood of the compiled pass is statsmodels' exact Kalman likelihood at the same point."""

@@ -45,9 +45,11 @@ def add_identify(subparsers):
                              "maximum likelihood; writes DIR/person.json) or a per-cycle estimator: pf (the "
                              f"article's particle filter), rbpf, ukf, ekf or grid (default for a batch: "
                              f"{DEFAULT_ESTIMATOR})")
-    parser.add_argument("--variation", choices=("independent", "both", "random_walk", "auto"), default="independent",
-                        help="record estimator: how the force coefficients vary from cycle to cycle (default "
-                             "independent; auto fits independent and both and keeps the lower AIC)")
+    parser.add_argument("--variation", choices=("auto", "independent", "smooth", "both", "random_walk"),
+                        default="auto",
+                        help="record estimator: how the force coefficients vary: independent (they jump at every "
+                             "cycle start), smooth (they drift continuously), both, random_walk, or auto (default: "
+                             "fits independent and smooth and keeps the lower AIC)")
     parser.add_argument("--timing", choices=("model", "template", "peaks"), default="model",
                         help="record estimator: force-cycle starts placed by the model's own phase errors (default), "
                              "aligned on the mean cycle (template), or at GRF peaks (the article's cycles)")

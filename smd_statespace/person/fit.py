@@ -39,7 +39,7 @@ START_F_H = (1.2, 1.7, 2.3, 3.0, 3.9, 5.0)
 START_XI_H = (0.15, 0.45)
 """Starting values of ``xi_h`` of the coarse search."""
 
-AUTO_VARIATIONS = ("independent", "both")
+AUTO_VARIATIONS = ("independent", "smooth")
 """Variation models compared by ``variation="auto"``."""
 
 TIMING_ITERATIONS = 3
@@ -295,10 +295,26 @@ def corrected_timing(model: RecordModel, params) -> CycleTiming:
     return CycleTiming(new, "model")
 
 
-def _fit_timing(model_for, timing, variation):
-    """Fit with a phase template and re-place the cycle starts; returns the best ``(model, fit)`` by likelihood."""
-    base = model_for(timing, variation, None)
-    fitted = fit_model(base, quick=True)
+def at_bound(model: RecordModel, params, which) -> bool:
+    """True when parameter ``which`` is within 0.1 % of its search range from a bound."""
+    low, high = model.bounds[which]
+    return bool(min(params[which] - low, high - params[which]) < 1e-3 * (high - low))
+
+
+def _on_bound(model: RecordModel, params) -> bool:
+    """True when ``f_h`` or ``xi_h`` sits on a search bound."""
+    return at_bound(model, params, 0) or at_bound(model, params, 1)
+
+
+def _fit_timing(model_for, timing, variation, first=None):
+    """Fit with a phase template and re-place the cycle starts; returns the best ``(model, fit)`` by likelihood.
+
+    ``first``: the ``(model, fit)`` without phase template at ``timing`` when already made.
+    """
+    base, fitted = first if first is not None else (None, None)
+    if base is None:
+        base = model_for(timing, variation, None)
+        fitted = fit_model(base, quick=True)
     params = fitted["params"]
     best = (base, fitted)
     model = base
@@ -326,7 +342,7 @@ def _fit_timing(model_for, timing, variation):
     return model, fit_model(model, fitted["params"])
 
 
-def identify_person(record: Record, n_harmonics=4, variation="independent", timing="model", process_noise=False,
+def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="wald", level=0.9, regressors=(), cov_type="oim", drift=False):
     """Identify one person's SMD model from a whole bouncing record.
 
@@ -336,9 +352,14 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
         The measurement (``time``, ``force`` in N, ``mass`` in kg).
     n_harmonics : int
         Harmonics ``n`` of the force, Eq. 4.
-    variation : {"auto", "independent", "random_walk", "both"}
-        Cycle-to-cycle variation of the force coefficients; ``"auto"`` fits
-        :data:`AUTO_VARIATIONS` and keeps the lowest AIC.
+    variation : {"auto", "independent", "smooth", "random_walk", "both"}
+        How the force coefficients vary (:mod:`~smd_statespace.person.model`):
+        jumping at every cycle start (``"independent"``), drifting smoothly
+        in time (``"smooth"``), ... ``"auto"`` (default) fits
+        :data:`AUTO_VARIATIONS` at the first cycle timing and keeps the lowest
+        AIC among the fits whose ``f_h`` and ``xi_h`` are off their search
+        bounds (the list of fits is ``result.comparison``); with
+        ``timing="model"`` only the winner's cycle starts are then re-placed.
     timing : {"model", "template", "peaks"}
         How the force-cycle boundaries are placed: ``"template"`` and
         ``"peaks"`` as :func:`~smd_statespace.person.timing.estimate_timing`
@@ -404,17 +425,22 @@ def identify_person(record: Record, n_harmonics=4, variation="independent", timi
         return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise, drift=drift,
                            regressors=all_regressors, phase_template=template)
 
+    # every variation model is fitted at the first cycle timing and compared by AIC there; only
+    # the winner's cycle starts are then re-placed (timing="model")
     fits = []
     for name in names:
-        if timing == "model":
-            fits.append(_fit_timing(model_for, cycle_timing, name))
-        else:
-            model = model_for(cycle_timing, name, None)
-            fits.append((model, fit_model(model)))
+        model = model_for(cycle_timing, name, None)
+        fits.append((model, fit_model(model, quick=timing == "model")))
     comparison = [{"variation": m.variation, "loglike": f["loglike"], "n_params": len(f["params"]),
-                   "aic": 2 * len(f["params"]) - 2 * f["loglike"], "converged": f["converged"]} for m, f in fits]
-    best = int(np.argmin([row["aic"] for row in comparison]))
+                   "aic": 2 * len(f["params"]) - 2 * f["loglike"], "converged": f["converged"],
+                   "on_bound": _on_bound(m, f["params"])} for m, f in fits]
+    # a fit with f_h or xi_h on its search bound has not estimated them (a variation model that is
+    # too flexible lets the person's resonance imitate a missing effect): it wins only if all do
+    eligible = [i for i, row in enumerate(comparison) if not row["on_bound"]] or list(range(len(fits)))
+    best = min(eligible, key=lambda i: comparison[i]["aic"])
     model, fitted = fits[best]
+    if timing == "model":
+        model, fitted = _fit_timing(model_for, cycle_timing, model.variation, first=(model, fitted))
     if not fitted["converged"]:
         raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                        "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")

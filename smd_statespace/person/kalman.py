@@ -37,7 +37,7 @@ import math
 import numba
 import numpy as np
 
-INDEPENDENT, RANDOM_WALK, BOTH = 0, 1, 2
+INDEPENDENT, RANDOM_WALK, BOTH, SMOOTH = 0, 1, 2, 3
 """Codes of the variation models in the compiled pass."""
 
 
@@ -60,6 +60,15 @@ def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
     elif code == RANDOM_WALK:  # alpha := alpha + e
         for i in range(2, 2 + p):
             P[i, i] += E[i - 2]
+    elif code == SMOOTH:  # the coefficients run on; only the timing states are drawn again
+        for i in range(2 + n_template, 2 + p):
+            a[i] = 0.0
+            for c in range(q):
+                A[i, c] = 0.0
+            for c in range(m):
+                P[i, c] = 0.0
+                P[c, i] = 0.0
+            P[i, i] = D[i - 2]
     else:  # m := m + e, alpha := m + d
         if step:
             for i in range(2 + p, 2 + 2 * p):
@@ -95,7 +104,51 @@ def _advance_rows(Phi, G, p, X):
 
 
 @numba.njit(cache=True)
-def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift, n_template):
+def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D):
+    """Advance every coefficient's smooth deviation one sample (in place, variation "smooth").
+
+    The pair ``(alpha_i - tau_i, alpha_dot_i)`` (rows ``2 + i`` and
+    ``2 + p + i``) moves by ``smooth_phi``; ``tau_i`` (the column
+    ``2 + i`` of ``delta``) stays, so ``alpha_i`` gains ``(1 - phi_00) tau_i``
+    and ``alpha_dot_i`` loses ``phi_10 tau_i``; the step adds the process
+    covariance ``D_i smooth_q``.
+    """
+    m = P.shape[0]
+    q = A.shape[1]
+    f00, f01, f10, f11 = smooth_phi[0, 0], smooth_phi[0, 1], smooth_phi[1, 0], smooth_phi[1, 1]
+    for i in range(n_template):
+        r0 = 2 + i
+        r1 = 2 + p + i
+        for c in range(m):  # rows: T P
+            x0 = P[r0, c]
+            x1 = P[r1, c]
+            P[r0, c] = f00 * x0 + f01 * x1
+            P[r1, c] = f10 * x0 + f11 * x1
+        for c in range(m):  # columns: (T P) T'
+            x0 = P[c, r0]
+            x1 = P[c, r1]
+            P[c, r0] = f00 * x0 + f01 * x1
+            P[c, r1] = f10 * x0 + f11 * x1
+        x0 = a[r0]
+        x1 = a[r1]
+        a[r0] = f00 * x0 + f01 * x1
+        a[r1] = f10 * x0 + f11 * x1
+        for c in range(q):
+            x0 = A[r0, c]
+            x1 = A[r1, c]
+            A[r0, c] = f00 * x0 + f01 * x1
+            A[r1, c] = f10 * x0 + f11 * x1
+        A[r0, 2 + i] += 1.0 - f00
+        A[r1, 2 + i] -= f10
+        P[r0, r0] += D[i] * smooth_q[0, 0]
+        P[r0, r1] += D[i] * smooth_q[0, 1]
+        P[r1, r0] += D[i] * smooth_q[1, 0]
+        P[r1, r1] += D[i] * smooth_q[1, 1]
+
+
+@numba.njit(cache=True)
+def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift, n_template,
+                   smooth_phi, smooth_q, smooth_p0):
     """Run the augmented Kalman filter over one record.
 
     Parameters
@@ -119,16 +172,23 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
     reset : ndarray of bool, shape (N,)
         True where a new force cycle starts at sample ``k`` (``k >= 1``).
     code : int
-        Variation model: :data:`INDEPENDENT`, :data:`RANDOM_WALK` or :data:`BOTH`.
+        Variation model: :data:`INDEPENDENT`, :data:`RANDOM_WALK`, :data:`BOTH`
+        or :data:`SMOOTH`.
     D, E : ndarray, shape (p,)
         Variances of the independent draws and of the random-walk steps,
-        relative to ``sigma^2``.
+        relative to ``sigma^2``; with :data:`SMOOTH`, ``D`` holds the
+        stationary variances of the coefficients' smooth deviations (and of
+        the timing states' draws).
     drift : ndarray, shape (p,)
         Variance of a per-sample random walk of the coefficients, relative to
         ``sigma^2`` (0: coefficients constant within a cycle).
     n_template : int
         The first ``n_template`` force states have an unknown record-level
         mean (a column of ``delta``); the others have mean zero.
+    smooth_phi, smooth_q, smooth_p0 : ndarray, shape (2, 2)
+        Variation :data:`SMOOTH` only: transition over one sample of a
+        deviation and its rate (a Matern-3/2 process), its process covariance
+        and its stationary covariance, for a unit stationary variance.
 
     Returns
     -------
@@ -147,7 +207,11 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
     """
     N, p = H.shape
     r = X_obs.shape[1]
-    m = 2 + p if code != BOTH else 2 + 2 * p
+    m = 2 + p
+    if code == BOTH:
+        m = 2 + 2 * p
+    elif code == SMOOTH:
+        m = 2 + p + n_template
     n_free = 2  # delta = [u0, u_dot0, template (p), beta (r)]
     q = 2 + n_template + r
     a = np.zeros(m)
@@ -160,6 +224,14 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
     elif code == RANDOM_WALK:
         for i in range(n_template):
             A[2 + i, n_free + i] = 1.0
+    elif code == SMOOTH:  # stationary start: deviation variance D, rate variance D lambda^2
+        for i in range(n_template):
+            A[2 + i, n_free + i] = 1.0
+            P[2 + i, 2 + i] = D[i] * smooth_p0[0, 0]
+            P[2 + i, 2 + p + i] = D[i] * smooth_p0[0, 1]
+            P[2 + p + i, 2 + i] = D[i] * smooth_p0[1, 0]
+            P[2 + p + i, 2 + p + i] = D[i] * smooth_p0[1, 1]
+        _reset(code, a, A, P, p, D, E, n_free, n_template)
     else:
         for i in range(n_template):
             A[2 + p + i, n_free + i] = 1.0
@@ -183,15 +255,17 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
             P[0, 1] += Qx[0, 1]
             P[1, 0] += Qx[1, 0]
             P[1, 1] += Qx[1, 1]
-            for i in range(p):
-                P[2 + i, 2 + i] += drift[i]
-                if code == BOTH:
-                    P[2 + p + i, 2 + p + i] += drift[i]
             _advance_rows(Phi, G, p, a.reshape((m, 1)))  # the mean
             _advance_rows(Phi, G, p, A)  # and its delta-columns
             for j in range(r):  # known regressors: the state's dependence on beta
                 A[0, 2 + n_template + j] += X_tr[k - 1, 0, j]
                 A[1, 2 + n_template + j] += X_tr[k - 1, 1, j]
+            if code == SMOOTH:
+                _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D)
+            for i in range(p):
+                P[2 + i, 2 + i] += drift[i]
+                if code == BOTH:
+                    P[2 + p + i, 2 + p + i] += drift[i]
             if reset[k]:
                 _reset(code, a, A, P, p, D, E, n_free, n_template)
         # update with y_k

@@ -23,6 +23,12 @@ Variation models of the coefficients (chosen by likelihood in
     ``alpha_j = alpha_{j-1} + e_j``, ``e_j ~ N(0, E)``; ``tau`` is ``alpha_0``.
 ``"both"``
     ``alpha_j = m_j + d_j``, ``m_j = m_{j-1} + e_j``: a wandering template.
+``"smooth"``
+    ``alpha(t) = tau + d(t)`` with no jump at cycle boundaries: every
+    coefficient's deviation ``d(t)`` is a stationary Matern-3/2 process of
+    time (once differentiable, variance ``D``, length scale ``ell``, one
+    ``ell`` for all coefficients, at least :data:`SMOOTH_MIN_CYCLES` mean cycles; ``d'' = -2 lambda d' - lambda^2 d + white
+    noise``, ``lambda = sqrt(3) / ell``), sampled exactly at every sample.
 
 ``D`` and ``E`` are diagonal with one variance for ``a0`` and one per harmonic
 (shared by ``a_i`` and ``b_i``: a perturbation of the harmonic's complex
@@ -34,7 +40,8 @@ error enters the likelihood (the article's Euler step, Eq. 11-12, is not used).
 
 Parameters estimated by maximum likelihood (:attr:`RecordModel.param_names`):
 ``f_h`` (Hz), ``xi_h`` (-), ``log_var_d_0 .. log_var_d_n`` (log of ``D``'s
-variances relative to ``sigma^2``), likewise ``log_var_e_*``, and with
+variances relative to ``sigma^2``), likewise ``log_var_e_*``,
+``log_smooth_time`` (``log ell``, ``ell`` in s; variation "smooth"), and with
 ``process_noise=True`` ``log_var_w`` (a white force on the COM, variance per
 second relative to ``sigma^2``). ``sigma^2``, the template, ``u_0``, ``u'_0``
 and the coefficients of effects' regressors are concentrated out (generalised
@@ -55,7 +62,8 @@ from .timing import CycleTiming
 
 __all__ = ["VARIATIONS", "Regressor", "RecordModel", "coefficient_names"]
 
-VARIATIONS = {"independent": kalman.INDEPENDENT, "random_walk": kalman.RANDOM_WALK, "both": kalman.BOTH}
+VARIATIONS = {"independent": kalman.INDEPENDENT, "random_walk": kalman.RANDOM_WALK, "both": kalman.BOTH,
+              "smooth": kalman.SMOOTH}
 """Variation models of the force coefficients and their codes in the compiled pass."""
 
 F_H_BOUNDS = (0.5, 10.0)
@@ -66,6 +74,18 @@ XI_H_BOUNDS = (1e-3, 3.0)
 
 LOG_VAR_BOUNDS = (-25.0, 12.0)
 """Search range of every log variance ratio."""
+
+SMOOTH_MIN_CYCLES = 1.0
+"""Shortest length scale ``ell`` of the smooth variation, in mean force cycles.
+
+Faster variation is the ``"independent"`` model's domain; without this bound
+the smooth deviations, made nearly white, absorb whatever the model lacks
+(measured: hidden 5th and 6th harmonics taken up by a first harmonic with
+``ell`` = 0.03 s, ``f_h`` 2.24 Hz for 2.5).
+"""
+
+LONGEST_SMOOTH_TIME = 100.0
+"""Longest length scale ``ell`` (s) of the smooth variation."""
 
 
 def coefficient_names(n_harmonics):
@@ -126,7 +146,7 @@ class RecordModel:
         Force-cycle boundaries (the phase of Eq. 4).
     n_harmonics : int
         Harmonics ``n`` of Eq. 4.
-    variation : {"independent", "random_walk", "both"}
+    variation : {"independent", "random_walk", "both", "smooth"}
         How the force coefficients change from cycle to cycle.
     process_noise : bool
         Add a white force on the COM with an estimated level.
@@ -236,8 +256,10 @@ class RecordModel:
     def param_names(self) -> list:
         """Names of the parameters searched by maximum likelihood."""
         names = ["f_h", "xi_h"]
-        if self.variation in ("independent", "both"):
+        if self.variation in ("independent", "both", "smooth"):
             names += [f"log_var_d_{i}" for i in self.variance_groups]
+        if self.variation == "smooth":
+            names.append("log_smooth_time")
         if self.variation in ("random_walk", "both"):
             names += [f"log_var_e_{i}" for i in self.variance_groups]
         if self.phase_template is not None:
@@ -251,12 +273,17 @@ class RecordModel:
     @property
     def bounds(self) -> list:
         """Search bounds of the parameters, in the order of :attr:`param_names`."""
-        return [F_H_BOUNDS, XI_H_BOUNDS] + [LOG_VAR_BOUNDS] * (len(self.param_names) - 2)
+        smooth = (np.log(SMOOTH_MIN_CYCLES / np.mean(self.timing.f_b)), np.log(LONGEST_SMOOTH_TIME))
+        return [F_H_BOUNDS, XI_H_BOUNDS] + [
+            smooth if name == "log_smooth_time" else LOG_VAR_BOUNDS for name in self.param_names[2:]]
 
     def start_params(self, f_h=2.5, xi_h=0.3, log_var=-3.0) -> np.ndarray:
-        """A starting point: the given ``f_h``, ``xi_h`` and one log variance ratio for every group."""
+        """A starting point: the given ``f_h``, ``xi_h``, one log variance ratio for every group and,
+        for variation "smooth", a length scale of two mean bouncing cycles."""
         values = np.full(len(self.param_names), float(log_var))
         values[0], values[1] = f_h, xi_h
+        if "log_smooth_time" in self.param_names:
+            values[self.param_names.index("log_smooth_time")] = np.log(2.0 / np.mean(self.timing.f_b))
         return values
 
     # ------------------------------------------------------------------ system
@@ -284,7 +311,8 @@ class RecordModel:
         Returns
         -------
         dict
-            ``hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift`` as
+            ``hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift,
+            smooth_phi, smooth_q, smooth_p0`` as
             :func:`~smd_statespace.person.kalman.augmented_pass` takes them.
         """
         f_h, xi_h = float(params[0]), float(params[1])
@@ -313,6 +341,9 @@ class RecordModel:
             gam = np.concatenate([gam, g0[None, :, None] * step_values[:, None, :]], axis=2)
         D, E, S, w = self._variances(params)
         qx = w * _integrated_white_noise(a_c, dt) if w > 0 else np.zeros((2, 2))
+        named = dict(zip(self.param_names, params))
+        smooth = matern32_step(np.exp(named["log_smooth_time"]), dt) if "log_smooth_time" in named else (
+            np.zeros((2, 2)),) * 3
         dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
         x_tr = _regressor_steps(a_c, phi, self._X * dynamic, dt)
         return {
@@ -328,6 +359,9 @@ class RecordModel:
             "D": D,
             "E": E,
             "drift": S,
+            "smooth_phi": smooth[0],
+            "smooth_q": smooth[1],
+            "smooth_p0": smooth[2],
         }
 
     def timing_rates(self) -> np.ndarray:
@@ -340,7 +374,8 @@ class RecordModel:
         sys = self.system(params)
         e, Ev, f, S, s, ee = kalman.augmented_pass(
             self.y, sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["X_obs"], sys["X_tr"],
-            sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"], self.n_coefficients)
+            sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"], self.n_coefficients,
+            sys["smooth_phi"], sys["smooth_q"], sys["smooth_p0"])
         out = kalman.concentrate(S, s, ee, f, self.y.size)
         out.update(innovations_raw=e, innovation_regression=Ev, innovation_variance_unscaled=f)
         return out
@@ -386,6 +421,24 @@ def expm2(a, t):
     sinhc = t * (1.0 + qt * qt / 6.0 + qt**4 / 120.0) if abs(qt) < 1e-4 else np.sinh(qt) / q
     shifted = a - s * np.eye(2)
     return (np.exp(s * t) * (cosh * np.eye(2) + sinhc * shifted)).real
+
+
+def matern32_step(length_scale, dt):
+    """One sample of a unit-variance Matern-3/2 process and its rate: ``(Phi, Q, P_inf)``.
+
+    The process ``d'' = -2 lambda d' - lambda^2 d + w``, ``lambda = sqrt(3) /
+    length_scale`` (s), has the stationary covariance ``P_inf = diag(1,
+    lambda^2)`` of ``(d, d')`` and the autocorrelation ``(1 + lambda tau)
+    exp(-lambda tau)``; over a step ``dt`` (s) the transition is
+    ``Phi = exp(A dt)`` and the process covariance ``Q = P_inf - Phi P_inf Phi'``
+    (exact for a stationary linear system).
+    """
+    lam = np.sqrt(3.0) / float(length_scale)
+    a_c = np.array([[0.0, 1.0], [-lam * lam, -2.0 * lam]])
+    phi = expm2(a_c, dt)
+    p_inf = np.diag([1.0, lam * lam])
+    q = p_inf - phi @ p_inf @ phi.T
+    return phi, 0.5 * (q + q.T), p_inf
 
 
 def _harmonic_step_gain(a_c, phi, nu, dt):

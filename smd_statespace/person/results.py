@@ -158,11 +158,11 @@ class PersonResult:
     def determined(self, name) -> bool:
         """True when the standard error of ``f_h`` or ``xi_h`` is below :data:`DETERMINED_FRACTION` of its yardstick
         and the estimate is not at a search bound."""
+        from .fit import at_bound
+
         which = {"f_h": 0, "xi_h": 1}[name]
-        low, high = self.model.bounds[which]
-        at_bound = min(self.params[which] - low, high - self.params[which]) < 1e-3 * (high - low)
         return bool(np.isfinite(self.se[which]) and self.se[which] < DETERMINED_FRACTION * PRIOR_SD[name]
-                    and not at_bound)
+                    and not at_bound(self.model, self.params, which))
 
     def derived(self) -> dict:
         """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds."""

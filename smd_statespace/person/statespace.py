@@ -42,7 +42,7 @@ class RecordStateSpace(MLEModel):
     Notes
     -----
     State ``[u, u_dot, alpha]`` (``[u, u_dot, alpha, m]`` for variation
-    "both"); observation ``y = [h_x, H_k] state + X_obs beta + v`` with the
+    "both", ``[u, u_dot, alpha, alpha_dot]`` for "smooth"); observation ``y = [h_x, H_k] state + X_obs beta + v`` with the
     scale ``sigma^2`` concentrated out (``concentrate_scale=True``), so every
     variance is relative to it, as in the compiled pass.
     """
@@ -51,7 +51,7 @@ class RecordStateSpace(MLEModel):
         self.record_model = model
         self.delta = np.asarray(delta, dtype=float)
         p = model.n_force_states
-        k_states = 2 + p if model.variation != "both" else 2 + 2 * p
+        k_states = {"both": 2 + 2 * p, "smooth": 2 + p + model.n_coefficients}.get(model.variation, 2 + p)
         super().__init__(model.y, k_states=k_states, k_posdef=k_states)
         self.ssm.filter_concentrated = True
         self.ssm["selection"] = np.eye(k_states)
@@ -113,6 +113,17 @@ class RecordStateSpace(MLEModel):
             state_cov[alpha, alpha, starts] = D[:, :, None]
         elif model.variation == "random_walk":
             state_cov[alpha, alpha, starts] = (E + drift)[:, :, None]
+        elif model.variation == "smooth":
+            f, qs = sys["smooth_phi"], sys["smooth_q"]
+            for i in range(n_template):
+                rows = [2 + i, 2 + p + i]
+                transition[np.ix_(rows, rows)] = f[:, :, None]
+                intercept[rows[0], :] += (1.0 - f[0, 0]) * tau[i]
+                intercept[rows[1], :] -= f[1, 0] * tau[i]
+                state_cov[np.ix_(rows, rows)] += sys["D"][i] * qs[:, :, None]
+            timing = slice(2 + n_template, 2 + p)  # the phase and rate errors are drawn again per cycle
+            transition[timing, :, starts] = 0.0
+            state_cov[timing, timing, starts] = np.diag(sys["D"][n_template:])[:, :, None]
         else:  # m := m + e, alpha := m + e + d
             state_cov[base, base, :] += drift[:, :, None]
             transition[alpha, :, starts] = 0.0
@@ -136,6 +147,13 @@ class RecordStateSpace(MLEModel):
             cov[alpha, alpha] = D
         elif model.variation == "random_walk":
             mean[alpha] = tau
+        elif model.variation == "smooth":
+            mean[alpha] = tau
+            cov[alpha, alpha] = np.diag(sys["D"])
+            p0 = sys["smooth_p0"]
+            for i in range(n_template):
+                rows = [2 + i, 2 + p + i]
+                cov[np.ix_(rows, rows)] = sys["D"][i] * p0
         else:
             mean[alpha] = tau
             mean[base] = tau
