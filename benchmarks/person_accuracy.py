@@ -774,7 +774,7 @@ def parse_args(argv=None):
     parser.add_argument("--generators", default=",".join(GENERATORS),
                         help="comma-separated variation generators of simulate_bouncing (default jumps,smooth)")
     parser.add_argument("--seed", type=int, default=2024, help="root of the SeedSequence (default 2024)")
-    parser.add_argument("--intervals", choices=("wald", "profile"), default=DEFAULT_INTERVALS,
+    parser.add_argument("--intervals", choices=("calibrated", "wald", "profile"), default=DEFAULT_INTERVALS,
                         help=f"interval method of identify_person (default {DEFAULT_INTERVALS}, the library's)")
     parser.add_argument("--out", type=Path, default=None,
                         help="Markdown page (default docs/person-benchmark.md; with --quick a temporary directory); "

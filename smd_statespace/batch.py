@@ -11,7 +11,13 @@ parts joined in the run's record order, identical to an uninterrupted run.
 Nothing is lost to one bad record: a record that cannot be read or
 segmented, or whose identification fails numerically, gets one row with
 ``status`` "failed" and the reason, and the batch goes on
-(:class:`BatchSummary` counts them).
+(:class:`BatchSummary` counts them). Cycles whose estimates cannot be true
+keep ``status`` "ok" but are flagged ``implausible`` with the reason (see
+:mod:`smd_statespace.plausibility`); the summary counts them too.
+
+With ``estimator="record"`` every record gives one row, the person from the
+whole record (:func:`~smd_statespace.person.identify_person`; deterministic),
+with the flags ``implausible`` and ``model_adequate`` that ``stats`` reads.
 
 Reproducible: every cycle's random stream is derived from the seed, the
 record's name (:func:`record_key`) and the cycle's index, never from the
@@ -42,7 +48,12 @@ from tqdm import tqdm
 from . import __version__
 from .errors import OptionError, RecordError, SMDInputError
 from .io import check_mass
+from .plausibility import flagged, reason_counts
 from .runner import DEFAULT_ESTIMATOR
+
+RECORD_ESTIMATOR = "record"
+"""The estimator name of the record-level model (:func:`~smd_statespace.person.identify_person`):
+one row per record (the person) instead of one per cycle."""
 
 __all__ = ["BatchRecord", "BatchSummary", "collect_records", "read_manifest", "record_key", "run_batch",
            "atomic_write_csv"]
@@ -76,7 +87,9 @@ class BatchSummary:
     """What a batch run did: records identified now, taken from an earlier run, failed; cycles by status.
 
     ``failures`` maps each record that could not be identified at all to the reason; ``table`` is
-    what ``results`` holds (every record's cycles, in the run's record order).
+    what ``results`` holds (every record's cycles, in the run's record order); ``implausible``
+    counts the ``ok`` cycles flagged implausible, ``implausible_reasons`` how often each reason
+    was given.
     """
 
     records: int
@@ -86,6 +99,8 @@ class BatchSummary:
     cycles: dict = field(default_factory=dict)
     results: Path | None = None
     table: pd.DataFrame | None = None
+    implausible: int = 0
+    implausible_reasons: dict = field(default_factory=dict)
 
     @property
     def failed_records(self) -> list:
@@ -94,9 +109,12 @@ class BatchSummary:
 
     def line(self) -> str:
         """One line for the terminal."""
-        counts = ", ".join(f"{n} {status}" for status, n in sorted(self.cycles.items()))
+        counts = ", ".join(f"{n} {status}" + (f" ({self.implausible} of them implausible)"
+                                               if status == "ok" and self.implausible else "")
+                           for status, n in sorted(self.cycles.items()))
+        unit = "cycles" if self.table is None or "cycle" in self.table else "rows (one person per record)"
         return (f"{self.records} records: {self.identified} identified now, {self.resumed} taken from the earlier "
-                f"run, {len(self.failed_records)} failed; cycles: {counts or 'none'}")
+                f"run, {len(self.failed_records)} failed; {unit}: {counts or 'none'}")
 
 
 def record_key(name: str) -> int:
@@ -212,15 +230,30 @@ def atomic_write_csv(table: pd.DataFrame, path) -> None:
     os.replace(temporary, path)
 
 
-def identify_record(record: BatchRecord, model, estimator, runner_options: dict) -> pd.DataFrame:
-    """Identify every cycle of one record; a record that fails gives one "failed" row with the reason."""
+def identify_record(record: BatchRecord, model, estimator, runner_options: dict, check=True) -> pd.DataFrame:
+    """Identify every cycle of one record; a record that fails gives one "failed" row with the reason.
+
+    With ``estimator="record"`` the record gives one row: the person
+    (:meth:`~smd_statespace.person.results.PersonResult.table_row`). With
+    ``check`` a record that is not bouncing
+    (:func:`~smd_statespace.applicability.check_bouncing`) fails with the reason.
+    """
+    from .applicability import check_bouncing
     from .io import read_record
     from .runner import CycleRunner
     from .signals import preprocess
 
     try:
-        runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
-        table = runner.run(preprocess(read_record(record.path, record.mass)), record_key=record.key)
+        measured = read_record(record.path, record.mass)
+        if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row
+            from .person import identify_person
+
+            person = identify_person(measured, n_harmonics=model.n_harmonics, check=check)
+            table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
+        else:
+            runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
+            check_bouncing(measured).raise_if_refused(override=not check)
+            table = runner.run(preprocess(measured), record_key=record.key)
     except SMDInputError as exc:
         table = pd.DataFrame([{"status": "failed", "reason": " ".join(str(exc).split())}])
     except (ArithmeticError, np.linalg.LinAlgError) as exc:  # numerical failure outside a filter: contained
@@ -252,7 +285,7 @@ def _check_settings(sidecar: Path, settings: dict, resume: bool, parts: Path):
 
 
 def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_options=None, jobs: int = 1,
-              resume: bool = False, progress: bool = True) -> BatchSummary:
+              resume: bool = False, progress: bool = True, check: bool = True) -> BatchSummary:
     """Identify every record, writing each finished one at once; see the module docstring.
 
     Parameters
@@ -274,6 +307,8 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
         Continue the run in ``out``: keep its finished records.
     progress : bool
         Show a progress bar over records.
+    check : bool
+        Refuse records that are not bouncing (each fails with its reason; the others go on).
 
     Returns
     -------
@@ -301,13 +336,15 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     try:
         if jobs > 1 and len(pending) > 1:
             with ProcessPoolExecutor(max_workers=jobs) as pool:
-                futures = {pool.submit(identify_record, r, model, estimator, runner_options): r for r in pending}
+                futures = {pool.submit(identify_record, r, model, estimator, runner_options, check): r
+                           for r in pending}
                 for future in as_completed(futures):
                     atomic_write_csv(future.result(), parts / futures[future].part)
                     bar.update()
         else:
             for record in pending:
-                atomic_write_csv(identify_record(record, model, estimator, runner_options), parts / record.part)
+                atomic_write_csv(identify_record(record, model, estimator, runner_options, check),
+                                 parts / record.part)
                 bar.update()
     finally:
         bar.close()
@@ -317,6 +354,9 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     atomic_write_csv(table, results)
     cycle = table["cycle"] if "cycle" in table else pd.Series(np.nan, index=table.index)
     failed = table[(table["status"] == "failed") & cycle.isna()]  # a record's one row: it was not identified
+    bad = (table["status"] == "ok").to_numpy() & flagged(table)
+    reasons = reason_counts(table.loc[bad, "implausible_reason"]) if "implausible_reason" in table else {}
     return BatchSummary(records=len(records), identified=len(pending), resumed=len(records) - len(pending),
                         failures=dict(zip(failed["record"], failed["reason"])),
-                        cycles=table["status"].value_counts().to_dict(), results=results, table=table)
+                        cycles=table["status"].value_counts().to_dict(), results=results, table=table,
+                        implausible=int(bad.sum()), implausible_reasons=reasons)

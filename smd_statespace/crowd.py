@@ -18,7 +18,17 @@ and their sum. Each person
 - bounces on a rigid floor: Eq. 2 under the force of Eq. 4 (three harmonics,
   BLF1-3, phases giving a realistic GRF shape,
   :func:`~smd_statespace.simulate.default_phases`), GRF by Eq. 3 without
-  measurement noise.
+  measurement noise;
+- stays in contact with the floor. The SMD model has no flight phase: where
+  its GRF would go below zero the person would have to pull on the floor.
+  A draw whose steady periodic GRF dips below zero
+  (:func:`periodic_grf_minimum`, closed form) or whose simulated GRF does
+  (the cycle-to-cycle variation can push a marginal person under) is
+  rejected and the person redrawn from their own next seeds
+  (:func:`person_seeds` with ``draw = 1, 2, ...``); the people table and the
+  summary count the rejected draws and their reasons. The crowd is therefore
+  drawn from Table 2 *conditional on contact*: fewer lightly damped people
+  with ``f_h`` near a harmonic of ``f_b`` than Table 2's marginals alone give.
 
 Person ``i``'s GRF is exactly ``simulate_bouncing(mass, f_b, f_h, xi_h,
 blf=(BLF1, BLF2, BLF3), noise=0, seed=force_seed)`` (tested to 1e-6 N), but
@@ -27,9 +37,12 @@ computed by the exact, vectorised linear solution of
 per person: 50 people x 30 s at 200 Hz take well under a second.
 
 Reproducibility: everything comes from one :class:`numpy.random.SeedSequence`;
-person ``i`` uses the child with spawn key ``(i,)`` (its own two children for
-the parameters and the force), so person ``i`` is the same whatever the
-number of people, the chunking or the order of computation.
+person ``i``'s draw ``d`` uses the children ``(i, 2 d)`` and ``(i, 2 d + 1)``
+for the parameters and the force (draw 0 is the first; redraws take the next
+pair), so person ``i`` is the same whatever the number of people, the
+chunking or the order of computation. A redraw caused by the cycle-to-cycle
+variation depends on the duration (a longer record has more cycles that can
+dip), so the same seed gives the same crowd for the same duration.
 """
 
 from __future__ import annotations
@@ -46,15 +59,19 @@ from matplotlib.figure import Figure
 from . import article
 from .errors import OptionError
 from .io import G
-from .simulate import TRUNCATION_SD, _draw_cycles, default_phases, sample_population
+from .simulate import (GRF_PHASE_LAG, TRUNCATION_SD, _draw_cycles, _population_columns, _stiffness,
+                       _damping_coefficient, acceleration_frf, default_phases)
 
 __all__ = [
     "CROWD_SETTINGS",
     "N_HARMONICS",
     "Crowd",
+    "DEFAULT_DURATION",
+    "MAX_DRAWS",
     "person_seeds",
     "fit_table",
     "draw_people",
+    "periodic_grf_minimum",
     "simulate_crowd",
     "plot_crowd",
 ]
@@ -76,6 +93,13 @@ offsets (fraction of a cycle; 1 = unsynchronised, 0 = all start together)."""
 TABLE_PARAMETERS = ("f_h", "xi_h", "BLF1", "BLF2", "BLF3")
 """Parameters a fit table must give (the others of Table 2 are not used)."""
 
+DEFAULT_DURATION = 30.0
+"""Default length (s) of :func:`simulate_crowd` and ``smd-statespace crowd``: 40-110 cycles over
+the article's bands, enough to resolve the total force's harmonics to ``1/30`` Hz."""
+
+MAX_DRAWS = 50
+"""Draws of one person before :func:`simulate_crowd` gives up finding one who stays in contact."""
+
 CHUNK = 64
 """People integrated together by :func:`simulate_crowd` (memory ~ CHUNK x samples)."""
 
@@ -94,11 +118,13 @@ def _root(seed) -> np.random.SeedSequence:
     return np.random.SeedSequence(int(seed))
 
 
-def person_seeds(seed, index):
-    """Seeds of person ``index``: ``(parameters, force)`` SeedSequences.
+def person_seeds(seed, index, draw=0):
+    """Seeds of person ``index``'s draw ``draw``: ``(parameters, force)`` SeedSequences.
 
-    Both are children of ``SeedSequence(entropy, spawn_key=(..., index))``,
-    so they depend only on the crowd's seed and the person's index.
+    They are the children ``2 draw`` and ``2 draw + 1`` of
+    ``SeedSequence(entropy, spawn_key=(..., index))`` (draw 0: what
+    ``spawn(2)`` gives), so they depend only on the crowd's seed, the
+    person's index and the draw number.
 
     Parameters
     ----------
@@ -106,11 +132,18 @@ def person_seeds(seed, index):
         The crowd's seed.
     index : int
         Person number, from 0.
+    draw : int
+        0 for the first draw; ``1, 2, ...`` for the redraws of a person who
+        lost contact (the ``draw`` column of :attr:`Crowd.people`).
+
+    Returns
+    -------
+    tuple of numpy.random.SeedSequence
     """
     root = _root(seed)
-    person = np.random.SeedSequence(root.entropy, spawn_key=tuple(root.spawn_key) + (int(index),))
-    parameters, force = person.spawn(2)
-    return parameters, force
+    key = tuple(root.spawn_key) + (int(index),)
+    return tuple(np.random.SeedSequence(root.entropy, spawn_key=key + (2 * int(draw) + j,), pool_size=root.pool_size)
+                 for j in (0, 1))
 
 
 def _parameter_name(text):
@@ -244,11 +277,56 @@ def draw_people(n, f_b, seed=None, table=None, bounds=None) -> pd.DataFrame:
                           "the only ones Table 2 has fits for")
     root = _root(seed)
     fits = fit_table(table, f_b)
-    rows = [sample_population(1, f_b, seed=person_seeds(root, i)[0], table=fits, bounds=bounds)
-            for i in range(n)]
-    people = pd.concat(rows, ignore_index=True)
+    people = pd.DataFrame(_draw_parameters(root, np.arange(n), np.zeros(n, dtype=int), f_b, fits, bounds))
     people.insert(0, "person", np.arange(n))
     return people
+
+
+def _draw_parameters(root, indices, draws, f_b, fits, bounds):
+    """Parameters of people ``indices`` at their draws ``draws``: arrays, as :func:`sample_population`."""
+    rows = [_population_columns(1, f_b, person_seeds(root, i, d)[0], fits, bounds) for i, d in zip(indices, draws)]
+    columns = {key: np.concatenate([row[key] for row in rows]) for key in rows[0]}
+    columns["K_h"] = _stiffness(columns["mass"], columns["f_h"])  # Eq. 17
+    columns["C_h"] = _damping_coefficient(columns["mass"], columns["f_h"], columns["xi_h"])  # Eq. 18
+    return columns
+
+
+def periodic_grf_minimum(f_b, f_h, xi_h, blf, points=2048):
+    """Least value of a person's steady periodic GRF over body weight (closed form, vectorised).
+
+    With the force phases of :func:`~smd_statespace.simulate.default_phases`,
+    harmonic ``k`` of the steady dynamic GRF is ``|H(k f_b)| BLF_k cos(k theta
+    - pi/4)`` body weights (``H`` of
+    :func:`~smd_statespace.simulate.acceleration_frf`), so the GRF is ``1 +
+    sum_k |H(k f_b)| BLF_k cos(k theta - pi/4)`` body weights; its minimum over
+    a cycle is taken on ``points`` phases (error below ``(pi/points)^2 / 2 sum
+    k^2 |H_k| BLF_k``, about 1e-5 body weights). Below zero the person would
+    pull on the floor: the model needs a flight phase there.
+
+    Parameters
+    ----------
+    f_b : float
+        Bouncing frequency (Hz).
+    f_h, xi_h : array_like, shape (P,)
+        SMD natural frequency (Hz) and damping ratio of each person.
+    blf : array_like, shape (P, K)
+        Force harmonics BLF_1..K (g).
+    points : int
+        Phases per cycle on which the minimum is taken.
+
+    Returns
+    -------
+    ndarray, shape (P,)
+        Minimum GRF over body weight (-).
+    """
+    f_h = np.atleast_1d(np.asarray(f_h, dtype=float))
+    xi_h = np.atleast_1d(np.asarray(xi_h, dtype=float))
+    blf = np.atleast_2d(np.asarray(blf, dtype=float))
+    orders = np.arange(1, blf.shape[1] + 1)
+    amplitude = np.abs(acceleration_frf(orders * f_b, f_h[:, None], xi_h[:, None])) * blf
+    theta = np.linspace(0.0, 2.0 * np.pi, int(points), endpoint=False)
+    shape = np.cos(np.outer(orders, theta) - GRF_PHASE_LAG)
+    return 1.0 + (amplitude @ shape).min(axis=1)
 
 
 # ---------------------------------------------------------------------------
@@ -292,13 +370,20 @@ class Crowd:
         ``weight`` (N), ``phase_offset`` (fraction of a cycle by which the
         person's first cycle had started at ``t = 0``), ``grf_peak`` (N),
         ``dlf1..3`` (amplitude of the person's GRF at ``f_b, 2 f_b, 3 f_b``
-        over the body weight), ``seed``, ``spawn_key``.
+        over the body weight), ``grf_min`` (N, the person's least GRF, >= 0),
+        ``draw`` (the draw kept, for :func:`person_seeds`; 0 = the first),
+        ``rejected_steady`` and ``rejected_cycles`` (draws of this person
+        rejected because their steady periodic GRF, or a simulated cycle's GRF
+        with its cycle-to-cycle variation, went below zero), ``seed``,
+        ``spawn_key``.
     forces : pandas.DataFrame
         ``time`` (s), one GRF column per person ``person_000, ...`` (N,
         including the body weight) and ``total`` (N, their sum).
     settings : dict
         ``n, f_b, duration, fs, fb_variation, coef_variation, phase_spread,
-        seed`` (the root entropy), ``table``.
+        seed`` (the root entropy), ``table``, ``redrawn`` (people not kept at
+        their first draw), ``rejected_steady``, ``rejected_cycles`` (rejected
+        draws by reason, summed over people).
     cycles : list of pandas.DataFrame
         Each person's force cycles (layout of ``SyntheticRecord.cycles``).
     seconds : float
@@ -378,7 +463,20 @@ class Crowd:
         parts = [f"{k} f_b: {row.amplitude_N / 1000:.2f} kN ({row.amplitude_per_weight:.3f} W)"
                  for k, row in self.harmonics().iterrows()]
         lines.append("total force harmonics: " + ", ".join(parts))
+        lines.append(self.contact_summary())
         return "\n".join(lines)
+
+    def contact_summary(self) -> str:
+        """One line: how many people were redrawn because they would have lost contact, and why."""
+        s, people = self.settings, self.people
+        lowest = people["grf_min"] / people["weight"]
+        least = f"least GRF {lowest.min():.2f} body weights (person {int(lowest.idxmin())})"
+        if s["redrawn"] == 0:
+            return f"contact: every person stays on the floor at the first draw (GRF >= 0); {least}"
+        return (f"contact: {s['redrawn']} of {s['n']} people redrawn because their GRF went below zero (they "
+                f"would pull on the floor; the SMD model has no flight phase): {s['rejected_steady']} rejected "
+                f"draw(s) with a steady periodic GRF below zero, {s['rejected_cycles']} with a cycle's GRF below "
+                f"zero under the cycle-to-cycle variation; now {least}")
 
     def write(self, csv_path, people_path=None):
         """Write the forces and the people table as CSV.
@@ -405,6 +503,20 @@ class Crowd:
     def plot(self, path=None, n_people=3):
         """Figure: a few people's GRFs, the total crowd force and its spectrum (:func:`plot_crowd`)."""
         return plot_crowd(self, path, n_people)
+
+
+def _simulate_forces(indices, parameters, cycles, time, out):
+    """GRFs (N) of people ``indices`` into rows of ``out``: Eq. 2-3 solved exactly, ``CHUNK`` people at a time."""
+    from .hsi import batch_response, system_matrices
+
+    for start in range(0, len(indices), CHUNK):
+        chunk = indices[start:start + CHUNK]
+        mass = parameters["mass"][chunk]
+        systems = [system_matrices(parameters["mass"][i], parameters["f_h"][i], parameters["xi_h"][i]) for i in chunk]
+        a_matrices = np.stack([a for a, _ in systems])
+        b_vectors = np.stack([b for _, b in systems])
+        _, rates, _ = batch_response(a_matrices, b_vectors, [cycles[i] for i in chunk], time)
+        out[chunk] = mass[:, None] * (G + rates[:, :, 1])  # Eq. 3
 
 
 def _check_settings(duration, fs, fb_variation, coef_variation, phase_spread, f_b):
@@ -435,7 +547,7 @@ def _check_settings(duration, fs, fb_variation, coef_variation, phase_spread, f_
     return duration, fs, fb_variation, coef_variation, phase_spread, f_b
 
 
-def simulate_crowd(n, f_b, duration, fs=None, seed=None, table=None, bounds=None, fb_variation=None,
+def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=None, bounds=None, fb_variation=None,
                    coef_variation=None, phase_spread=None) -> Crowd:
     """Simulate ``n`` people bouncing at ``f_b`` on a rigid floor: their GRFs and the total crowd force.
 
@@ -446,7 +558,8 @@ def simulate_crowd(n, f_b, duration, fs=None, seed=None, table=None, bounds=None
     f_b : float
         Bouncing frequency (Hz), within 1.35-3.75 Hz (the article's bands).
     duration : float
-        Length (s); samples at ``0, 1/fs, ..., duration``.
+        Length (s), default :data:`DEFAULT_DURATION` (30 s); samples at ``0,
+        1/fs, ..., duration``.
     fs : float
         Sampling frequency (Hz), default 200; at least 4 x ``3 f_b``.
     seed : None, int or numpy.random.SeedSequence
@@ -465,9 +578,16 @@ def simulate_crowd(n, f_b, duration, fs=None, seed=None, table=None, bounds=None
     Returns
     -------
     Crowd
-    """
-    from .hsi import batch_response, system_matrices
+        Every person's GRF is >= 0 at every sample: a draw that would pull
+        on the floor is rejected and the person redrawn (module docstring;
+        ``Crowd.settings["redrawn"]`` and the people table count them).
 
+    Raises
+    ------
+    OptionError
+        Bad arguments, or a person still out of contact after
+        :data:`MAX_DRAWS` draws (fits that put almost everyone out of contact).
+    """
     started = _time.perf_counter()
     n = _check_count(n)
     settings = dict(CROWD_SETTINGS)
@@ -477,28 +597,47 @@ def simulate_crowd(n, f_b, duration, fs=None, seed=None, table=None, bounds=None
             settings[key] = value
     duration, fs, fb_variation, coef_variation, phase_spread, f_b = _check_settings(
         duration, settings["fs"], settings["fb_variation"], settings["coef_variation"], settings["phase_spread"], f_b)
+    if article.band_of(f_b) is None:
+        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
+        raise OptionError(f"crowd: f_b = {f_b!r} Hz is outside the article's bands ({edges} Hz), "
+                          "the only ones Table 2 has fits for")
     root = _root(seed)
-    people = draw_people(n, f_b, seed=root, table=table, bounds=bounds)
+    fits = fit_table(table, f_b)
     n_samples = int(np.floor(duration * fs + 1e-9)) + 1
     time = np.arange(n_samples) / fs
 
-    cycles, offsets = [], np.empty(n)
-    for i, person in enumerate(people.itertuples(index=False)):
-        blf = np.array([person.blf1, person.blf2, person.blf3])
-        table_i, offsets[i] = _person_cycles(person_seeds(root, i)[1], f_b, person.f_h, person.xi_h, blf, duration,
-                                             fb_variation, coef_variation, phase_spread)
-        cycles.append(table_i)
-
+    draw = np.zeros(n, dtype=int)
+    rejected = {"steady": np.zeros(n, dtype=int), "cycles": np.zeros(n, dtype=int)}
+    parameters, cycles, offsets = {}, [None] * n, np.empty(n)
     forces = np.empty((n, n_samples))
-    mass = people["mass"].to_numpy()
-    for start in range(0, n, CHUNK):
-        chunk = range(start, min(start + CHUNK, n))
-        systems = [system_matrices(mass[i], people["f_h"].iat[i], people["xi_h"].iat[i]) for i in chunk]
-        a_matrices = np.stack([a for a, _ in systems])
-        b_vectors = np.stack([b for _, b in systems])
-        _, rates, _ = batch_response(a_matrices, b_vectors, [cycles[i] for i in chunk], time)
-        forces[chunk.start:chunk.stop] = mass[chunk.start:chunk.stop, None] * (G + rates[:, :, 1])  # Eq. 3
+    pending = np.arange(n)
+    while pending.size:
+        worst = int(draw[pending].max())
+        if worst >= MAX_DRAWS:
+            i = int(pending[np.argmax(draw[pending])])
+            raise OptionError(f"crowd: person {i} lost contact with the floor (GRF < 0) in all {MAX_DRAWS} draws "
+                              f"at f_b = {f_b:g} Hz; the fits put almost everyone out of contact there")
+        drawn = _draw_parameters(root, pending, draw[pending], f_b, fits, bounds)
+        for key, values in drawn.items():
+            parameters.setdefault(key, np.empty(n))[pending] = values
+        blf = np.column_stack([drawn[f"blf{k}"] for k in range(1, N_HARMONICS + 1)])
+        steady = periodic_grf_minimum(f_b, drawn["f_h"], drawn["xi_h"], blf) < 0.0
+        rejected["steady"][pending[steady]] += 1
+        kept = pending[~steady]
+        for i in kept:
+            person_blf = np.array([parameters[f"blf{k}"][i] for k in range(1, N_HARMONICS + 1)])
+            cycles[i], offsets[i] = _person_cycles(person_seeds(root, i, draw[i])[1], f_b, parameters["f_h"][i],
+                                                   parameters["xi_h"][i], person_blf, duration, fb_variation,
+                                                   coef_variation, phase_spread)
+        _simulate_forces(kept, parameters, cycles, time, forces)
+        dipped = kept[forces[kept].min(axis=1) < 0.0]
+        rejected["cycles"][dipped] += 1
+        pending = np.sort(np.concatenate([pending[steady], dipped]))
+        draw[pending] += 1
 
+    people = pd.DataFrame(parameters)
+    people.insert(0, "person", np.arange(n))
+    mass = people["mass"].to_numpy()
     width = max(3, len(str(n - 1)))
     names = [f"person_{i:0{width}d}" for i in range(n)]
     frame = pd.DataFrame(forces.T, columns=names)
@@ -511,15 +650,21 @@ def simulate_crowd(n, f_b, duration, fs=None, seed=None, table=None, bounds=None
     people["weight"] = weight
     people["phase_offset"] = offsets
     people["grf_peak"] = forces.max(axis=1)
+    people["grf_min"] = forces.min(axis=1)
     for k in range(1, N_HARMONICS + 1):
         near = np.abs(frequency - k * f_b) <= 0.1 * f_b
         people[f"dlf{k}"] = spectrum[:, near].max(axis=1) / weight
+    people["draw"] = draw
+    people["rejected_steady"] = rejected["steady"]
+    people["rejected_cycles"] = rejected["cycles"]
     people["seed"] = str(root.entropy)
     people["spawn_key"] = [" ".join(map(str, tuple(root.spawn_key) + (i,))) for i in range(n)]
     table_label = "Table 2" if table is None else ("a user table" if not isinstance(table, (str, Path))
                                                    else f"table {table}")
     settings.update(n=n, f_b=f_b, duration=duration, fs=fs, fb_variation=fb_variation,
-                    coef_variation=coef_variation, phase_spread=phase_spread, seed=root.entropy, table=table_label)
+                    coef_variation=coef_variation, phase_spread=phase_spread, seed=root.entropy, table=table_label,
+                    redrawn=int(np.count_nonzero(draw)), rejected_steady=int(rejected["steady"].sum()),
+                    rejected_cycles=int(rejected["cycles"].sum()))
     return Crowd(people=people, forces=frame, settings=settings, cycles=cycles,
                  seconds=_time.perf_counter() - started)
 

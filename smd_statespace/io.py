@@ -253,3 +253,23 @@ def read_record(path, mass) -> Record:
 def write_record(path, record: Record) -> None:
     """Write ``record`` as CSV (columns ``time, force[, floor_acc]``)."""
     record.to_frame().to_csv(path, index=False, float_format="%.6f")
+
+
+def truth_values(truth) -> dict:
+    """The reported quantities of a truth (``SyntheticRecord.truth`` or a truth file): flat keys.
+
+    ``f_h``, ``xi_h`` as given, ``blf`` (a list) as ``blf_1, blf_2, ...``,
+    ``K_h``, ``C_h`` as ``k_h``, ``c_h``; keys already flat (``blf_1``) are kept.
+    """
+    if not truth:
+        return {}
+    values = {name: float(truth[name]) for name in ("f_h", "xi_h") if name in truth}
+    for i, value in enumerate(truth.get("blf", []), start=1):
+        values[f"blf_{i}"] = float(value)
+    for source, name in (("K_h", "k_h"), ("C_h", "c_h")):
+        if source in truth:
+            values[name] = float(truth[source])
+    for name, value in truth.items():
+        if name.startswith("blf_") or name in ("k_h", "c_h"):
+            values.setdefault(name, float(value))
+    return values

@@ -11,6 +11,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from .io import truth_values
+from .plausibility import flagged
+
 PARAMETER_LABELS = {
     "f_h": r"$f_h$ (Hz)",
     "xi_h": r"$\xi_h$ (-)",
@@ -72,20 +75,23 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
 
     Cycles that did not determine a parameter (posterior not much narrower
     than the prior, the ``*_determined`` columns) are drawn hollow and grey,
-    so a confident-looking number is never shown for them.
+    so a confident-looking number is never shown for them; cycles flagged
+    ``implausible`` (estimates that cannot be true, :mod:`.plausibility`) are red crosses.
 
     Parameters
     ----------
     table : DataFrame
         ``CycleRunner.run`` output (one row per cycle).
     truth : dict, optional
-        Known values (e.g. of a synthetic record) drawn as dashed lines.
+        Known values (e.g. of a synthetic record) drawn as dashed lines: flat
+        keys or a simulation's truth, as :func:`~smd_statespace.io.truth_values` reads it.
     against : {"time", "f_b"}
         Horizontal axis: the cycle's middle time (s; one record) or its
         bouncing frequency (Hz; many records, as the article's Fig. 6-8).
     """
     if against not in ("time", "f_b"):
         raise ValueError(f"against must be 'time' or 'f_b', got {against!r}")
+    truth = truth_values(truth)
     ok = table[table["status"] == "ok"]
     names = [n for n in names if n in ok]
     fig = Figure(figsize=(9.0, 1.9 * len(names) + 0.6))
@@ -94,10 +100,13 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
     for ax, name in zip(axes, names):
         sd = ok.get(f"{name}_sd", pd.Series(np.zeros(len(ok)), index=ok.index))
         flag = ok.get(f"{name}_determined", pd.Series(np.ones(len(ok), dtype=bool), index=ok.index)).astype(bool)
-        for mask, style in ((flag, dict(color="tab:blue", mfc="tab:blue", label="determined")),
-                            (~flag, dict(color="0.6", mfc="white", label="not determined"))):
+        bad = pd.Series(flagged(ok), index=ok.index)
+        for mask, style in ((flag & ~bad, dict(color="tab:blue", mfc="tab:blue", label="determined")),
+                            (~flag & ~bad, dict(color="0.6", mfc="white", label="not determined")),
+                            (bad, dict(color="tab:red", mfc="tab:red", fmt="x", label="implausible"))):
             if mask.any():
-                ax.errorbar(middle[mask], ok[name][mask], yerr=sd[mask], fmt="o", ms=4, capsize=2, lw=0.8, **style)
+                ax.errorbar(middle[mask], ok[name][mask], yerr=sd[mask], ms=4, capsize=2, lw=0.8,
+                            **{"fmt": "o", **style})
         if truth and name in truth:
             ax.axhline(truth[name], color="tab:red", ls="--", lw=1, label="truth")
         ax.set_ylabel(PARAMETER_LABELS.get(name, name))
@@ -111,16 +120,21 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
     return _save(fig, path)
 
 
-def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("f_h", "xi_h", "blf_1", "blf_2")) -> Figure:
-    """Per-cycle estimates of several estimators side by side (one marker style per estimator).
+def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("f_h", "xi_h", "blf_1", "blf_2"),
+                    title: str = "Estimators compared on the same cycles") -> Figure:
+    """Per-cycle estimates of several runs side by side (one marker style per run).
 
     Parameters
     ----------
     tables : dict of str to DataFrame
-        ``CycleRunner.run`` outputs keyed by estimator name, on the same cycles.
+        ``CycleRunner.run`` outputs keyed by a label (estimators, or models), on the same cycles.
     truth : dict, optional
-        Known values drawn as dashed lines.
+        Known values drawn as dashed lines: flat keys (``blf_1``) or a
+        simulation's truth (``blf`` as a list), as :func:`~smd_statespace.io.truth_values` reads it.
+    title : str
+        The figure's title (say "Models compared ..." when the tables come from two models).
     """
+    truth = truth_values(truth)
     fig = Figure(figsize=(9.0, 1.9 * len(names) + 0.6))
     axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
     markers = "osD^v<>"
@@ -143,7 +157,7 @@ def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("
     axes[0].legend(handles, labels, fontsize=7, ncol=len(labels), loc="lower right", bbox_to_anchor=(1.0, 1.0),
                    frameon=False)
     axes[-1].set_xlabel("time (s)")
-    fig.suptitle("Estimators compared on the same cycles (bars ±1 sd)", fontsize=11, x=0.02, ha="left")
+    fig.suptitle(f"{title} (bars ±1 sd)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
     return _save(fig, path)
 

@@ -20,6 +20,13 @@ Each cycle's random numbers come from ``SeedSequence(seed, spawn_key=(record_key
 so results do not depend on the order in which cycles run, or on how many
 run in parallel (any ``concurrent.futures.Executor``). A numerical failure in
 one cycle marks that row ``status="failed"`` with the reason; the run goes on.
+
+Estimates that cannot be true (``xi_h < 0``, ``f_h`` on or beyond the edge of
+the model's prior, a force beyond physical sense: see
+:mod:`smd_statespace.plausibility`) stay ``status="ok"`` but get
+``implausible=True`` with the reason in ``implausible_reason``, and every
+``*_determined`` flag of that cycle is False: a number that describes no
+person is never presented as determined.
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ from .errors import OptionError
 from .estimators import ESTIMATORS, EstimatorFailure, FilterResult, cycle_data, get_estimator
 from .io import Record
 from .model import SMDModel, blf
+from .plausibility import implausible_reasons
 from .signals import Preprocessed, preprocess
 
 DEFAULT_ESTIMATOR = "ekf"
@@ -248,7 +256,7 @@ class CycleRunner:
         rows = [outcome.row for outcome in outcomes] + skipped
         self.history_ = {outcome.row["cycle"]: outcome.history for outcome in outcomes}
         self.results_ = {o.row["cycle"]: o.result for o in outcomes if o.result is not None} if self.keep_results else {}
-        table = pd.DataFrame(rows).sort_values("cycle").reset_index(drop=True)
+        table = mark_implausible(pd.DataFrame(rows).sort_values("cycle").reset_index(drop=True), self.model)
         self.table_ = order_columns(table, self.model)
         return self.table_
 
@@ -309,12 +317,32 @@ class CycleRunner:
         return outcomes
 
 
+def mark_implausible(table: pd.DataFrame, model: SMDModel) -> pd.DataFrame:
+    """Add ``implausible`` and ``implausible_reason`` to a runner table; such cycles determine nothing.
+
+    Only ``ok`` rows are checked (failed and skipped rows have no estimates: False, ``""``). The
+    limits are those of :func:`smd_statespace.plausibility.implausible_reasons` with the model's
+    prior; the check of the floor force uses the base SMD and is left out for models with effects.
+    The filter's own claim stays readable in the ``*_width_ratio`` columns.
+    """
+    ok = (table["status"] == "ok").to_numpy() if "status" in table else np.zeros(len(table), dtype=bool)
+    reasons = pd.Series("", index=table.index, dtype=object)
+    if ok.any():
+        reasons[ok] = implausible_reasons(table[ok], model=model, grf=not model.effects)
+    table["implausible"] = (reasons != "").to_numpy()
+    table["implausible_reason"] = reasons
+    for column in [c for c in table.columns if c.endswith("_determined")]:
+        table[column] = table[column].where(~table["implausible"], False)
+    return table
+
+
 def order_columns(table: pd.DataFrame, model: SMDModel) -> pd.DataFrame:
     """Put the documented columns first, in a stable order."""
     n = model.n_harmonics
     first = ["cycle", "t_start", "t_end", "f_b", "f_h", "f_h_sd", "xi_h", "xi_h_sd"]
     first += [f"blf_{i}" for i in range(1, n + 1)] + [f"blf_{i}_sd" for i in range(1, n + 1)]
     first += ["a0", "k_h", "c_h", "passes", "converged", "log_likelihood", "estimator", "status", "reason",
-              "f_h_determined", "xi_h_determined"] + [f"blf_{i}_determined" for i in range(1, n + 1)]
+              "implausible", "implausible_reason", "f_h_determined", "xi_h_determined"]
+    first += [f"blf_{i}_determined" for i in range(1, n + 1)]
     first = [c for c in first if c in table.columns]
     return table[first + [c for c in table.columns if c not in first]]

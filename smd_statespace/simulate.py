@@ -51,6 +51,7 @@ cycles, and the knots of the run-in before the record come last).
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from dataclasses import dataclass
@@ -1429,19 +1430,76 @@ def simulate_bouncing(
 # population (Table 2)
 
 
-def _draw_bounded(distribution, n, low, high, rng, name):
-    """Draw ``n`` values of a frozen distribution, redrawing those outside [low, high]."""
+@functools.lru_cache(maxsize=256)
+def _bounded_distribution(kind, parameters, low, high, name):
+    """Frozen ``skewnorm(a, loc=m, scale=s)`` (``kind="skewnorm"``, ``parameters=(m, s, a)``) or
+    ``norm(loc, scale)``, checked to put enough mass in [low, high]; cached, as freezing costs about 1 ms."""
+    from scipy.stats import norm, skewnorm
+
+    if kind == "skewnorm":
+        m, s, a = parameters
+        distribution = skewnorm(a, loc=m, scale=s)
+    else:
+        distribution = norm(*parameters)
     accept = float(distribution.cdf(high) - distribution.cdf(low))
     if accept < 1e-3:
         raise OptionError(
             f"sample_population: the {name} distribution puts only {accept:.2g} of its mass in {low:g}-{high:g}"
         )
+    return distribution
+
+
+def _draw_bounded(distribution, n, low, high, rng):
+    """Draw ``n`` values of a frozen distribution, redrawing those outside [low, high]."""
     values = distribution.rvs(size=n, random_state=rng)
     while True:
         bad = (values < low) | (values > high)
         if not bad.any():
             return values
         values[bad] = distribution.rvs(size=int(bad.sum()), random_state=rng)
+
+
+def _population_columns(n, f_b, seed, table=None, bounds=None):
+    """The draws of :func:`sample_population` as arrays: ``f_b, f_h, xi_h, blf1..3, mass``."""
+    where = "sample_population"
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise OptionError(f"{where}: n must be a positive integer, got {n!r}")
+    f_b = _number(f_b, "f_b (Hz)", positive=True, where=where)
+    band = article.band_of(f_b)
+    if band is None:
+        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
+        raise OptionError(f"{where}: f_b = {f_b:g} Hz is outside the article's bands ({edges} Hz)")
+    table = article.TABLE2 if table is None else table
+    limits = dict(POPULATION_BOUNDS)
+    if bounds is not None:
+        for key in bounds:
+            if key not in POPULATION_BOUNDS:
+                raise OptionError(f"{where}: unknown bounds key {key!r}; valid keys: {', '.join(POPULATION_BOUNDS)}")
+        limits.update(bounds)
+    rng, _ = _resolve_seed(seed)
+
+    columns = {"f_b": np.full(n, f_b)}
+    for parameter, column, limit in (
+        ("f_h", "f_h", "f_h"),
+        ("xi_h", "xi_h", "xi_h"),
+        ("BLF1", "blf1", "blf"),
+        ("BLF2", "blf2", "blf"),
+        ("BLF3", "blf3", "blf"),
+    ):
+        try:
+            m, s, a = (float(v) for v in table[parameter][band])
+        except (KeyError, IndexError, TypeError, ValueError):
+            raise OptionError(
+                f"{where}: table has no (m, s, a) fit for {parameter!r} in band {band}; "
+                "expected the layout of article.TABLE2"
+            ) from None
+        low, high = (float(v) for v in limits[limit])
+        distribution = _bounded_distribution("skewnorm", (m, s, a), low, high, parameter)
+        columns[column] = _draw_bounded(distribution, n, low, high, rng)
+    low, high = (float(v) for v in limits["mass"])
+    distribution = _bounded_distribution("norm", tuple(float(v) for v in MASS_DISTRIBUTION), low, high, "mass")
+    columns["mass"] = _draw_bounded(distribution, n, low, high, rng)
+    return columns
 
 
 def sample_population(n, f_b, seed=None, table=None, bounds=None):
@@ -1481,46 +1539,7 @@ def sample_population(n, f_b, seed=None, table=None, bounds=None):
     OptionError
         ``f_b`` outside every band, bad ``n``, ``table`` or ``bounds``.
     """
-    from scipy.stats import norm, skewnorm
-
-    where = "sample_population"
-    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise OptionError(f"{where}: n must be a positive integer, got {n!r}")
-    f_b = _number(f_b, "f_b (Hz)", positive=True, where=where)
-    band = article.band_of(f_b)
-    if band is None:
-        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
-        raise OptionError(f"{where}: f_b = {f_b:g} Hz is outside the article's bands ({edges} Hz)")
-    table = article.TABLE2 if table is None else table
-    limits = dict(POPULATION_BOUNDS)
-    if bounds is not None:
-        for key in bounds:
-            if key not in POPULATION_BOUNDS:
-                raise OptionError(f"{where}: unknown bounds key {key!r}; valid keys: {', '.join(POPULATION_BOUNDS)}")
-        limits.update(bounds)
-    rng, _ = _resolve_seed(seed)
-
-    columns = {"f_b": np.full(n, f_b)}
-    for parameter, column, limit in (
-        ("f_h", "f_h", "f_h"),
-        ("xi_h", "xi_h", "xi_h"),
-        ("BLF1", "blf1", "blf"),
-        ("BLF2", "blf2", "blf"),
-        ("BLF3", "blf3", "blf"),
-    ):
-        try:
-            m, s, a = (float(v) for v in table[parameter][band])
-        except (KeyError, IndexError, TypeError, ValueError):
-            raise OptionError(
-                f"{where}: table has no (m, s, a) fit for {parameter!r} in band {band}; "
-                "expected the layout of article.TABLE2"
-            ) from None
-        low, high = limits[limit]
-        columns[column] = _draw_bounded(skewnorm(a, loc=m, scale=s), n, low, high, rng, parameter)
-    mean, sd = MASS_DISTRIBUTION
-    low, high = limits["mass"]
-    columns["mass"] = _draw_bounded(norm(loc=mean, scale=sd), n, low, high, rng, "mass")
-    frame = pd.DataFrame(columns)
+    frame = pd.DataFrame(_population_columns(n, f_b, seed, table, bounds))
     frame["K_h"] = _stiffness(frame["mass"], frame["f_h"])  # Eq. 17
     frame["C_h"] = _damping_coefficient(frame["mass"], frame["f_h"], frame["xi_h"])  # Eq. 18
     return frame

@@ -1,7 +1,9 @@
 """Population statistics of identified cycles: bands, skew-normal fits, trends (Section 5).
 
-Input is one or many ``results.csv`` files written by ``smd-statespace
-identify`` (one row per cycle), or DataFrames of the same layout. The cycles
+Input is one or many tables of identified cycles, one row per cycle: the
+``results.csv`` files written by ``smd-statespace identify``, or any table
+(CSV or DataFrame) with a column ``f_b`` and the parameter columns asked for,
+for example from the article's own data or another tool. The cycles
 are assigned to bouncing-frequency bands (the article's six bands of
 :data:`smd_statespace.article.BANDS`, or the user's own edges); per band, each
 parameter gets its count, mean and standard deviation and a skew-normal fit
@@ -25,14 +27,26 @@ symbol (article)   name here   column      unit
 Which cycles count
 ------------------
 Rows whose ``status`` is not ``"ok"`` (``failed``, ``skipped``) are left out
-and counted; so are ``ok`` cycles whose ``f_b`` lies outside every band. A
+and counted; a table without a ``status`` column has every row taken as an
+identified cycle. Cycles whose estimates cannot be true are left out and
+counted unless ``include_implausible=True``: those flagged in an
+``implausible`` column (written by ``identify``), or, in a table without that
+column, those failing the physical limits of :mod:`smd_statespace.plausibility`
+(``xi_h < 0``, ``C_h < 0``, a BLF or floor-force harmonic beyond 2 g); so are
+cycles of a record whose model was found inadequate (a column
+:data:`ADEQUATE_COLUMN` that is False). ``ok`` cycles whose ``f_b`` lies
+outside every band are counted and left out. A
 cycle that did not determine a parameter (its ``*_determined`` flag is False:
 the posterior sd was not under a quarter of the prior sd, see
 :data:`smd_statespace.runner.DETERMINED_RATIO`) is left out of that
 parameter's statistics unless ``include_undetermined=True``, and the report
-says how many. ``K_h`` and ``C_h`` are computed from ``f_h``, ``xi_h`` and the
-body mass (Eq. 17-18), so a cycle determines ``K_h`` when it determines
-``f_h``, and ``C_h`` when it determines both ``f_h`` and ``xi_h``.
+says how many; a table without the ``*_determined`` columns has its cycles
+treated as determined, and the report says so once. ``K_h`` and ``C_h`` are
+computed from ``f_h``, ``xi_h`` and the body mass (Eq. 17-18), so a cycle
+determines ``K_h`` when it determines ``f_h``, and ``C_h`` when it determines
+both ``f_h`` and ``xi_h``. A table without ``k_h``/``c_h`` columns gets them
+by Eq. 17-18 from a ``mass`` column or the ``mass`` argument; with neither,
+``K_h`` and ``C_h`` are left out with a note (an error when asked for).
 
 Skew-normal fit (Eq. 19)
 ------------------------
@@ -76,6 +90,7 @@ from scipy.special import log_ndtr
 
 from . import article
 from .errors import OptionError, RecordError
+from .plausibility import implausible_reasons, reason_counts
 
 __all__ = [
     "ParameterSpec",
@@ -84,7 +99,9 @@ __all__ = [
     "MIN_CYCLES",
     "N_BOOTSTRAP",
     "A_MAX",
+    "ADEQUATE_COLUMN",
     "Bands",
+    "parse_parameters",
     "read_results",
     "SkewNormalResult",
     "fit_skewnorm",
@@ -132,6 +149,10 @@ N_BOOTSTRAP = 200
 
 A_MAX = 50.0
 """Cap on the skew-normal shape ``|a|`` (the likelihood can rise without bound towards the half-normal)."""
+
+ADEQUATE_COLUMN = "model_adequate"
+"""Optional True/False column: False marks the cycles of a record whose model was found inadequate
+(for example by ``smd-statespace diagnose``); they are left out like implausible cycles. Blank: adequate."""
 
 _STATUS_OK = "ok"
 _LOG_NORM = np.log(2.0) - 0.5 * np.log(2.0 * np.pi)  # log(2 / sqrt(2 pi)) of Eq. 19
@@ -285,18 +306,18 @@ _TRUE = {"true", "1", "1.0", "yes"}
 _FALSE = {"false", "0", "0.0", "no"}
 
 
-def _flags(values: pd.Series, source: str, column: str) -> np.ndarray:
-    """A True/False column (bools, 'True'/'False', 1/0; missing -> False) or a RecordError naming the bad value."""
+def _flags(values: pd.Series, source: str, column: str, missing: bool = False) -> np.ndarray:
+    """A True/False column (bools, 'True'/'False', 1/0; blank -> ``missing``) or a RecordError naming the bad value."""
     if values.dtype == bool:
         return values.to_numpy()
     text = values.astype(str).str.strip().str.lower()
-    missing = values.isna().to_numpy()
+    blank = (values.isna() | (text == "")).to_numpy()
     true = text.isin(_TRUE).to_numpy()
-    bad = ~(true | text.isin(_FALSE).to_numpy() | missing)
+    bad = ~(true | text.isin(_FALSE).to_numpy() | blank)
     if bad.any():
         row = int(np.argmax(bad))
         raise RecordError(f"{source}: column {column!r}, data row {row + 1}: {values.iloc[row]!r} is not True or False")
-    return true
+    return np.where(blank, missing, true)
 
 
 def _numeric(values: pd.Series, source: str, column: str) -> np.ndarray:
@@ -318,7 +339,8 @@ def _one_source(item, index: int) -> tuple[pd.DataFrame, str]:
     try:
         frame = pd.read_csv(source)
     except pd.errors.EmptyDataError:
-        raise RecordError(f"{source}: empty file (expected the results.csv of 'smd-statespace identify')") from None
+        raise RecordError(f"{source}: empty file (expected a table of cycles with columns f_b and the "
+                          "parameters, e.g. the results.csv of 'smd-statespace identify')") from None
     except (OSError, UnicodeDecodeError) as exc:
         reason = getattr(exc, "strerror", None) or exc
         raise RecordError(f"{source}: cannot read ({reason})") from None
@@ -327,60 +349,212 @@ def _one_source(item, index: int) -> tuple[pd.DataFrame, str]:
     return frame, source
 
 
-def read_results(sources, *, parameters=tuple(PARAMETERS), require_flags: bool = True) -> pd.DataFrame:
-    """Read and check one or many ``results.csv`` tables of ``smd-statespace identify``.
+def parse_parameters(parameters, *, option: str = "parameters") -> tuple[str, ...]:
+    """Names of :data:`PARAMETERS` from names or columns, any case: ``"f_h,BLF1"``, ``["k_h", "blf_2"]``.
+
+    Raises
+    ------
+    OptionError
+        An unknown name (the message names ``option`` and lists the valid names), or none.
+    """
+    items = parameters.split(",") if isinstance(parameters, str) else list(parameters)
+    lookup = {}
+    for name, spec in PARAMETERS.items():
+        lookup[name.lower()] = name
+        lookup[spec.column.lower()] = name
+    names = []
+    for item in items:
+        key = str(item).strip().lower()
+        if key not in lookup:
+            raise OptionError(f"{option}: unknown parameter {str(item).strip()!r}; valid: {', '.join(PARAMETERS)} "
+                              "(or their columns f_h, xi_h, k_h, c_h, blf_1, blf_2, blf_3)")
+        if lookup[key] not in names:
+            names.append(lookup[key])
+    if not names:
+        raise OptionError(f"{option}: give at least one of {', '.join(PARAMETERS)}")
+    return tuple(names)
+
+
+_DERIVED = {"K_h": ("f_h",), "C_h": ("f_h", "xi_h")}  # Eq. 17, Eq. 18: computed from these and the mass
+
+
+def _lacks(frame: pd.DataFrame, name: str, mass) -> str:
+    """Why ``frame`` cannot give parameter ``name`` (empty when it can)."""
+    spec = PARAMETERS[name]
+    if spec.column in frame:
+        return ""
+    if name not in _DERIVED:
+        return f"no column {spec.column!r} for {name}"
+    missing = [column for column in _DERIVED[name] if column not in frame]
+    if missing:
+        return f"no column {spec.column!r} for {name}, nor {', '.join(missing)} to compute it"
+    if "mass" not in frame and mass is None:
+        equation = "Eq. 17" if name == "K_h" else "Eq. 18"
+        return (f"no column {spec.column!r} for {name} and no body mass to compute it by {equation} "
+                "(add a 'mass' column in kg or give --mass KG)")
+    return ""
+
+
+def _columns(frame: pd.DataFrame) -> str:
+    names = [str(c) for c in frame.columns]
+    return ", ".join(names[:15]) + (f", ... ({len(names)} columns)" if len(names) > 15 else "")
+
+
+def read_results(sources, *, parameters=None, mass=None) -> pd.DataFrame:
+    """Read and check one or many tables of identified cycles (``results.csv`` of ``identify`` or any other).
+
+    A table needs a column ``f_b`` (Hz) and the columns of the parameters: ``f_h``, ``xi_h``,
+    ``k_h``, ``c_h``, ``blf_1..3`` (see :data:`PARAMETERS`). Everything else is optional:
+
+    - no ``status`` column: every row is taken as an identified (``ok``) cycle;
+    - no ``*_determined`` column: the cycles are treated as determined;
+    - no ``k_h``/``c_h``: computed by Eq. 17-18 from ``f_h``, ``xi_h`` and a ``mass`` column or
+      ``mass``; with neither, ``K_h``/``C_h`` are left out (an error when asked for);
+    - no ``implausible`` column: the cycles are checked here against the physical limits of
+      :func:`smd_statespace.plausibility.implausible_reasons` (no prior is known);
+    - no :data:`ADEQUATE_COLUMN`: the cycles are taken as from an adequate model.
+
+    Each of these is said once in ``attrs["notes"]`` of the result.
 
     Parameters
     ----------
     sources : path, DataFrame or sequence of them
-        ``results.csv`` files or tables of the same layout (a DataFrame's ``attrs["source"]``
-        names it in messages, default ``<DataFrame i>``).
-    parameters : sequence of str
-        Names of :data:`PARAMETERS` whose columns are required.
-    require_flags : bool
-        Also require the ``*_determined`` columns of those parameters.
+        CSV files or tables (a DataFrame's ``attrs["source"]`` names it in messages, default
+        ``<DataFrame i>``).
+    parameters : sequence of str or str, optional
+        Parameters asked for (names of :data:`PARAMETERS` or their columns, see
+        :func:`parse_parameters`): every source must give them. Default: every parameter that
+        all sources give; the others are left out with a note.
+    mass : float, optional
+        Body mass (kg) of the tables without a ``mass`` column, for ``K_h`` and ``C_h``.
 
     Returns
     -------
     pandas.DataFrame
         All rows of all sources, with a ``source`` column; ``f_b`` (Hz) and the parameter
-        columns as floats, ``status`` as lower-case text, the flags as bools.
+        columns as floats, ``status`` as lower-case text, the flags (``*_determined``,
+        ``implausible``, :data:`ADEQUATE_COLUMN`) as bools, ``implausible_reason`` as text.
+        ``attrs["parameters"]`` holds the parameters read, ``attrs["notes"]`` what was assumed
+        or left out.
 
     Raises
     ------
     RecordError
-        A file that cannot be read or is empty, a missing column (named with its file), a
-        value that is not a number or not True/False (named with its row).
+        A file that cannot be read or is empty, no ``f_b`` column, a parameter asked for that a
+        source cannot give (named with its file and column), no parameter at all, a value that
+        is not a number or not True/False, a body mass that is not positive (named with its row).
+    OptionError
+        An unknown parameter, a bad ``mass``.
     """
+    from .io import check_mass
+    from .model import c_h, k_h
+
     if isinstance(sources, (str, os.PathLike, pd.DataFrame)):
         sources = [sources]
     sources = list(sources)
     if not sources:
-        raise OptionError("results: give at least one results.csv")
-    unknown = [name for name in parameters if name not in PARAMETERS]
-    if unknown:
-        raise OptionError(f"parameters: unknown {', '.join(map(repr, unknown))}; valid: {', '.join(PARAMETERS)}")
-    specs = [PARAMETERS[name] for name in parameters]
-    numeric = ["f_b"] + [spec.column for spec in specs]
-    flags = sorted({flag for spec in specs for flag in spec.determined_by}) if require_flags else []
-    frames = []
+        raise OptionError("results: give at least one table of identified cycles (results.csv)")
+    explicit = parameters is not None
+    asked = parse_parameters(PARAMETERS if parameters is None else parameters,
+                             option="--parameters" if explicit else "parameters")
+    if mass is not None:
+        mass = check_mass(mass, "--mass")
+    loaded = []
     for index, item in enumerate(sources):
         frame, source = _one_source(item, index)
+        frame.columns = [str(c).strip() for c in frame.columns]
         if frame.empty:
             raise RecordError(f"{source}: no rows (a header only; expected one row per cycle)")
-        missing = [column for column in ["status"] + numeric + flags if column not in frame.columns]
-        if missing:
-            hint = " (or use --include-undetermined)" if set(missing) <= set(flags) else ""
-            raise RecordError(f"{source}: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)}; "
-                              f"expected the results.csv of 'smd-statespace identify'{hint}")
-        for column in numeric:
-            frame[column] = _numeric(frame[column], source, column)
+        if "f_b" not in frame:
+            raise RecordError(f"{source}: no column 'f_b' (the bouncing frequency of each cycle, Hz); "
+                              f"the columns are {_columns(frame)}")
+        loaded.append((frame, source))
+
+    notes, chosen = [], []
+    for name in asked:
+        lacking = [(source, why) for frame, source in loaded if (why := _lacks(frame, name, mass))]
+        if not lacking:
+            chosen.append(name)
+        elif explicit:
+            source, why = lacking[0]
+            frame = next(f for f, s in loaded if s == source)
+            raise RecordError(f"{source}: {why}, asked for by --parameters; the columns are {_columns(frame)}")
+        else:
+            notes.append(f"{name} left out: {lacking[0][1]} in {', '.join(s for s, _ in lacking)}")
+    if not chosen:
+        frame, source = loaded[0]
+        raise RecordError(f"{source}: none of the parameter columns f_h, xi_h, k_h, c_h, blf_1, blf_2, blf_3; "
+                          f"the columns are {_columns(frame)}")
+    specs = [PARAMETERS[name] for name in chosen]
+    flags = sorted({flag for spec in specs for flag in spec.determined_by})
+    unflagged, unstatused, unchecked, derived = {}, [], [], {}
+    frames = []
+    for frame, source in loaded:
+        frame["f_b"] = _numeric(frame["f_b"], source, "f_b")
+        for name in chosen:
+            column = PARAMETERS[name].column
+            if column in frame:
+                frame[column] = _numeric(frame[column], source, column)
+                continue
+            # K_h or C_h by Eq. 17-18 from f_h, xi_h and the body mass
+            if "mass" in frame:
+                masses = _numeric(frame["mass"], source, "mass")
+                bad = ~(masses > 0) & np.isfinite(masses)
+                if bad.any():
+                    row = int(np.argmax(bad))
+                    raise RecordError(f"{source}: column 'mass', data row {row + 1}: {frame['mass'].iloc[row]!r} "
+                                      "is not a body mass (a positive number of kg)")
+                where = "its 'mass' column"
+            else:
+                masses, where = np.full(len(frame), mass), f"--mass {mass:g} kg"
+            f_h = _numeric(frame["f_h"], source, "f_h")
+            if name == "K_h":
+                frame[column] = k_h(f_h, masses)
+            else:
+                frame[column] = c_h(_numeric(frame["xi_h"], source, "xi_h"), f_h, masses)
+            derived.setdefault((source, where), []).append(name)
         for column in flags:
-            frame[column] = _flags(frame[column], source, column)
-        frame["status"] = frame["status"].astype(str).str.strip().str.lower()
+            if column in frame:
+                frame[column] = _flags(frame[column], source, column)
+            else:
+                frame[column] = True
+                unflagged.setdefault(source, []).append(column)
+        if "status" in frame:
+            frame["status"] = frame["status"].astype(str).str.strip().str.lower()
+        else:
+            frame["status"] = _STATUS_OK
+            unstatused.append(source)
+        if "implausible" in frame:
+            frame["implausible"] = _flags(frame["implausible"], source, "implausible")
+            reason = frame["implausible_reason"] if "implausible_reason" in frame else pd.Series("", index=frame.index)
+            reason = reason.astype(object).where(reason.notna(), "").astype(str)
+            frame["implausible_reason"] = reason.where(frame["implausible"], "")
+        else:
+            checked = frame[[c for c in ["f_b", "f_h", "xi_h", "c_h"] + [f"blf_{i}" for i in range(1, 10)]
+                             if c in frame]]
+            reasons = implausible_reasons(checked)
+            reasons[frame["status"] != _STATUS_OK] = ""
+            frame["implausible_reason"] = reasons
+            frame["implausible"] = (reasons != "").to_numpy()
+            unchecked.append(source)
+        frame[ADEQUATE_COLUMN] = (_flags(frame[ADEQUATE_COLUMN], source, ADEQUATE_COLUMN, missing=True)
+                                  if ADEQUATE_COLUMN in frame else True)
         frame.insert(0, "source", source)
         frames.append(frame)
-    return pd.concat(frames, ignore_index=True, sort=False)
+    for (source, where), names in derived.items():
+        notes.append(f"{', '.join(names)} computed by Eq. 17-18 from f_h, xi_h and {where} ({source})")
+    if unstatused:
+        notes.append(f"no status column in {', '.join(unstatused)}: every row taken as an identified cycle")
+    for source, columns in unflagged.items():
+        named = "*_determined columns" if len(columns) == len(flags) > 1 else (
+            f"{', '.join(columns)} column{'s' if len(columns) > 1 else ''}")
+        notes.append(f"no {named} in {source}: its cycles are treated as determined")
+    if unchecked:
+        notes.append(f"no implausible column in {', '.join(unchecked)}: cycles checked here against the physical "
+                     "limits (xi_h < 0, C_h < 0, BLF or floor-force harmonic > 2 g)")
+    table = pd.concat(frames, ignore_index=True, sort=False)
+    table.attrs = {"parameters": tuple(chosen), "notes": notes}
+    return table
 
 
 # ---------------------------------------------------------------------------
@@ -856,6 +1030,14 @@ def _trend_shortfall(f: np.ndarray, degree: int) -> str:
     return ""
 
 
+def _no_spread(y: np.ndarray) -> str:
+    """``"no spread: all n values equal v"`` when ``y`` is constant (R^2 is then undefined), else empty."""
+    y = y[np.isfinite(y)]
+    if y.size and np.ptp(y) == 0:
+        return f"no spread: all {y.size} values equal {y[0]:.4g}"
+    return ""
+
+
 def fit_trend(f_b, values, degree: int, *, parameter: str = "f_h", n_bootstrap: int = 0, rng=None,
               confidence: float = 0.95, cov_type: str = "HC3") -> TrendResult:
     """Fit ``values`` as a polynomial of degree 1 or 2 in ``f_b`` by OLS (statsmodels).
@@ -865,7 +1047,8 @@ def fit_trend(f_b, values, degree: int, *, parameter: str = "f_h", n_bootstrap: 
     f_b : array_like
         Bouncing frequencies (Hz), one per cycle.
     values : array_like
-        The parameter, one per cycle (unit of the parameter).
+        The parameter, one per cycle (unit of the parameter); not all equal (a constant has no
+        trend and no R^2: an OptionError says "no spread").
     degree : int
         1 (linear) or 2 (quadratic, with the vertex).
     parameter : str
@@ -892,7 +1075,7 @@ def fit_trend(f_b, values, degree: int, *, parameter: str = "f_h", n_bootstrap: 
     y = np.asarray(values, dtype=float)
     keep = np.isfinite(f) & np.isfinite(y)
     f, y = f[keep], y[keep]
-    shortfall = _trend_shortfall(f, degree)
+    shortfall = _trend_shortfall(f, degree) or _no_spread(y)
     if shortfall:
         raise OptionError(f"{parameter} trend: {shortfall}")
     design = np.vander(f, degree + 1, increasing=True)
@@ -951,10 +1134,13 @@ class PopulationStats:
     trends : dict
         ``parameter -> TrendResult`` (or the reason it could not be fitted, a str).
     counts : dict
-        ``rows``, ``by_status`` (dict), ``ok``, ``outside_bands``, ``in_bands``, ``sources`` and
-        ``no_flags`` (parameter -> flag columns absent, with ``include_undetermined`` only).
+        ``rows``, ``by_status`` (dict), ``ok``, ``implausible`` (ok cycles flagged implausible),
+        ``implausible_reasons`` (reason -> cycles), ``inadequate`` (ok cycles from an inadequate
+        model), ``usable`` (ok cycles kept), ``outside_bands``, ``in_bands``, ``sources`` and
+        ``notes`` (what the reader assumed or left out, see :func:`read_results`).
     options : dict
-        ``min_cycles``, ``n_bootstrap``, ``seed``, ``include_undetermined``, ``confidence``, ``a_max``.
+        ``min_cycles``, ``n_bootstrap``, ``seed``, ``include_undetermined``, ``include_implausible``,
+        ``confidence``, ``a_max``.
     """
 
     cycles: pd.DataFrame
@@ -1025,24 +1211,36 @@ class PopulationStats:
 
     # -- report -----------------------------------------------------------
     def counts_line(self) -> str:
-        """One line: rows read, left out by status, outside the bands, used."""
+        """One line: rows read, left out by status, implausible, outside the bands, used."""
         c = self.counts
         others = ", ".join(f"{n} {status}" for status, n in sorted(c["by_status"].items()) if status != _STATUS_OK)
+        verb = "kept" if self.options["include_implausible"] else "left out"
+        flagged = [f"{c['implausible']} implausible"] if c["implausible"] else []
+        flagged += [f"{c['inadequate']} from an inadequate model"] if c["inadequate"] else []
         return (f"{c['rows']} cycles read from {len(c['sources'])} file(s): {c['ok']} ok"
                 + (f", {others} left out" if others else "")
+                + (f"; of the ok cycles {' and '.join(flagged)} {verb}" if flagged else "")
                 + f"; {c['outside_bands']} ok cycles outside the bands; {c['in_bands']} in {len(self.bands)} bands "
                   f"({', '.join(self.bands.labels)} Hz)")
+
+    def implausible_lines(self) -> list[str]:
+        """What the cycles left out (or kept) as impossible were: one line each for reasons and models."""
+        c, lines = self.counts, []
+        verb = "kept (include_implausible)" if self.options["include_implausible"] else "left out"
+        if c["implausible"]:
+            why = ", ".join(f"{reason}: {n}" for reason, n in c["implausible_reasons"].items())
+            lines.append(f"warning: {c['implausible']} ok cycles have estimates that cannot be true ({why}); {verb}")
+        if c["inadequate"]:
+            lines.append(f"warning: {c['inadequate']} ok cycles come from a model found inadequate for their record "
+                         f"({ADEQUATE_COLUMN} False); {verb}")
+        return lines
 
     def exclusion_lines(self) -> list[str]:
         """Per parameter, how many cycles did not determine it and whether they were left out."""
         lines = []
         table = self.exclusions()
         for parameter, row in table.iterrows():
-            missing_flags = self.counts.get("no_flags", {}).get(parameter)
-            if missing_flags:
-                text = (f"{parameter}: {int(row['used'])} cycles used, whether they determined it is unknown "
-                        f"(no {', '.join(missing_flags)} column)")
-            elif self.options["include_undetermined"]:
+            if self.options["include_undetermined"]:
                 text = (f"{parameter}: {int(row['used'])} cycles used, {int(row['undetermined'])} of them "
                         "undetermined (included)")
             else:
@@ -1058,6 +1256,8 @@ class PopulationStats:
         width = 200
         with pd.option_context("display.width", width, "display.max_columns", 50, "display.max_colwidth", 60):
             parts = ["Population statistics (Wang, Chen & Nagayama 2019, Section 5)", self.counts_line()]
+            parts += self.implausible_lines()
+            parts += [f"note: {note}" for note in self.counts.get("notes", [])]
             parts.append("cycles that did not determine a parameter (*_determined False): "
                          + ("included" if o["include_undetermined"] else "left out of that parameter"))
             parts += ["  " + line for line in self.exclusion_lines()]
@@ -1097,20 +1297,24 @@ class PopulationStats:
         return plot_histograms(self, parameter, path, published=published)
 
 
-def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_cycles: int = MIN_CYCLES,
+def population_stats(sources, *, bands=None, parameters=None, mass=None, min_cycles: int = MIN_CYCLES,
                      n_bootstrap: int = N_BOOTSTRAP, seed=0, include_undetermined: bool = False,
-                     confidence: float = 0.95, a_max: float = A_MAX, trend_degrees=None,
-                     cov_type: str = "HC3") -> PopulationStats:
+                     include_implausible: bool = False, confidence: float = 0.95, a_max: float = A_MAX,
+                     trend_degrees=None, cov_type: str = "HC3") -> PopulationStats:
     """Section 5 statistics of identified cycles: per band counts, mean, sd, Eq. 19 fits; trends in ``f_b``.
 
     Parameters
     ----------
     sources : path, DataFrame or sequence of them
-        ``results.csv`` of ``smd-statespace identify`` (see :func:`read_results`).
+        ``results.csv`` of ``smd-statespace identify`` or any table with ``f_b`` and parameter
+        columns (see :func:`read_results`).
     bands : None, "article", Bands, text, edges or (low, high) pairs
         Bouncing-frequency bands (Hz); default the article's six (:data:`article.BANDS`).
-    parameters : sequence of str
-        Parameters to analyse, from :data:`PARAMETERS` (default all seven of Table 2).
+    parameters : sequence of str or str, optional
+        Parameters to analyse, from :data:`PARAMETERS` (or their columns); every source must give
+        them. Default: those of Table 2's seven that the sources give (the others are noted).
+    mass : float, optional
+        Body mass (kg) for ``K_h`` and ``C_h`` of tables without ``k_h``/``c_h`` or ``mass`` columns.
     min_cycles : int
         Fewest cycles in a band for a skew-normal fit (>= 3, default :data:`MIN_CYCLES`).
     n_bootstrap : int
@@ -1121,6 +1325,9 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
         other cells are fitted.
     include_undetermined : bool
         Keep cycles whose ``*_determined`` flag is False (default: leave them out of that parameter).
+    include_implausible : bool
+        Keep cycles flagged implausible or from an inadequate model (default: leave them out;
+        they are counted either way).
     confidence : float
         Level of every interval (default 0.95).
     a_max : float
@@ -1138,12 +1345,11 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
     ------
     RecordError
         Unreadable, empty or incomplete results (named by file and column), no ``ok`` cycles,
-        no ``ok`` cycle inside the bands.
+        no plausible ``ok`` cycle, no ``ok`` cycle inside the bands.
     OptionError
         Invalid bands, ``min_cycles``, ``n_bootstrap``, ``confidence`` or parameters.
     """
     bands = Bands.coerce(bands)
-    parameters = tuple(parameters)
     for name, value, minimum in (("min_cycles", min_cycles, 3), ("n_bootstrap", n_bootstrap, 0)):
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
             raise OptionError(f"{name} must be a whole number >= {minimum}, got {value!r}")
@@ -1160,42 +1366,48 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
             raise OptionError(f"trend_degrees: {name!r}: {degree!r}; give parameters of {', '.join(PARAMETERS)} "
                               "with degree 1 or 2")
         degrees[name] = degree
-    table = read_results(sources, parameters=parameters, require_flags=not include_undetermined)
+    table = read_results(sources, parameters=parameters, mass=mass)
+    parameters, notes = table.attrs["parameters"], list(table.attrs["notes"])
     sources_read = list(dict.fromkeys(table["source"]))
     by_status = {str(k): int(v) for k, v in table["status"].value_counts().items()}
     ok = (table["status"] == _STATUS_OK).to_numpy()
     if not ok.any():
         detail = ", ".join(f"{n} {s}" for s, n in sorted(by_status.items()))
         raise RecordError(f"{', '.join(sources_read)}: no 'ok' cycles to analyse ({detail})")
-    band = np.where(ok, bands.assign(table["f_b"].to_numpy()), -1)
+    implausible = ok & table["implausible"].to_numpy(dtype=bool)
+    inadequate = ok & ~table[ADEQUATE_COLUMN].to_numpy(dtype=bool)
+    usable = ok & ((~implausible & ~inadequate) | include_implausible)
+    if not usable.any():
+        why = ", ".join(f"{reason}: {n}" for reason, n in reason_counts(table.loc[implausible,
+                                                                                   "implausible_reason"]).items())
+        raise RecordError(f"{', '.join(sources_read)}: all {int(ok.sum())} ok cycles are implausible ({why or 'none'})"
+                          f" or from an inadequate model ({int(inadequate.sum())}); nothing to analyse "
+                          "(--include-implausible keeps them)")
+    band = np.where(usable, bands.assign(table["f_b"].to_numpy()), -1)
     if not (band >= 0).any():
-        f_ok = table.loc[ok, "f_b"]
-        raise RecordError(f"{', '.join(sources_read)}: none of the {int(ok.sum())} ok cycles has f_b inside the bands "
-                          f"{bands.intervals[0][0]:g}-{bands.intervals[-1][1]:g} Hz (their f_b: "
+        f_ok = table.loc[usable, "f_b"]
+        raise RecordError(f"{', '.join(sources_read)}: none of the {int(usable.sum())} ok cycles has f_b inside the "
+                          f"bands {bands.intervals[0][0]:g}-{bands.intervals[-1][1]:g} Hz (their f_b: "
                           f"{f_ok.min():.3g}-{f_ok.max():.3g} Hz); choose --bands to cover them")
     table["band"] = band
     counts = {"rows": int(len(table)), "by_status": by_status, "ok": int(ok.sum()),
-              "outside_bands": int((ok & (band < 0)).sum()), "in_bands": int((band >= 0).sum()),
-              "sources": sources_read}
+              "implausible": int(implausible.sum()),
+              "implausible_reasons": reason_counts(table.loc[implausible, "implausible_reason"]),
+              "inadequate": int(inadequate.sum()), "usable": int(usable.sum()),
+              "outside_bands": int((usable & (band < 0)).sum()), "in_bands": int((band >= 0).sum()),
+              "sources": sources_read, "notes": notes}
     options = {"min_cycles": int(min_cycles), "n_bootstrap": int(n_bootstrap), "seed": seed,
-               "include_undetermined": bool(include_undetermined), "confidence": float(confidence),
+               "include_undetermined": bool(include_undetermined),
+               "include_implausible": bool(include_implausible), "confidence": float(confidence),
                "a_max": float(a_max), "cov_type": cov_type, "trend_degrees": degrees}
 
-    cells, trends, no_flags = {}, {}, {}
+    cells, trends = {}, {}
     f_b = table["f_b"].to_numpy()
     for parameter in parameters:
         p_index = list(PARAMETERS).index(parameter)  # seeds keyed by the parameter, not by what else is fitted
         spec = PARAMETERS[parameter]
         values = table[spec.column].to_numpy(dtype=float)
-        if include_undetermined:
-            determined = np.ones(len(table), dtype=bool)
-            for flag in spec.determined_by:
-                if flag in table and table[flag].notna().any():
-                    determined &= _flags(table[flag], ", ".join(sources_read), flag)
-                else:
-                    no_flags.setdefault(parameter, []).append(flag)
-        else:
-            determined = np.logical_and.reduce([table[flag].to_numpy(dtype=bool) for flag in spec.determined_by])
+        determined = np.logical_and.reduce([table[flag].to_numpy(dtype=bool) for flag in spec.determined_by])
         in_band = band >= 0
         used = in_band & np.isfinite(values) & (determined | include_undetermined)
         table[f"used_{parameter}"] = used
@@ -1207,11 +1419,10 @@ def population_stats(sources, *, bands=None, parameters=tuple(PARAMETERS), min_c
                 min_cycles=min_cycles, n_bootstrap=n_bootstrap, rng=np.random.default_rng(
                     _seed_sequence(seed, 0, p_index, b)), confidence=confidence, a_max=a_max)
         degree = int(degrees.get(parameter, 1))
-        shortfall = _trend_shortfall(f_b[used], degree)
+        shortfall = _trend_shortfall(f_b[used], degree) or _no_spread(values[used])
         trends[parameter] = f"no trend ({shortfall})" if shortfall else fit_trend(
             f_b[used], values[used], degree, parameter=parameter, n_bootstrap=n_bootstrap,
             rng=np.random.default_rng(_seed_sequence(seed, 1, p_index)), confidence=confidence, cov_type=cov_type)
-    counts["no_flags"] = no_flags
     return PopulationStats(cycles=table, bands=bands, parameters=parameters, cells=cells, trends=trends,
                            counts=counts, options=options)
 

@@ -92,8 +92,9 @@ def plot_trends(stats, path=None) -> Figure:
             elif trend.vertex is not None:
                 ax.text(0.98, 0.95, f"{trend.vertex_kind} at {trend.vertex:.2f} Hz\n(outside the bands)",
                         transform=ax.transAxes, ha="right", va="top", fontsize=7, color="tab:blue")
-        elif trend is not None:
-            ax.text(0.5, 0.06, "no trend: too few cycles", transform=ax.transAxes, ha="center", va="bottom",
+        elif trend is not None:  # "no trend (too few cycles: ...)" or "no trend (no spread: ...)"
+            why = str(trend).partition("(")[2].partition(":")[0] or "too few cycles"
+            ax.text(0.5, 0.06, f"no trend: {why}", transform=ax.transAxes, ha="center", va="bottom",
                     fontsize=8, color="tab:red")
         # y-range from the bulk of the cycles, so that a few outliers do not flatten the panel
         values = used[PARAMETERS[parameter].column].to_numpy()
@@ -133,6 +134,10 @@ def plot_trends(stats, path=None) -> Figure:
     fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=8, frameon=False,
                bbox_to_anchor=(0.5, 1.0 - 0.36 / fig.get_figheight()))
     included = "all cycles" if stats.options["include_undetermined"] else "cycles that determined each parameter"
+    impossible = stats.counts.get("implausible", 0) + stats.counts.get("inadequate", 0)
+    if impossible:
+        included += (f", {impossible} implausible kept" if stats.options.get("include_implausible")
+                     else f", {impossible} implausible left out")
     fig.suptitle(f"Parameters against bouncing frequency ({included}; {stats.counts['in_bands']} ok cycles in the "
                  "bands)", fontsize=11, x=0.01, ha="left", y=1.0 - 0.08 / fig.get_figheight(), va="top")
     fig.tight_layout(rect=(0, 0, 1, 1.0 - 0.52 / fig.get_figheight()))

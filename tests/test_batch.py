@@ -86,11 +86,18 @@ def test_failures_are_contained_and_jobs_do_not_change_results(records, tmp_path
     assert one.failed_records == ["flat.csv"] and one.identified == 4
     table = results(tmp_path / "one")
     flat = table[table["record"] == "flat.csv"]
-    assert len(flat) == 1 and flat["status"].iloc[0] == "failed" and "no GRF peaks" in flat["reason"].iloc[0]
+    assert len(flat) == 1 and flat["status"].iloc[0] == "failed"
+    assert "not a bouncing record (not_rhythmic): the force is constant" in flat["reason"].iloc[0]
     assert (table.loc[table["record"] != "flat.csv", "status"] != "failed").all()
     assert table["record"].drop_duplicates().tolist() == [r.name for r in found]  # the run's order
     pd.testing.assert_frame_equal(table, results(tmp_path / "two"))
     assert two.cycles == one.cycles
+    # Implausible cycles are counted from the flags the runner wrote (max_passes=2 leaves some here).
+    ok = table[table["status"] == "ok"]
+    flagged = ok["implausible"].astype(str).str.lower() == "true"
+    assert one.implausible == int(flagged.sum()) and sum(one.implausible_reasons.values()) >= one.implausible
+    assert (ok.loc[flagged, "implausible_reason"].fillna("").astype(str).str.len() > 0).all()
+    assert (f"({one.implausible} of them implausible)" in one.line()) == (one.implausible > 0)
     # Each record's rows are those of identifying it alone (seed from its name, not its position).
     alone = run_batch([found[2]], tmp_path / "alone", runner_options=OPTIONS, progress=False)
     assert alone.identified == 1
@@ -162,3 +169,20 @@ def test_a_new_run_rewrites_settings_left_in_its_folder(records, tmp_path):
     run_batch(found, out, runner_options=OPTIONS, progress=False)
     again = run_batch(found, out, runner_options=OPTIONS, resume=True, progress=False)  # compared with the new
     assert again.resumed == 1
+
+
+def test_record_estimator_gives_one_person_per_record_that_stats_reads(records, tmp_path, capsys):
+    """``identify FOLDER --estimator record``: one row per record (the person), the flat record fails in one line,
+    and ``stats`` reads the table as it is (f_b, f_h, xi_h, BLFs, mass, the flags)."""
+    found = collect_records(records, manifest=records / "manifest.csv")
+    summary = run_batch(found, tmp_path / "people", estimator="record", progress=False)
+    assert summary.failed_records == ["flat.csv"] and "rows (one person per record)" in summary.line()
+    table = pd.read_csv(summary.results)
+    people = table[table["status"] == "ok"].set_index("record")
+    assert list(people.index) == ["rec0.csv", "rec1.csv", "rec2.csv"]
+    assert people["f_h"].between(2.4 * 0.9, 2.4 * 1.1).all()  # the simulated people all have f_h 2.4 Hz
+    assert (people["f_b"] - [1.8, 1.95, 2.1]).abs().max() < 0.05
+    assert {"f_h_sd", "xi_h", "blf_1", "mass", "implausible", "model_adequate", "ljung_box_p"} <= set(people.columns)
+    from smd_statespace.cli import main
+
+    assert main(["stats", str(summary.results), "--out", str(tmp_path / "stats"), "--bootstrap", "5"]) == 0

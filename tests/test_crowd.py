@@ -7,7 +7,8 @@ from scipy import stats
 
 from smd_statespace import OptionError, article
 from smd_statespace.cli import main
-from smd_statespace.crowd import draw_people, fit_table, person_seeds, simulate_crowd
+from smd_statespace.crowd import (DEFAULT_DURATION, draw_people, fit_table, periodic_grf_minimum, person_seeds,
+                                  simulate_crowd)
 from smd_statespace.simulate import MASS_DISTRIBUTION, POPULATION_BOUNDS, simulate_bouncing
 
 
@@ -111,7 +112,8 @@ def test_each_grf_is_the_ode_simulators():
         person = crowd.people.iloc[i]
         reference = simulate_bouncing(mass=person["mass"], f_b=1.9, f_h=person["f_h"], xi_h=person["xi_h"],
                                       blf=(person["blf1"], person["blf2"], person["blf3"]), duration=12.0, fs=150.0,
-                                      coef_variation=0.2, noise=0.0, seed=person_seeds(8, i)[1])
+                                      coef_variation=0.2, noise=0.0,
+                                      seed=person_seeds(8, i, person["draw"])[1])
         column = crowd.forces[f"person_00{i}"].to_numpy()
         assert np.max(np.abs(column - reference.record.force)) < 1e-6 * person["weight"]
         pd.testing.assert_frame_equal(crowd.cycles[i][["t_start", "t_end", "f_b", "a1", "b1", "a3", "b3"]],
@@ -193,3 +195,71 @@ def test_command_reports_a_bad_table(tmp_path, capsys):
     assert main(["crowd", "--people", "2", "--fb", "2", "--duration", "4", "--out", str(tmp_path / "c.csv"),
                  "--table", str(bad)]) == 2
     assert "missing column(s) a" in capsys.readouterr().err
+
+
+BAND_CENTRES = [round((low + high) / 2, 2) for low, high in article.BANDS]
+
+
+@pytest.mark.parametrize("f_b", BAND_CENTRES)
+def test_nobody_pulls_on_the_floor(f_b):
+    """1000 people per band of the article: every GRF sample >= 0; those whose first draw would pull are redrawn."""
+    crowd = simulate_crowd(1000, f_b, 4.0, fs=50.0, seed=2019)
+    people, settings = crowd.people, crowd.settings
+    assert crowd.forces.filter(like="person_").to_numpy().min() >= 0.0
+    assert (people["grf_min"] >= 0).all()
+    blf = people[["blf1", "blf2", "blf3"]].to_numpy()
+    assert (periodic_grf_minimum(f_b, people["f_h"], people["xi_h"], blf) >= 0).all()
+    # the problem is real: some of Table 2's first draws pull on the floor in their steady state, and were redrawn
+    first = draw_people(1000, f_b, seed=2019)
+    pulling = periodic_grf_minimum(f_b, first["f_h"], first["xi_h"], first[["blf1", "blf2", "blf3"]].to_numpy()) < 0
+    assert pulling.any() and (people.loc[pulling, "draw"] > 0).all()
+    kept = people["draw"] == 0
+    pd.testing.assert_frame_equal(people.loc[kept, first.columns], first[kept])
+    # the counts add up
+    assert settings["redrawn"] == int((people["draw"] > 0).sum()) > 0
+    assert (people["draw"] == people["rejected_steady"] + people["rejected_cycles"]).all()
+    assert settings["rejected_steady"] == people["rejected_steady"].sum() >= pulling.sum()
+    assert settings["rejected_cycles"] == people["rejected_cycles"].sum()
+    assert f"contact: {settings['redrawn']} of 1000 people redrawn" in crowd.summary()
+
+
+def test_periodic_minimum_is_the_steady_simulated_minimum():
+    """Without cycle-to-cycle variation the simulated GRF is the steady periodic one: same minimum."""
+    crowd = simulate_crowd(12, 2.35, 3.0, fs=2000.0, seed=4, fb_variation=0.0, coef_variation=0.0)
+    people = crowd.people
+    closed = periodic_grf_minimum(2.35, people["f_h"], people["xi_h"], people[["blf1", "blf2", "blf3"]].to_numpy())
+    simulated = (people["grf_min"] / people["weight"]).to_numpy()
+    np.testing.assert_allclose(simulated, closed, atol=2e-4)
+    assert (simulated >= closed - 1e-5).all()  # sampled minima cannot be below the true one
+    assert closed.min() < 0.5  # some people come close to leaving the floor
+
+
+def test_redraws_are_reproducible_and_person_i_stays_person_i():
+    big = simulate_crowd(30, 3.15, 5.0, fs=60.0, seed=7)
+    assert big.settings["redrawn"] > 0
+    again = simulate_crowd(30, 3.15, 5.0, fs=60.0, seed=7)
+    pd.testing.assert_frame_equal(big.people, again.people)
+    pd.testing.assert_frame_equal(big.forces, again.forces)
+    small = simulate_crowd(12, 3.15, 5.0, fs=60.0, seed=7)
+    pd.testing.assert_frame_equal(small.people, big.people.iloc[:12])
+    # a redrawn person's seeds are their draw's: the force is simulate_bouncing's with them
+    i = int(np.flatnonzero(big.people["draw"].to_numpy() > 0)[0])
+    person = big.people.iloc[i]
+    reference = simulate_bouncing(mass=person["mass"], f_b=3.15, f_h=person["f_h"], xi_h=person["xi_h"],
+                                  blf=(person["blf1"], person["blf2"], person["blf3"]), duration=5.0, fs=60.0,
+                                  noise=0.0, seed=person_seeds(7, i, person["draw"])[1])
+    assert np.max(np.abs(big.forces.iloc[:, 1 + i].to_numpy() - reference.record.force)) < 1e-6 * person["weight"]
+
+
+def test_command_duration_defaults_and_output_says_who_was_redrawn(tmp_path, capsys):
+    out = tmp_path / "c.csv"
+    assert main(["crowd", "--people", "6", "--fb", "3.2", "--out", str(out), "--seed", "1", "--fs", "60"]) == 0
+    forces = pd.read_csv(out)
+    assert forces["time"].iloc[-1] == pytest.approx(DEFAULT_DURATION)
+    people = pd.read_csv(tmp_path / "c_people.csv")
+    assert {"grf_min", "draw", "rejected_steady", "rejected_cycles"} <= set(people.columns)
+    assert (forces.filter(like="person_") >= 0).all().all()
+    printed = capsys.readouterr().out
+    assert "contact: " in printed
+    redrawn = int((people["draw"] > 0).sum())
+    assert (f"{redrawn} of 6 people redrawn" in printed) if redrawn else ("first draw" in printed)

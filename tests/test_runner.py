@@ -9,7 +9,8 @@ import pytest
 from smd_statespace.errors import OptionError
 from smd_statespace.estimators import Estimator, EstimatorFailure, FilterResult, GaussianStart
 from smd_statespace.model import SMDModel
-from smd_statespace.runner import CycleRunner, converged
+from smd_statespace.plausibility import MAX_BLF, PRIOR_MARGIN, implausible_reasons
+from smd_statespace.runner import DETERMINED_RATIO, CycleRunner, converged
 from smd_statespace.signals import preprocess
 from smd_statespace.simulate import simulate_bouncing
 
@@ -140,3 +141,122 @@ def test_failed_cycle_leaves_no_stale_result(record):
     table = runner.run(record)
     assert table.set_index("cycle").loc[bad, "status"] == "failed"
     assert bad not in runner.results_
+
+
+# ---------------------------------------------------------------------------
+# estimates that cannot be true
+
+
+class ImpossibleEstimator(Estimator):
+    """Claims every parameter determined (sd 0.01 over prior sd 0.1); on chosen cycles, with impossible values."""
+
+    name = "impossible"
+
+    def __init__(self, overrides):
+        self.overrides = overrides  # cycle index -> {slot: value}
+
+    def run(self, model, data, start=None, rng=None, fixed=None):
+        values = {"f_h": 2.5, "xi_h": 0.3, "a1": 0.2, "b1": 0.15, "a2": 0.1, "b2": 0.05, "a3": 0.03, "a4": 0.01}
+        values.update(self.overrides.get(data.index, {}))
+        x = np.zeros(model.n_state)
+        for name, value in values.items():
+            x[model.index(name)] = value
+        m = len(data)
+        restart = GaussianStart(x, np.eye(model.n_state))
+        return FilterResult(self.name, model.state_names, data.t, np.tile(x, (m, 1)),
+                            np.tile(np.full(model.n_state, 0.01), (m, 1)), np.zeros((m, model.n_obs)),
+                            np.tile(np.eye(model.n_obs), (m, 1, 1)), -1.0, restart, np.full(model.n_state, 0.1))
+
+
+def test_impossible_cycles_are_flagged_never_determined_and_left_out_of_the_summary(record):
+    from smd_statespace.commands.identify import implausible_warning, run_summary, summary_table
+
+    cycles = [c.index for c in record.valid_cycles]
+    model = SMDModel()
+    prior = model.slots[model.index("f_h")]
+    overrides = {cycles[0]: {"xi_h": -0.05},                      # negative damping: C_h < 0 too
+                 cycles[1]: {"f_h": prior.high - 0.5 * PRIOR_MARGIN * (prior.high - prior.low)},  # at 4 Hz
+                 cycles[2]: {"f_h": 5.41},                        # beyond the prior (the issue's 0.38-5.41 Hz)
+                 cycles[3]: {"a1": 0.39, "b1": 0.39}}             # two coefficients on their bound
+    table = CycleRunner(model, estimator=ImpossibleEstimator(overrides), progress=False).run(record)
+    ok = table[table.status == "ok"].set_index("cycle")
+    assert ok.loc[cycles[0], "implausible_reason"] == "xi_h < 0; C_h < 0" and ok.loc[cycles[0], "c_h"] < 0
+    assert ok.loc[cycles[1], "implausible_reason"] == "f_h on prior bound"
+    assert ok.loc[cycles[2], "implausible_reason"] == "f_h outside prior"
+    assert ok.loc[cycles[3], "implausible_reason"] == "a1 on prior bound; b1 on prior bound"
+    bad = ok.index.isin(list(overrides))
+    assert ok.implausible.tolist() == bad.tolist()
+    assert (ok.loc[~bad, "implausible_reason"] == "").all()
+    determined = [c for c in ok.columns if c.endswith("_determined")]
+    assert not ok.loc[bad, determined].any().any()       # never determined, whatever the filter claims
+    assert ok.loc[~bad, determined].all().all()
+    assert (ok.loc[bad, "f_h_width_ratio"] < DETERMINED_RATIO).all()  # the filter's own claim stays readable
+    skipped = table[table.status == "skipped"]
+    assert len(skipped) and not skipped.implausible.any()
+
+    summary = summary_table(table)
+    assert summary.loc["f_h", "median"] == 2.5 and summary.loc["f_h", "q25"] == 2.5  # the impossible ones left out
+    assert summary.loc["xi_h", "determined_%"] == 100.0
+    warning = implausible_warning(table)
+    assert warning.startswith(f"warning: 4 of {len(ok)} identified cycles gave estimates that cannot be true")
+    for reason in ("xi_h < 0: 1", "f_h on prior bound: 1", "f_h outside prior: 1", "a1 on prior bound: 1"):
+        assert reason in warning
+    assert "4 implausible" in run_summary(table, 1.0)
+    from smd_statespace.plots import plot_parameters
+
+    f_h_axes = plot_parameters(table).axes[0]
+    crosses = [c for c in f_h_axes.containers if c.get_label() == "implausible"]
+    assert len(crosses) == 1 and len(crosses[0].lines[0].get_xdata()) == 4  # drawn apart, as red crosses
+    everything_bad = CycleRunner(model, estimator=ImpossibleEstimator({c: {"xi_h": -0.1} for c in cycles}),
+                                 progress=False).run(record)
+    assert summary_table(everything_bad).empty  # nothing to summarise, and no KeyError
+
+
+def test_physical_limits_of_a_cycle():
+    table = pd.DataFrame({"f_b": [2.0, 2.0, 2.0, 2.0, 2.0], "f_h": [2.5, 2.5, 4.0, 2.5, 2.5],
+                          "xi_h": [0.3, 0.3, 0.01, 0.3, 0.3], "c_h": [800.0, 800.0, 30.0, 800.0, -1.0],
+                          "blf_1": [0.3, MAX_BLF + 0.1, 0.2, 0.3, 0.3], "blf_2": [0.15, 0.1, 0.1, 0.15, 0.15]})
+    reasons = implausible_reasons(table)  # no model: no prior bounds, physics only
+    assert reasons.tolist() == ["", "BLF_1 > 2 g", "GRF harmonic 2 > 2 g", "", "C_h < 0"]
+    # GRF harmonic 2 of cycle 2: 0.1 g at resonance (2 f_b = f_h) with xi_h 0.01 is 0.1 / 0.02 = 5 g on the floor.
+
+
+def test_clean_record_has_no_implausible_cycle(record):
+    table = CycleRunner(estimator="ekf", progress=False).run(record)
+    ok = table[table.status == "ok"]
+    assert len(ok) >= 10 and not ok.implausible.any() and (ok.implausible_reason == "").all()
+
+
+def test_identify_warns_about_impossible_cycles_of_a_record_with_extra_harmonics(tmp_path, capsys):
+    from smd_statespace.cli import main
+
+    record = tmp_path / "rec.csv"
+    # Two force harmonics beyond the model's four: the base model's EKF answers f_h beyond its own prior.
+    assert main(["simulate", "--out", str(record), "--mass", "65", "--fb", "2.0", "--fh", "2.5", "--xi", "0.3",
+                 "--duration", "8", "--seed", "3", "--blf", "0.25,0.15,0.05,0.02,0.06,0.05"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "id"
+    assert main(["identify", str(record), "--mass", "65", "--estimator", "ekf", "--out", str(out), "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    table = pd.read_csv(out / "results.csv")
+    ok = table[table.status == "ok"]
+    n_bad = int(ok.implausible.sum())
+    assert n_bad >= len(ok) // 2 and ok.loc[ok.implausible, "f_h"].gt(4.0).any()
+    assert not ok.loc[ok.implausible, "f_h_determined"].any()
+    warnings = [line for line in printed.splitlines() if line.startswith("warning: ")]
+    assert len(warnings) == 1 and f"{n_bad} of {len(ok)} identified cycles" in warnings[0]
+    assert "f_h outside prior" in warnings[0] and f"{n_bad} implausible" in printed
+
+
+def test_comparison_figure_draws_a_simulations_truth_on_every_panel_and_takes_a_title():
+    """A simulation's truth (``blf`` as a list) gives dashed truth lines on the BLF panels too."""
+    from smd_statespace.plots import plot_comparison
+
+    table = pd.DataFrame({"status": ["ok"] * 3, "t_start": [0.0, 0.5, 1.0], "t_end": [0.5, 1.0, 1.5],
+                          "f_h": [2.4, 2.5, 2.6], "xi_h": [0.3] * 3, "blf_1": [0.2] * 3, "blf_2": [0.1] * 3})
+    truth = {"f_h": 2.5, "xi_h": 0.3, "blf": [0.25, 0.15, 0.05]}
+    fig = plot_comparison({"model A": table, "model B": table}, truth=truth, title="Two models compared")
+    for ax, expected in zip(fig.axes, (2.5, 0.3, 0.25, 0.15)):
+        lines = [line for line in ax.get_lines() if line.get_label() == "truth"]
+        assert len(lines) == 1 and lines[0].get_ydata()[0] == expected
+    assert fig._suptitle.get_text().startswith("Two models compared")

@@ -11,8 +11,8 @@ from smd_statespace import article
 from smd_statespace.cli import main
 from smd_statespace.errors import OptionError, RecordError
 from smd_statespace.simulate import sample_population
-from smd_statespace.stats import (A_MAX, Bands, bootstrap_skewnorm, fit_skewnorm, fit_trend, population_stats,
-                                  read_results)
+from smd_statespace.stats import (A_MAX, ADEQUATE_COLUMN, PARAMETERS, Bands, bootstrap_skewnorm, fit_skewnorm,
+                                  fit_trend, parse_parameters, population_stats, read_results)
 
 # sample_population redraws values outside physical bounds (truncation); these wide bounds switch that
 # off so that the drawn people follow Table 2's skew-normals exactly and the round trip tests the statistics.
@@ -21,7 +21,11 @@ ROUND_TRIP = ("f_h", "xi_h", "BLF1", "BLF2", "BLF3")  # K_h, C_h are drawn by Eq
 
 
 def results_frame(per_band, seed=0, points=4, bands=article.BANDS):
-    """A results.csv-like table of ``per_band`` people per band drawn from Table 2, all ok and determined."""
+    """A results.csv-like table of ``per_band`` people per band drawn from Table 2, all ok, determined, plausible.
+
+    ``implausible`` is False as ``identify`` would write it: the skew-normals of Table 2 have tails below
+    ``xi_h = 0``, which the physical check of a table without that column would (rightly) leave out.
+    """
     frames = []
     children = iter(np.random.SeedSequence(seed).spawn(points * len(bands)))
     for low, high in bands:
@@ -38,7 +42,7 @@ def results_frame(per_band, seed=0, points=4, bands=article.BANDS):
         "blf_2_sd": 0.01, "blf_3_sd": 0.01, "a0": 0.0, "k_h": people["K_h"], "c_h": people["C_h"], "passes": 3,
         "converged": True, "log_likelihood": 0.0, "estimator": "ekf", "status": "ok", "reason": "",
         "f_h_determined": True, "xi_h_determined": True, "blf_1_determined": True, "blf_2_determined": True,
-        "blf_3_determined": True,
+        "blf_3_determined": True, "implausible": False, "implausible_reason": "",
     })
 
 
@@ -290,9 +294,20 @@ def test_reader_checks_and_tags_sources(tmp_path):
     table = read_results([path, frame])
     assert list(table["source"].unique()) == [str(path), "<DataFrame 1>"] and len(table) == 24
     assert table["f_h_determined"].dtype == bool
-    with pytest.raises(RecordError, match=r"b\.csv: missing columns f_b, xi_h"):
-        frame.drop(columns=["f_b", "xi_h"]).to_csv(tmp_path / "b.csv", index=False)
+    assert table.attrs["parameters"] == tuple(PARAMETERS) and table.attrs["notes"] == []
+    frame.drop(columns=["f_b"]).to_csv(tmp_path / "b.csv", index=False)
+    with pytest.raises(RecordError, match=r"b\.csv: no column 'f_b' \(the bouncing frequency"):
         read_results(tmp_path / "b.csv")
+    # Not asked for: a missing parameter is left out with a note; asked for: an error naming file and column.
+    frame.drop(columns=["xi_h", "blf_2"]).to_csv(tmp_path / "c.csv", index=False)
+    partial = read_results(tmp_path / "c.csv")
+    assert partial.attrs["parameters"] == ("f_h", "K_h", "C_h", "BLF1", "BLF3")
+    assert f"BLF2 left out: no column 'blf_2' for BLF2 in {tmp_path / 'c.csv'}" in partial.attrs["notes"]
+    with pytest.raises(RecordError, match=r"c\.csv: no column 'xi_h' for xi_h, asked for by --parameters"):
+        read_results(tmp_path / "c.csv", parameters="f_h,xi_h")
+    with pytest.raises(OptionError, match=r"--parameters: unknown parameter 'zeta'; valid: f_h, xi_h, K_h"):
+        read_results(frame, parameters=["f_h", "zeta"])
+    assert parse_parameters("blf_1, F_H,k_h") == ("BLF1", "f_h", "K_h")
 
 
 def test_histogram_and_trend_figures_show_what_was_fitted(tmp_path):
@@ -353,10 +368,22 @@ def error_line(capsys):
 
 
 @pytest.mark.parametrize("make, extra, fragments", [
-    (lambda f, p: f.drop(columns=["xi_h", "blf_2"]).to_csv(p, index=False), [],
-     ["bad.csv", "missing columns xi_h, blf_2"]),
-    (lambda f, p: f.drop(columns=["f_h_determined"]).to_csv(p, index=False), [],
-     ["bad.csv", "f_h_determined", "--include-undetermined"]),
+    (lambda f, p: f.drop(columns=["f_b"]).to_csv(p, index=False), [], ["bad.csv", "no column 'f_b'", "columns are"]),
+    (lambda f, p: f.drop(columns=["xi_h", "blf_2"]).to_csv(p, index=False), ["--parameters", "f_h,BLF2"],
+     ["bad.csv", "no column 'blf_2' for BLF2", "--parameters"]),
+    (lambda f, p: f.to_csv(p, index=False), ["--parameters", "f_h,stiffness"],
+     ["--parameters", "unknown parameter 'stiffness'", "valid: f_h, xi_h, K_h, C_h, BLF1, BLF2, BLF3"]),
+    (lambda f, p: f[["f_b", "f_h", "xi_h"]].to_csv(p, index=False), ["--parameters", "K_h"],
+     ["bad.csv", "no column 'k_h' for K_h", "'mass' column", "--mass KG"]),
+    (lambda f, p: f.drop(columns=["blf_1", "blf_2", "blf_3", "f_h", "xi_h", "k_h", "c_h"]).to_csv(p, index=False), [],
+     ["bad.csv", "none of the parameter columns"]),
+    (lambda f, p: f[["f_b", "f_h", "xi_h"]].assign(mass=np.where(f.index == 2, -60.0, 60.0)).to_csv(p, index=False),
+     [], ["bad.csv", "column 'mass', data row 3", "positive number of kg"]),
+    (lambda f, p: f.assign(implausible="maybe").to_csv(p, index=False), [],
+     ["bad.csv", "column 'implausible', data row 1", "not True or False"]),
+    (lambda f, p: f.assign(implausible=True).to_csv(p, index=False), [],
+     ["bad.csv", "all 12 ok cycles are implausible", "--include-implausible"]),
+    (lambda f, p: f.to_csv(p, index=False), ["--mass", "-3"], ["--mass", "positive number"]),
     (lambda f, p: p.write_text(""), [], ["bad.csv", "empty file"]),
     (lambda f, p: p.write_text(",".join(f.columns) + "\n"), [], ["bad.csv", "no rows"]),
     (lambda f, p: f.assign(status="failed").to_csv(p, index=False), [], ["bad.csv", "no 'ok' cycles", "12 failed"]),
@@ -376,3 +403,86 @@ def test_stats_bad_input_is_one_line_exit_2(tmp_path, capsys, make, extra, fragm
     line = error_line(capsys)
     for fragment in fragments:
         assert fragment in line, (fragment, line)
+
+
+# ---------------------------------------------------------------------------
+# any table of cycles; impossible cycles protect nothing
+
+
+def plain_frame(n=40, seed=3, f_b=(1.6, 2.0, 2.4, 2.8)):
+    """A plain table of identified cycles as another tool writes it: f_b, f_h, xi_h, blf_1..3 only."""
+    rng = np.random.default_rng(seed)
+    f = np.repeat(f_b, n // len(f_b))
+    return pd.DataFrame({"f_b": f, "f_h": 0.8 * f + 0.7 + rng.normal(0, 0.15, f.size),
+                         "xi_h": rng.uniform(0.15, 0.5, f.size), "blf_1": rng.uniform(0.1, 0.4, f.size),
+                         "blf_2": rng.uniform(0.05, 0.3, f.size), "blf_3": rng.uniform(0.0, 0.1, f.size)})
+
+
+def test_plain_table_reads_with_notes_and_mass(tmp_path, capsys):
+    frame = plain_frame()
+    stats = population_stats(frame, n_bootstrap=0, bands="1.5,2.6,3")
+    assert stats.parameters == ("f_h", "xi_h", "BLF1", "BLF2", "BLF3")
+    text = stats.summary()
+    assert text.count("treated as determined") == 1 and text.count("every row taken as an identified cycle") == 1
+    assert "K_h left out: no column 'k_h' for K_h and no body mass" in text and "C_h left out" in text
+    assert stats.cells["f_h", 0].n == 30 and stats.counts["implausible"] == 0
+    assert stats.cells["f_h", 0].mean == pytest.approx(frame.f_h[frame.f_b < 2.6].mean(), rel=1e-12)
+
+    # A body mass gives K_h and C_h by Eq. 17-18: from an option, or per row from a mass column.
+    with_mass = population_stats(frame, n_bootstrap=0, bands="1.5,2.6,3", mass=70.0, parameters="K_h,C_h")
+    expected = 70.0 * (2 * np.pi * frame.f_h[frame.f_b < 2.6]) ** 2
+    assert with_mass.cells["K_h", 0].mean == pytest.approx(expected.mean(), rel=1e-12)
+    masses = np.where(frame.index % 2 == 0, 60.0, 80.0)
+    own = population_stats(frame.assign(mass=masses), n_bootstrap=0, bands="1.5,2.6,3", parameters=["C_h"])
+    c_h = 2 * frame.xi_h * masses * 2 * np.pi * frame.f_h
+    assert own.cells["C_h", 1].mean == pytest.approx(c_h[frame.f_b > 2.6].mean(), rel=1e-12)
+    assert "computed by Eq. 17-18 from f_h, xi_h and its 'mass' column" in own.summary()
+
+    path = tmp_path / "plain.csv"
+    frame.to_csv(path, index=False)
+    assert main(["stats", str(path), "--out", str(tmp_path / "out"), "--bootstrap", "0", "--bands", "1.5,2.6,3",
+                 "--mass", "70"]) == 0
+    printed = capsys.readouterr().out
+    assert "K_h, C_h computed by Eq. 17-18 from f_h, xi_h and --mass 70 kg" in printed
+    assert (tmp_path / "out" / "hist_k_h.png").stat().st_size > 0
+
+
+def test_implausible_and_inadequate_cycles_are_left_out_and_counted():
+    frame = plain_frame(seed=5)
+    frame.loc[0:2, "xi_h"] = -0.05                       # negative damping (found by the physical check)
+    frame.loc[3, "blf_1"] = 2.5                          # an internal force of 2.5 body weights
+    frame.loc[4, ["f_h", "xi_h"]] = (2 * 1.6, 0.01)      # 2nd harmonic at resonance: floor force 0.3 / 0.02 g
+    stats = population_stats(frame, n_bootstrap=0, bands="1.5,2.6,3")
+    assert stats.counts["implausible"] == 5 and stats.counts["usable"] == 35
+    assert stats.counts["implausible_reasons"] == {"xi_h < 0": 3, "BLF_1 > 2 g": 1, "GRF harmonic 2 > 2 g": 1}
+    clean = frame.drop(index=range(5))
+    assert stats.cells["xi_h", 0].mean == pytest.approx(clean.xi_h[clean.f_b < 2.6].mean(), rel=1e-12)
+    assert (stats.cycles.loc[0:4, "band"] == -1).all()
+    text = stats.summary()
+    assert "of the ok cycles 5 implausible left out" in text
+    assert "warning: 5 ok cycles have estimates that cannot be true (xi_h < 0: 3," in text
+    kept = population_stats(frame, n_bootstrap=0, bands="1.5,2.6,3", include_implausible=True)
+    assert kept.cells["xi_h", 0].n == 30 and kept.counts["implausible"] == 5 and "5 implausible kept" in kept.summary()
+
+    # identify's own flag is trusted (here it marks a cycle the physical check alone would keep) ...
+    flagged = plain_frame(seed=5).assign(implausible=False, implausible_reason="")
+    flagged.loc[7, ["implausible", "implausible_reason"]] = (True, "f_h on prior bound")
+    one = population_stats(flagged, n_bootstrap=0, bands="1.5,2.6,3")
+    assert one.counts["implausible_reasons"] == {"f_h on prior bound": 1} and one.counts["usable"] == 39
+    # ... and so is a record-level verdict that the model is inadequate.
+    inadequate = plain_frame(seed=5).assign(**{ADEQUATE_COLUMN: np.where(np.arange(40) < 10, False, True)})
+    adequate_only = population_stats(inadequate, n_bootstrap=0, bands="1.5,2.6,3")
+    assert adequate_only.counts["inadequate"] == 10 and adequate_only.cells["f_h", 0].n == 20
+    assert "warning: 10 ok cycles come from a model found inadequate" in adequate_only.summary()
+
+
+def test_constant_column_has_no_spread_not_minus_infinite_r_squared(tmp_path):
+    frame = plain_frame().assign(blf_3=0.05)
+    stats = population_stats(frame, n_bootstrap=0, bands="1.5,2.6,3")
+    assert stats.trends["BLF3"] == "no trend (no spread: all 40 values equal 0.05)"
+    assert stats.cells["BLF3", 0].note == "no spread: all 30 values equal"
+    assert "-inf" not in stats.summary() and "BLF3: no trend (no spread" in stats.summary()
+    with pytest.raises(OptionError, match="BLF3 trend: no spread: all 40 values equal 0.05"):
+        fit_trend(frame.f_b, frame.blf_3, 1, parameter="BLF3")
+    fig = stats.plot_trends()
+    assert any(t.get_text() == "no trend: no spread" for ax in fig.axes for t in ax.texts)

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from ..errors import OptionError
+from ..io import truth_values  # noqa: F401 - the commands import it from here
 
 PROG = "smd-statespace"
 
@@ -158,6 +159,29 @@ def add_record_arguments(parser):
     parser.add_argument("--mass", required=True, type=float, metavar="KG", help="body mass M_h (kg)")
 
 
+def add_check_argument(parser):
+    """``--ignore-checks``: identify a record that the bouncing checks refuse."""
+    parser.add_argument("--ignore-checks", action="store_true",
+                        help="identify even a record that is not bouncing (contact lost, clipped, not rhythmic, "
+                             "walking); the checks' findings are printed as warnings")
+
+
+def checked(record, args) -> list:
+    """Check that ``record`` is bouncing (:func:`~smd_statespace.applicability.check_bouncing`); print warnings.
+
+    Raises :class:`~smd_statespace.applicability.NotBouncingError` (exit 2)
+    for a refusal unless ``--ignore-checks``; returns the warnings.
+    """
+    import sys
+
+    from ..applicability import check_bouncing
+
+    warnings = check_bouncing(record).raise_if_refused(override=getattr(args, "ignore_checks", False))
+    for text in warnings:
+        print(f"warning: {text}", file=sys.stderr)
+    return warnings
+
+
 def add_model_arguments(parser):
     """Options that build the :class:`~smd_statespace.model.SMDModel`."""
     parser.add_argument("--harmonics", type=_count, default=4, metavar="N",
@@ -177,6 +201,7 @@ def add_run_arguments(parser):
     parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default 0)")
     parser.add_argument("--out", default="smd_output", metavar="DIR", help="output directory (default ./smd_output)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_check_argument(parser)
 
 
 def build_model(args):
@@ -201,6 +226,7 @@ def prepare_record(args):
     from ..signals import preprocess
 
     record = read_record(args.record, args.mass)
+    checked(record, args)
     return record, preprocess(record)
 
 
@@ -223,16 +249,3 @@ def load_truth(path):
         raise OptionError(f"--truth {path}: cannot read ({exc.strerror or exc})") from None
     except ValueError:
         raise OptionError(f"--truth {path}: not a JSON file") from None
-
-
-def truth_values(truth) -> dict:
-    """Reported quantities known from a truth file: f_h, xi_h, blf_i, k_h, c_h."""
-    if not truth:
-        return {}
-    values = {name: float(truth[name]) for name in ("f_h", "xi_h") if name in truth}
-    for i, value in enumerate(truth.get("blf", []), start=1):
-        values[f"blf_{i}"] = float(value)
-    for source, name in (("K_h", "k_h"), ("C_h", "c_h")):
-        if source in truth:
-            values[name] = float(truth[source])
-    return values

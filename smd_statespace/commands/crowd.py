@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..crowd import DEFAULT_DURATION
 from ..errors import OptionError
 from .common import _count, _nonnegative, _positive, _seed
 
@@ -17,13 +18,16 @@ def add_crowd(subparsers):
             "Draw N people bouncing at f_b from the article's Table 2 skew-normal fits (Eq. 19) or your own "
             "table, synthesise each person's GRF with the SMD model on a rigid floor (Eq. 2-4; own mass, phase "
             "offset and cycle-to-cycle variation) and write the forces (time, one column per person, total; N), "
-            "the people table (<out stem>_people.csv) and a figure."
+            "the people table (<out stem>_people.csv) and a figure. The model has no flight phase: a person whose "
+            "GRF would go below zero (pulling on the floor) is redrawn, and the summary and the people table "
+            "(draw, rejected_steady, rejected_cycles) say how many and why."
         ),
     )
     parser.add_argument("--people", required=True, type=_count, metavar="N", help="number of people")
     parser.add_argument("--fb", required=True, type=_positive, metavar="HZ",
                         help="bouncing frequency f_b (Hz), within 1.35-3.75 (the article's bands)")
-    parser.add_argument("--duration", required=True, type=_positive, metavar="S", help="length (s)")
+    parser.add_argument("--duration", type=_positive, default=DEFAULT_DURATION, metavar="S",
+                        help=f"length (s, default {DEFAULT_DURATION:g})")
     parser.add_argument("--out", required=True, metavar="CSV", help="forces file to write")
     parser.add_argument("--fs", type=_positive, default=200.0, metavar="HZ", help="sampling frequency (default 200)")
     parser.add_argument("--seed", type=_seed, metavar="S",

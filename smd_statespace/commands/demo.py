@@ -182,18 +182,48 @@ def demo_identification_section(pre, out_dir, truth, estimator: str = "ekf") -> 
     return _heading("Identification, cycle by cycle (Section 3.2)") + "\n" + "\n".join(lines)
 
 
-def demo_next_steps() -> str:
-    """What to do next."""
-    return _heading("Next") + "\n" + "\n".join([
-        "  smd-statespace identify REC.csv --mass KG                  the person from your own record (person.json)",
-        "  smd-statespace compare REC.csv --mass KG --truth T.json   estimators side by side",
-        "  smd-statespace simulate --out REC.csv ...                   synthetic records with known truth",
-        "  smd-statespace diagnose REC.csv --mass KG [--json R.json]   where the model fails, which effect is missing",
-        "  smd-statespace identify FOLDER --manifest M.csv --out DIR   a whole study, resumable (--resume)",
-        "  smd-statespace stats DIR/results.csv                        Section 5: bands, Table 2 fits, trends",
-        "  smd-statespace crowd --people 50 --fb 2.5 --out crowd.csv   crowd loads drawn from Table 2",
-        "  smd-statespace hsi                                          Section 6: the vibrating-floor study",
-    ])
+DEMO_RECORD = "rec.csv"
+"""Record that the first of the demo's next steps writes and the others read (in the current directory)."""
+
+
+def demo_next_steps(out_dir=DEMO_OUT) -> str:
+    """What to do next: commands that run exactly as printed, in order, from the current directory.
+
+    The first writes a short synthetic record (8 s, so that each step takes
+    seconds) that the next ones read; ``stats`` reads the demo's own
+    ``results.csv`` in ``out_dir``. ``tests/test_suggestions.py`` runs every
+    one of them.
+
+    Parameters
+    ----------
+    out_dir : str or path-like
+        The demo's output directory.
+
+    Returns
+    -------
+    str
+    """
+    import shlex
+
+    results = shlex.quote(str(Path(out_dir) / "results.csv"))
+    rec, truth = DEMO_RECORD, DEMO_RECORD.replace(".csv", "_truth.json")
+    steps = [
+        (f"smd-statespace simulate --out {rec} --mass 70 --fb 2 --fh 2.5 --xi 0.3 --duration 8 --seed 1",
+         f"a record with known truth ({truth})"),
+        (f"smd-statespace identify {rec} --mass 70", "the person (person.json)"),
+        (f"smd-statespace compare {rec} --mass 70 --truth {truth} --estimators ekf,ukf",
+         "estimators side by side"),
+        (f"smd-statespace diagnose {rec} --mass 70 --max-passes 2",
+         "where the model fails, which effect is missing"),
+        (f"smd-statespace stats {results} --bootstrap 20", "Section 5 on the demo's cycles"),
+        ("smd-statespace crowd --people 50 --fb 2.5 --out crowd.csv", "crowd loads drawn from Table 2 (30 s)"),
+        ("smd-statespace hsi --repeats 1 --duration 8 --max-passes 2", "Section 6, small (defaults: 10 x 30 s)"),
+    ]
+    lines = [line for command, what in steps for line in (f"  {what}:", f"    {command}")]
+    lines.append("  your own record: identify REC.csv --mass KG; a whole study: identify FOLDER --manifest M.csv "
+                 "(docs/batch.md)")
+    return (_heading("Next (each command runs as printed, in order, from this directory)") + "\n"
+            + "\n".join(lines))
 
 
 def run_demo(args) -> int:
@@ -221,5 +251,5 @@ def run_demo(args) -> int:
     print(_heading("Figure") + f"\n  {figure}\n  GRF and cycles, COM acceleration, velocity and displacement: "
           "whole record and a 3-cycle zoom")
     print(demo_identification_section(pre, out_dir, truth))
-    print(demo_next_steps())
+    print(demo_next_steps(out_dir))
     return 0

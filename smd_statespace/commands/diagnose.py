@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shlex
 
 import pandas as pd
 
@@ -67,7 +68,7 @@ def run_person_diagnose(args) -> int:
         raise OptionError("--effect is not available with --estimator record yet; the candidates are tried in turn")
     directory = out_dir(args.out)
     record = read_record(args.record, args.mass)
-    base = identify_person(record, n_harmonics=args.harmonics)
+    base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks)
     print(f"{record.source}: record-level model")
     print(base.summary())
     result = diagnose_person(base, alpha=args.alpha)
@@ -133,7 +134,8 @@ def run_diagnose(args) -> int:
     else:
         best = result.missing[0]
         print(f"\nverdict: missing effect '{best.name}': {best.evidence}")
-        print(f"next: smd-statespace diagnose {args.record} --mass {args.mass:g} --effect {best.effect.spec}")
+        print(f"next: smd-statespace diagnose {shlex.quote(str(args.record))} --mass {args.mass:g} "
+              f"--effect {shlex.quote(best.effect.spec)}")
     for note in result.notes:
         print(f"note: {note}")
     base.plot_diagnostics(directory / "diagnostics.png")

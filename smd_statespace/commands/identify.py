@@ -53,9 +53,10 @@ def add_identify(subparsers):
     parser.add_argument("--timing", choices=("model", "template", "peaks"), default="model",
                         help="record estimator: force-cycle starts placed by the model's own phase errors (default), "
                              "aligned on the mean cycle (template), or at GRF peaks (the article's cycles)")
-    parser.add_argument("--intervals", choices=("wald", "profile"), default="wald",
-                        help="record estimator: 90 %% intervals of f_h, xi_h from the standard errors (default) or "
-                             "the profile likelihood (slower)")
+    parser.add_argument("--intervals", choices=("calibrated", "wald", "profile"), default="calibrated",
+                        help="record estimator: 90 %% intervals of f_h, xi_h from the standard errors widened by "
+                             "factors measured on simulated records (calibrated, default), from the standard errors "
+                             "alone (wald: too narrow) or from the profile likelihood (slower)")
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--jobs", type=_count, default=1, metavar="N", help="parallel processes (default 1)")
@@ -82,9 +83,22 @@ def identify(args, model, preprocessed, estimator: str):
     return runner, table, time.perf_counter() - started
 
 
+def plausible_cycles(table: pd.DataFrame) -> pd.DataFrame:
+    """The ``ok`` cycles whose estimates are possible (not flagged ``implausible``)."""
+    from ..plausibility import flagged
+
+    ok = table["status"] == "ok" if "status" in table else pd.Series(False, index=table.index)
+    return table[ok.to_numpy() & ~flagged(table)]
+
+
 def summary_table(table: pd.DataFrame, truth: dict | None = None) -> pd.DataFrame:
-    """Median, interquartile range and share of determining cycles of each reported parameter."""
-    ok = table[table["status"] == "ok"]
+    """Median, interquartile range and share of determining cycles of each reported parameter.
+
+    Over the plausible ``ok`` cycles only: cycles flagged ``implausible`` (see
+    :mod:`smd_statespace.plausibility`) are left out, :func:`implausible_warning` says how many.
+    Empty (no rows) when no cycle is left.
+    """
+    ok = plausible_cycles(table)
     rows = []
     for name in SUMMARY_PARAMETERS:
         if name not in ok:
@@ -97,15 +111,35 @@ def summary_table(table: pd.DataFrame, truth: dict | None = None) -> pd.DataFram
         if truth and name in truth:
             row["truth"] = truth[name]
         rows.append(row)
+    if not rows or ok.empty:
+        return pd.DataFrame(columns=["median", "q25", "q75", "median_sd", "determined_%"],
+                            index=pd.Index([], name="parameter"))
     return pd.DataFrame(rows).set_index("parameter")
 
 
+def implausible_warning(table: pd.DataFrame) -> str:
+    """A ``warning:`` line counting the cycles flagged ``implausible`` and why; ``""`` when there are none."""
+    from ..plausibility import flagged, reason_counts
+
+    ok = (table["status"] == "ok").to_numpy() if "status" in table else np.zeros(len(table), dtype=bool)
+    bad = ok & flagged(table)
+    if not bad.any():
+        return ""
+    counts = reason_counts(table.loc[bad, "implausible_reason"]) if "implausible_reason" in table else {}
+    why = ", ".join(f"{reason}: {n}" for reason, n in counts.items())
+    return (f"warning: {int(bad.sum())} of {int(ok.sum())} identified cycles gave estimates that cannot be true "
+            f"({why}); they are marked implausible and undetermined in results.csv and left out of the summary")
+
+
 def run_summary(table: pd.DataFrame, seconds: float) -> str:
-    """One line: cycles identified, converged, failed, skipped, and time."""
+    """One line: cycles identified (implausible among them), converged, failed, skipped, and time."""
+    from ..plausibility import flagged
+
     counts = table["status"].value_counts()
     ok = table[table["status"] == "ok"]
+    implausible = int(flagged(ok).sum())
     return (f"{counts.get('ok', 0)} cycles identified ({int(ok['converged'].sum())} converged within the pass limit, "
-            f"mean {ok['passes'].mean():.1f} passes), {counts.get('failed', 0)} failed, "
+            f"mean {ok['passes'].mean():.1f} passes, {implausible} implausible), {counts.get('failed', 0)} failed, "
             f"{counts.get('skipped', 0)} skipped near the record ends; {seconds:.1f} s "
             f"({seconds / max(len(ok), 1):.2f} s per cycle)")
 
@@ -158,16 +192,22 @@ def run_batch_identify(args) -> int:
         raise OptionError("--truth applies to one record, not to a batch")
     directory = out_dir(args.out)
     model = build_model(args)
+    if args.estimator == "record" and args.effect:
+        raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
+                          "(--estimator ekf) to identify with an effect")
     records = collect_records(args.record, args.mass, args.manifest)
     options = dict(max_passes=args.max_passes, seed=args.seed, **estimator_options(args.estimator, args))
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
-                        progress=not args.quiet)
+                        progress=not args.quiet, check=not args.ignore_checks)
     written = [summary.results, directory / "run.json"]
     if (summary.table["status"] == "ok").any():
         written.append(directory / "parameters.png")
         plot_parameters(summary.table, written[-1], against="f_b")
     print(f"{summary.line()}; {time.perf_counter() - started:.1f} s")
+    warning = implausible_warning(summary.table)
+    if warning:
+        print(warning)
     for reason in summary.failures.values():
         print(f"{PROG}: error: {reason}", file=sys.stderr)
     print("wrote " + ", ".join(str(path) for path in written) + f" and {len(records)} parts in {directory / 'parts'}")
@@ -188,7 +228,7 @@ def run_person(args) -> int:
     record = read_record(args.record, args.mass)
     started = time.perf_counter()
     result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
-                             intervals=args.intervals)
+                             intervals=args.intervals, check=not args.ignore_checks)
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary())
@@ -202,9 +242,6 @@ def run_person(args) -> int:
 def run_identify(args) -> int:
     """Run ``smd-statespace identify``."""
     if is_batch(args):
-        if args.estimator == "record":
-            raise OptionError("--estimator record identifies one record at a time; a batch uses a per-cycle "
-                              f"estimator (default {DEFAULT_ESTIMATOR})")
         args.estimator = args.estimator or DEFAULT_ESTIMATOR
         return run_batch_identify(args)
     if args.mass is None:
@@ -220,9 +257,16 @@ def run_identify(args) -> int:
     written = write_outputs(directory, runner, table, args, args.estimator, truth)
     print(f"{record.source}: {args.estimator} on {model}")
     print(run_summary(table, seconds))
-    with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 120):
-        print(summary_table(table, truth).to_string())
-    print("'determined_%': cycles whose posterior sd is under a quarter of the prior sd; "
-          "the others do not pin the parameter down.")
+    warning = implausible_warning(table)
+    if warning:
+        print(warning)
+    summary = summary_table(table, truth)
+    if summary.empty:
+        print("no plausible identified cycle to summarise")
+    else:
+        with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 120):
+            print(summary.to_string())
+        print("'determined_%': plausible cycles whose posterior sd is under a quarter of the prior sd; "
+              "the others do not pin the parameter down.")
     print("wrote " + ", ".join(str(path) for path in written))
     return 0

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, stats
 
+from ..applicability import check_bouncing
 from ..errors import CycleError, SMDInputError
 from ..io import G, Record
 from .model import VARIATIONS, Regressor, RecordModel
@@ -41,6 +42,24 @@ START_XI_H = (0.15, 0.45)
 
 AUTO_VARIATIONS = ("independent", "smooth")
 """Variation models compared by ``variation="auto"``."""
+
+INTERVAL_METHODS = ("calibrated", "wald", "profile")
+"""Interval methods of :func:`identify_person`."""
+
+CALIBRATION = {"independent": {"f_h": 1.89, "xi_h": 2.63}, "smooth": {"f_h": 3.21, "xi_h": 1.96},
+               "random_walk": {"f_h": 2.73, "xi_h": 2.25}, "both": {"f_h": 2.73, "xi_h": 2.25}}
+"""Factors on the standard errors of ``f_h`` and ``xi_h`` for ``intervals="calibrated"`` (the default).
+
+The observed information ignores the error of the cycle timing and what the
+model misses, so its intervals are too narrow. Each factor is the 90th
+percentile of ``|estimate - truth| / sd`` over simulated records, divided by
+1.645, for the variation model that ``variation="auto"`` chose on them:
+measured with ``benchmarks/person_accuracy.py`` (seed 2024, 50 records of each
+generator of force variation; "auto" chose "independent" on all 50 records
+whose force jumps per cycle and "smooth" on all 50 whose force drifts), and
+checked on records of another seed (docs/person-benchmark.md). "random_walk"
+and "both" were not measured: they take the factors of both generators pooled.
+"""
 
 TIMING_ITERATIONS = 3
 """Re-placements of the cycle starts from the model's own phase and rate errors (``timing="model"``)."""
@@ -343,7 +362,7 @@ def _fit_timing(model_for, timing, variation, first=None):
 
 
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
-                    intervals="wald", level=0.9, regressors=(), cov_type="oim", drift=False):
+                    intervals="calibrated", level=0.9, regressors=(), cov_type="oim", drift=False, check=True):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -371,10 +390,13 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         is kept.
     process_noise : bool
         Add a white force on the COM with an estimated level.
-    intervals : {"profile", "wald"}
-        ``"profile"``: profile-likelihood intervals for ``f_h`` and ``xi_h``
-        (measured: about 9 s more on a 30 s record); ``"wald"`` (default):
-        estimate +- z * standard error.
+    intervals : {"calibrated", "wald", "profile"}
+        ``"calibrated"`` (default): estimate +- z * standard error, the
+        standard errors of ``f_h`` and ``xi_h`` (and of ``k_h``, ``c_h``)
+        multiplied by :data:`CALIBRATION`; ``"wald"``: the same from the
+        observed information alone (too narrow: docs/person-benchmark.md);
+        ``"profile"``: profile-likelihood intervals (measured: about 9 s more
+        on a 30 s record; as narrow as the Wald ones).
     level : float
         Confidence level of the intervals.
     regressors : sequence of Regressor
@@ -386,6 +408,10 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     drift : bool
         Let the force coefficients also wander within cycles (a per-sample
         random walk with one estimated variance per harmonic group).
+    check : bool
+        True (default): refuse a record that is not one person bouncing in
+        contact with the plate (:func:`~smd_statespace.applicability.check_bouncing`);
+        False: identify anyway, its findings become warnings.
 
     Returns
     -------
@@ -393,6 +419,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
 
     Raises
     ------
+    NotBouncingError
+        The record is not bouncing (contact lost, clipped, not rhythmic, walking) and ``check`` is True.
     CycleError
         No bouncing cycles, or fewer than :data:`MIN_CYCLES`.
     OptionError
@@ -405,8 +433,9 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
 
     if variation != "auto" and variation not in VARIATIONS:
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
-    if intervals not in ("profile", "wald"):
-        raise OptionError(f"intervals {intervals!r} is not one of: profile, wald")
+    if intervals not in INTERVAL_METHODS:
+        raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
+    record_warnings = check_bouncing(record).raise_if_refused(override=not check)
     y = record.force / record.mass - G  # Eq. 3
     if timing not in ("model",) + TIMING_METHODS:
         raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
@@ -448,6 +477,11 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     if cov_type not in ("robust", "oim"):
         raise OptionError(f"cov_type {cov_type!r} is not one of: robust, oim")
     cov, free = information(model, params, cov_type)
+    factors = CALIBRATION[model.variation]
+    if intervals == "calibrated":
+        scale = np.ones(params.size)
+        scale[0], scale[1] = factors["f_h"], factors["xi_h"]
+        cov = cov * np.outer(scale, scale)
     se = np.sqrt(np.diag(cov))
     z = stats.norm.ppf(0.5 + level / 2.0)
     interval = {}
@@ -458,7 +492,9 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         else:
             interval[name] = wald
     return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
-                        intervals=interval, interval_method=intervals if intervals == "profile" else f"wald ({cov_type})",
+                        intervals=interval, interval_method={"profile": "profile", "wald": f"wald ({cov_type})"}.get(
+                            intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, "
+                                       f"{factors['xi_h']:g})"),
                         level=level, comparison=comparison,
-                        n_evaluations=fitted["n_evaluations"])
+                        n_evaluations=fitted["n_evaluations"], record_warnings=record_warnings)
 

@@ -15,7 +15,7 @@ and plain-word warnings (:attr:`warnings`).
 from __future__ import annotations
 
 import shlex
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -64,6 +64,9 @@ class PersonResult:
         The variation models tried: log-likelihood, parameters, AIC.
     n_evaluations : int
         Likelihood evaluations of the search.
+    record_warnings : list of str
+        What the checks of :func:`~smd_statespace.applicability.check_bouncing`
+        found in the record before the fit (first in :attr:`warnings`).
     """
 
     record: object
@@ -77,6 +80,7 @@ class PersonResult:
     level: float
     comparison: list
     n_evaluations: int = 0
+    record_warnings: list = field(default_factory=list)
 
     # ------------------------------------------------------------------ estimates
     @cached_property
@@ -248,8 +252,8 @@ class PersonResult:
     # ------------------------------------------------------------------ words
     @property
     def warnings(self) -> list:
-        """Plain-word warnings: parameters at a bound or not determined, residual tests that reject."""
-        out = []
+        """Plain-word warnings: the record's checks, parameters at a bound or not determined, residual tests that reject."""
+        out = list(self.record_warnings)
         for which, name in enumerate(("f_h", "xi_h")):
             low, high = self.model.bounds[which]
             value = self.params[which]
@@ -264,8 +268,7 @@ class PersonResult:
         tests = self.test_pvalues()
         if tests["ljung_box_p"] < WHITENESS_ALPHA:
             out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): the model "
-                       "misses something, and f_h, xi_h and their intervals may be biased (on simulated records whose "
-                       "force drifts smoothly within cycles, f_h was off by 16 % in the median; docs/person.md); run "
+                       "misses something, and f_h, xi_h and their intervals may be biased; run "
                        f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g} "
                        "--estimator record`")
         return out
@@ -306,6 +309,26 @@ class PersonResult:
         out["warnings"] = self.warnings
         out["variation_models"] = self.comparison
         return out
+
+    def table_row(self) -> dict:
+        """One flat row for a table of people (a batch's ``results.csv``; what ``stats`` reads).
+
+        The scalars of :meth:`to_dict`, the warnings joined by ``" | "``, and
+        the flags ``stats`` uses: ``implausible`` (``f_h`` or ``xi_h`` on a
+        search bound: not an estimate) with ``implausible_reason``, and
+        ``model_adequate`` (the innovations pass the Ljung-Box test at
+        :data:`WHITENESS_ALPHA`).
+        """
+        from .fit import at_bound
+
+        row = {key: value for key, value in self.to_dict().items() if np.isscalar(value)}
+        row["warnings"] = " | ".join(self.warnings)
+        reasons = [f"{name} on search bound" for which, name in enumerate(("f_h", "xi_h"))
+                   if at_bound(self.model, self.params, which)]
+        row["implausible"] = bool(reasons)
+        row["implausible_reason"] = "; ".join(reasons)
+        row["model_adequate"] = bool(row["ljung_box_p"] >= WHITENESS_ALPHA)
+        return row
 
     def summary(self) -> str:
         """The person in a few lines: the answer first, then noise, force, tests, warnings."""
