@@ -243,6 +243,9 @@ def test_compare_puts_the_person_beside_the_per_cycle_estimators(tmp_path, long_
     assert list(table.index) == ["record", "ekf"]
     assert table.loc["record", "|err| f_h"] == pytest.approx(abs(table.loc["record", "f_h"] - 2.8))
     assert "the person from the whole record" in out
+    # the ekf's measured coverage is 67 %: its row carries the warning, the calibrated record row does not
+    assert table.loc["ekf", "f_h_cover_%"] == 67 and "warning: ekf: intervals over-confident" in out
+    assert "warning: record:" not in out
 
 
 def test_likelihood_ratio_of_an_absent_effect_is_chi_square_1():
