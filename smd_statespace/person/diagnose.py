@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal, stats
 
-from .fit import fit_model
+from .fit import at_bound, fit_model
 from .model import RecordModel, Regressor
 
 __all__ = ["CANDIDATES", "ALL_CANDIDATES", "PersonDiagnosis", "diagnose_person"]
@@ -64,7 +64,7 @@ class PersonDiagnosis:
         The fit without any effect.
     rows : list of dict
         One per candidate: ``effect, n_params, loglike, lr, p_value,
-        significant, delta_aic, noise_change_%, f_h, xi_h`` (after) and the
+        significant, on_bound, delta_aic, noise_change_%, f_h, xi_h`` (after) and the
         effect's parameter estimate with its sd.
     alpha : float
         Family-wise significance level (Bonferroni over the candidates).
@@ -92,8 +92,14 @@ class PersonDiagnosis:
         return not self.missing
 
     def notes(self) -> list:
-        """Plain-word notes: candidates that explain the same residual, and what separates them."""
+        """Plain-word notes: candidates that explain the same residual, what separates them, degenerate refits."""
         out = []
+        table = self.table()
+        if not table.empty and "on_bound" in table:
+            for name in table.index[table["on_bound"].astype(bool)]:
+                out.append(f"{name}: its refit put f_h or xi_h on a search bound (f_h {table.loc[name, 'f_h']:.3g} "
+                           f"Hz, xi_h {table.loc[name, 'xi_h']:.3g}); the term and the person's resonance together "
+                           "imitate the residual, so it is not proposed")
         if {"harmonics", "cubic_stiffness"} <= set(self.missing):
             out.append("harmonics and cubic_stiffness both explain the residual: a cubic spring makes harmonics "
                        "of the bouncing frequency. Only the spring's harmonics grow with the displacement "
@@ -201,7 +207,11 @@ def diagnose_person(result, candidates=CANDIDATES, alpha=0.01) -> PersonDiagnosi
                "noise_change_%": 100.0 * (np.sqrt(out["sigma2"]) / result.sigma - 1.0),
                "f_h_before": result.f_h, "f_h": float(fitted["params"][0]),
                "xi_h_before": result.xi_h, "xi_h": float(fitted["params"][1])}
-        row["significant"] = bool(row["p_value"] < level)
+        # a refit that runs f_h or xi_h to a search bound has not found an effect: the effect's term
+        # and the person's resonance together imitate the residual (measured: a cubic spring "explained"
+        # hidden harmonics with f_h 6 Hz, xi_h 3)
+        row["on_bound"] = at_bound(model, fitted["params"], 0) or at_bound(model, fitted["params"], 1)
+        row["significant"] = bool(row["p_value"] < level) and not row["on_bound"]
         start = 2 + model.n_coefficients
         names = [r.name for r in model.regressors]
         if parameter in names:
