@@ -254,8 +254,18 @@ class Effect:
         return np.zeros(x.shape[:-1])
 
     def acceleration_jacobian(self, model: "SMDModel", x, t, inputs: CycleInputs):
-        """Derivative of :meth:`acceleration` with respect to ``x``, shape ``x.shape``."""
-        return np.zeros(x.shape)
+        """Derivative of :meth:`acceleration` with respect to ``x``, shape ``x.shape``.
+
+        Default: central differences of :meth:`acceleration` itself
+        (:func:`~smd_statespace.jacobians.numeric_jacobian`), so an effect
+        that gives only its acceleration is right in every estimator. An
+        analytic override is faster; :func:`~smd_statespace.jacobians.check_jacobians`
+        compares the two.
+        """
+        from .jacobians import expand_time, numeric_jacobian
+
+        moment = expand_time(t)
+        return numeric_jacobian(lambda z: self.acceleration(model, z, moment, inputs), x)
 
     def slot_rates(self, model: "SMDModel", x, t, inputs: CycleInputs, acc):
         """Rates of the effect's own slots, shape ``x.shape[:-1] + (len(slots),)``.
@@ -268,9 +278,24 @@ class Effect:
     def slot_rates_jacobian(self, model: "SMDModel", x, t, inputs: CycleInputs, acc, acc_jacobian):
         """Derivative of :meth:`slot_rates`, shape ``x.shape[:-1] + (len(slots), n_state)``.
 
-        ``acc_jacobian`` is the derivative of the total acceleration.
+        ``acc_jacobian`` is the derivative of the total acceleration. Default:
+        central differences of :meth:`slot_rates` in ``x`` at fixed ``acc``,
+        plus their derivative in ``acc`` times ``acc_jacobian`` (the chain rule).
         """
-        return np.zeros(x.shape[:-1] + (_width(model.effect_slice(self)), x.shape[-1]))
+        from .jacobians import JACOBIAN_STEP, expand_time, numeric_jacobian
+
+        x = np.asarray(x, dtype=float)
+        width = _width(model.effect_slice(self))
+        if width == 0:
+            return np.zeros(x.shape[:-1] + (0, x.shape[-1]))
+        acc = np.asarray(acc, dtype=float)
+        moment = expand_time(t)
+        held = acc[..., None] if acc.ndim else acc
+        in_x = numeric_jacobian(lambda z: self.slot_rates(model, z, moment, inputs, held), x)
+        step = JACOBIAN_STEP * np.maximum(1.0, np.abs(acc))
+        in_acc = (self.slot_rates(model, x, t, inputs, acc + step)
+                  - self.slot_rates(model, x, t, inputs, acc - step)) / (2.0 * np.asarray(step)[..., None])
+        return in_x + in_acc[..., :, None] * np.asarray(acc_jacobian)[..., None, :]
 
     def __repr__(self):
         return f"{type(self).__name__}()"

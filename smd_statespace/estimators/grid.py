@@ -28,7 +28,8 @@ from ..errors import OptionError
 from ..model import SMDModel
 from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, GaussianStart, Trace, gaussian_start,
                    prepare, register_estimator)
-from .linear import ConditionalKalman, mixture_covariance, mixture_moments, normalised, predictive_mixture
+from .linear import (ConditionalKalman, mixture_covariance, mixture_moments, normalised, predictive_mixture,
+                     verify_linear)
 
 
 def _cell_centres(low, high, count):
@@ -76,6 +77,7 @@ class GridReference(Estimator):
 
     def run(self, model: SMDModel, data: CycleData, start=None, rng=None, fixed=None) -> FilterResult:
         fixed = dict(fixed or {})
+        verify_linear(model, data.inputs)
         setup = prepare(model, data, fixed, self.process_noise_std, self.observation_noise_std)
         i_f, i_xi = model.index("f_h"), model.index("xi_h")
         f_axis = np.array([fixed["f_h"]]) if "f_h" in fixed else _cell_centres(

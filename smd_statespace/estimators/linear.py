@@ -11,6 +11,8 @@ those slots and an extended Kalman filter otherwise.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy.special import logsumexp
 
@@ -18,6 +20,33 @@ from ..model import SMDModel
 from .base import Setup
 
 LOG_2PI = np.log(2.0 * np.pi)
+
+
+_VERIFIED: set = set()
+"""Models (by ``id``) whose linearity has been checked in this process."""
+
+
+def verify_linear(model: SMDModel, inputs) -> dict:
+    """Check once per model that its rate is linear in the slots the Kalman part filters.
+
+    A wrong declaration by an effect raises
+    :class:`~smd_statespace.errors.OptionError`
+    (:func:`~smd_statespace.jacobians.check_linearity`); a base slot made
+    non-linear by an effect (``u`` under a cubic spring) gives a warning: the
+    conditional Kalman filter then linearises, like an EKF, and its posterior
+    is approximate. Returns the failures.
+    """
+    if id(model) in _VERIFIED:
+        return {}
+    from ..jacobians import check_linearity
+
+    failures = check_linearity(model, inputs, t=inputs.t0 + 0.1)
+    _VERIFIED.add(id(model))
+    if failures:
+        warnings.warn(f"the model is not linear in {', '.join(sorted(failures))} (an effect's term is non-linear "
+                      "in them): the Kalman part of this estimator linearises there, like an EKF, so its posterior "
+                      "is approximate", stacklevel=3)
+    return failures
 
 
 class ConditionalKalman:

@@ -32,7 +32,7 @@ from ..errors import OptionError
 from ..model import SMDModel
 from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, ParticleStart, Trace, dynamic_mask,
                    prepare, register_estimator)
-from .linear import ConditionalKalman, mixture_moments, normalised, predictive_mixture
+from .linear import ConditionalKalman, mixture_moments, normalised, predictive_mixture, verify_linear
 from .particle import check_particle_options, effective_sample_size, reflect, reweight, systematic_resample
 
 
@@ -88,6 +88,7 @@ class RaoBlackwellisedFilter(Estimator):
 
     def run(self, model: SMDModel, data: CycleData, start=None, rng=None, fixed=None) -> FilterResult:
         rng = np.random.default_rng() if rng is None else rng
+        verify_linear(model, data.inputs)
         setup = prepare(model, data, fixed, self.process_noise_std, self.observation_noise_std)
         slots_linear = np.array([slot.linear for slot in model.slots])
         nonlinear = np.flatnonzero(setup.free & ~slots_linear)
