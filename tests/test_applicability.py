@@ -107,6 +107,7 @@ def test_a_wrong_mass_and_quiet_standing_are_warnings_not_refusals(bouncing):
     assert abs(partly.active_seconds - 18.0) < 1.0
 
 
+@pytest.mark.slow
 def test_clean_bouncing_across_the_articles_range_raises_nothing():
     """No refusal on any of 20 simulated people (f_b 1.5-3.5 Hz, both generators); warnings counted."""
     rng = np.random.default_rng(2024)
@@ -123,6 +124,7 @@ def test_clean_bouncing_across_the_articles_range_raises_nothing():
     assert warned <= 2  # the two-hump warning may fire near a resonance at 2 f_b (1 of 40 measured)
 
 
+@pytest.mark.slow
 def test_ignore_checks_identifies_anyway_and_says_what_was_found(bouncing, tmp_path, capsys):
     path = tmp_path / "clipped.csv"
     force = np.minimum(bouncing.record.force, 1.3 * WEIGHT)
@@ -135,6 +137,7 @@ def test_ignore_checks_identifies_anyway_and_says_what_was_found(bouncing, tmp_p
     assert any("clipped" in w and "identified anyway" in w for w in result.warnings)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(arrays(np.float64, st.integers(50, 1500), elements=st.floats(-2000.0, 5000.0)))
 def test_any_finite_force_gets_a_table_or_one_line(tmp_path_factory, values):

@@ -123,6 +123,7 @@ def test_resume_keeps_finished_records_and_refuses_other_settings(records, tmp_p
     assert again.resumed == 2 and again.identified == 0
 
 
+@pytest.mark.slow
 def test_sigkill_mid_run_then_resume_gives_the_clean_results(tmp_path):
     """A real process killed with SIGKILL after its first record; --resume completes it, nothing lost or doubled."""
     folder = write_records(tmp_path / "records", 6, duration=10.0)
@@ -171,6 +172,7 @@ def test_a_new_run_rewrites_settings_left_in_its_folder(records, tmp_path):
     assert again.resumed == 1
 
 
+@pytest.mark.slow
 def test_record_estimator_gives_one_person_per_record_that_stats_reads(records, tmp_path, capsys):
     """``identify FOLDER --estimator record``: one row per record (the person), the flat record fails in one line,
     and ``stats`` reads the table as it is (f_b, f_h, xi_h, BLFs, mass, the flags)."""

@@ -88,6 +88,7 @@ def test_parse_effect():
             parse_effect(bad)
 
 
+@pytest.mark.slow
 def test_demo_reports_the_sample_and_writes_the_figure(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path / "fig")]) == 0
     text = capsys.readouterr().out
@@ -191,6 +192,7 @@ def console_script():
     return str(here) if here.exists() else shutil.which("smd-statespace")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(console_script() is None, reason="the smd-statespace console script is not installed")
 def test_console_script_demo(tmp_path):
     done = subprocess.run([console_script(), "demo", "--out", "tmp"], cwd=tmp_path, capture_output=True,

@@ -11,7 +11,8 @@ from smd_statespace.model import CycleInputs, SMDModel
 from smd_statespace.runner import CycleRunner
 from smd_statespace.simulate import simulate_bouncing
 
-from test_model import finite_difference, random_states
+from helpers import finite_difference, random_states
+
 
 # A measured floor: two modes, about 1 mm and 1 cm/s, sampled finely enough that
 # linear interpolation between samples is smooth at the test times.

@@ -16,6 +16,7 @@ def record(seed, f_b, f_h, xi_h, effects=None, duration=12.0):
                                         effects=effects).record)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed,f_b,f_h,xi_h,blf", [(31, 2.0, 2.5, 0.3, (0.04, 0.03)), (32, 2.6, 3.1, 0.4, (0.05, 0.02))])
 def test_hidden_harmonics_are_found_and_adding_them_lowers_the_residual(seed, f_b, f_h, xi_h, blf):
     result = diagnose(record(seed, f_b, f_h, xi_h, {"harmonics": {"blf": blf}}), max_passes=3)
@@ -43,6 +44,7 @@ def check_found(result, name):
 # A cubic spring leaves harmonics above n f_b only where the COM moves far: low f_b, strong nonlinearity
 # (below about f_b 1.8 Hz with beta 1000 1/m^2; at the simulator's default 400 1/m^2 and 2 Hz the force
 # absorbs it, see smd_statespace.missing).
+@pytest.mark.slow
 @pytest.mark.parametrize("seed,f_b,f_h,beta", [(1, 1.6, 1.92, 1500.0), (12, 1.5, 1.8, 1200.0)])
 def test_hidden_cubic_stiffness_is_found(seed, f_b, f_h, beta):
     result = diagnose(record(seed, f_b, f_h, 0.3, {"cubic_stiffness": {"beta": beta}}), max_passes=3)
@@ -52,6 +54,7 @@ def test_hidden_cubic_stiffness_is_found(seed, f_b, f_h, beta):
 
 
 # A floor vibrating above n f_b (here from other occupants, about 1 m/s^2) reaches the GRF through the legs.
+@pytest.mark.slow
 @pytest.mark.parametrize("seed,f_b,f_f", [(9, 1.7, 9.5), (5, 1.5, 8.2)])
 def test_hidden_floor_mode_is_found(seed, f_b, f_f):
     synthetic = simulate_bouncing(mass=72.0, f_b=f_b, f_h=1.2 * f_b, xi_h=0.3, duration=12.0, seed=seed,
@@ -64,6 +67,7 @@ def test_hidden_floor_mode_is_found(seed, f_b, f_f):
 # Without an accelerometer: a known floor mode at the strongest non-harmonic line of the residual spectrum,
 # its motion estimated cycle by cycle. It explains the residual with 2 values per cycle (z, z_dot) where
 # extra harmonics need 4, so it ranks above them.
+@pytest.mark.slow
 @pytest.mark.parametrize("seed,f_b,f_f,ambient", [(5, 1.5, 8.2, 1.0), (14, 1.8, 11.0, 1.3)])
 def test_hidden_floor_without_accelerometer_is_found(seed, f_b, f_f, ambient):
     synthetic = simulate_bouncing(mass=72.0, f_b=f_b, f_h=1.2 * f_b, xi_h=0.3, duration=12.0, seed=seed,
@@ -80,6 +84,7 @@ def test_hidden_floor_without_accelerometer_is_found(seed, f_b, f_f, ambient):
     assert first["spec"].startswith("floor_mode:source=modal,frequency=")
 
 
+@pytest.mark.slow
 def test_floor_at_the_bouncing_harmonics_is_absorbed_and_said_so():
     # The article's set-up: plate mode 1 (3.48 Hz) driven by the 2nd harmonic at 1.75 Hz, no other source.
     synthetic = simulate_bouncing(mass=72.0, f_b=1.75, f_h=1.8, xi_h=0.33, duration=12.0, seed=6,
@@ -92,6 +97,7 @@ def test_floor_at_the_bouncing_harmonics_is_absorbed_and_said_so():
     assert coupling > 1.0  # % BW: the floor matters physically, yet the residual cannot show it
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed,f_b,f_h,xi_h", [(41, 1.8, 2.2, 0.35), (42, 2.9, 3.3, 0.25), (43, 2.3, 2.0, 0.4)])
 def test_clean_records_are_adequate(seed, f_b, f_h, xi_h):
     result = diagnose(record(seed, f_b, f_h, xi_h), max_passes=3)
@@ -100,6 +106,7 @@ def test_clean_records_are_adequate(seed, f_b, f_h, xi_h):
     assert result.base.serial_correlation_ratio() < 2.0
 
 
+@pytest.mark.slow
 def test_diagnose_cli_json_and_before_after(tmp_path, capsys):
     rec = tmp_path / "h.csv"
     assert main(["simulate", "--out", str(rec), "--mass", "70", "--fb", "2.2", "--fh", "2.6", "--xi", "0.3",

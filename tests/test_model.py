@@ -8,26 +8,9 @@ from smd_statespace.effects import CubicStiffness, Harmonics, make_effect
 from smd_statespace.io import G
 from smd_statespace.model import CycleInputs, SMDModel, blf, c_h, k_h
 
+from helpers import finite_difference, random_states
+
 INPUTS = CycleInputs(f_b=2.1, t0=0.3)
-
-
-def random_states(model, rng, size):
-    """States with realistic magnitudes (u in cm, u_dot in dm/s)."""
-    prior = model.prior(np.array([0.02, 0.1, 3.0])[: model.n_obs], {"u": 0.02, "u_dot": 0.2, "u_ddot": 3.0})
-    x = prior.sample(rng, size)
-    x[:, 0] = rng.normal(0, 0.03, size)
-    x[:, 1] = rng.normal(0, 0.3, size)
-    return x
-
-
-def finite_difference(func, x, eps=1e-6):
-    """Central differences of func at a single state x: shape out.shape + (n,)."""
-    columns = []
-    for j in range(x.size):
-        step = np.zeros_like(x)
-        step[j] = eps * max(1.0, abs(x[j]))
-        columns.append((func(x + step) - func(x - step)) / (2 * step[j]))
-    return np.stack(columns, axis=-1)
 
 
 def test_eq17_eq18_article_check_values():

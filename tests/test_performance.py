@@ -11,7 +11,8 @@ from smd_statespace.estimators import GaussianStart, get_estimator
 from smd_statespace.estimators.particle import noise_generator
 from smd_statespace.model import SMDModel
 
-from test_estimators import FIXED, linear_case, well_excited_cycle
+from helpers import FIXED, linear_case, well_excited_cycle
+
 
 
 def run_both(model, data, **options):

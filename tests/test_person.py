@@ -158,6 +158,7 @@ def test_a_smooth_fit_at_the_bouncing_frequency_does_not_determine_f_h(long_sim,
     assert result.at_bouncing_frequency is not determined
 
 
+@pytest.mark.slow
 def test_result_reports_the_person_with_intervals_and_tests(long_sim):
     result = identify_person(long_sim.record)
     d = result.to_dict()
@@ -179,6 +180,7 @@ def test_too_short_a_record_is_refused_in_one_line():
         identify_person(sim.record, check=False)
 
 
+@pytest.mark.slow
 def test_cli_writes_person_json_first_and_refuses_short_records(tmp_path, long_sim, capsys):
     path = tmp_path / "rec.csv"
     long_sim.write(path)
@@ -196,6 +198,7 @@ def test_cli_writes_person_json_first_and_refuses_short_records(tmp_path, long_s
     assert not (tmp_path / "s" / "person.json").exists()
 
 
+@pytest.mark.slow
 def test_constant_offset_absorbs_a_wrong_body_mass():
     """A 2 % error in the mass shifts GRF/M - g by a constant; the offset regressor takes it, f_h stays."""
     sim = simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30, seed=4)
@@ -205,6 +208,7 @@ def test_constant_offset_absorbs_a_wrong_body_mass():
     assert wrong.f_h == pytest.approx(good.f_h, rel=0.03)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("effects, expected", [
     (None, None),
     ({"harmonics": {"blf": (0.04, 0.03)}}, "harmonics"),
@@ -231,6 +235,7 @@ def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects,
         assert row["estimate"] == pytest.approx(1.0, abs=3 * row["estimate_sd"])
 
 
+@pytest.mark.slow
 def test_compare_puts_the_person_beside_the_per_cycle_estimators(tmp_path, long_sim, capsys):
     path = tmp_path / "rec.csv"
     truth = tmp_path / "rec_truth.json"
@@ -248,6 +253,7 @@ def test_compare_puts_the_person_beside_the_per_cycle_estimators(tmp_path, long_
     assert "warning: record:" not in out
 
 
+@pytest.mark.slow
 def test_likelihood_ratio_of_an_absent_effect_is_chi_square_1():
     """Records drawn from the model itself (statsmodels' simulator); a regressor that is not there: LR ~ chi2(1)."""
     from scipy import stats

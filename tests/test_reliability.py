@@ -153,6 +153,7 @@ def test_same_seed_same_table(record):
     pd.testing.assert_frame_equal(*(t.drop(columns="seconds") for t in tables))
 
 
+@pytest.mark.slow
 @QUICK
 @given(f_b=st.floats(1.3, 3.8), amplitudes=st.lists(st.floats(0.0, 600.0), min_size=1, max_size=8),
        spikes=st.lists(st.tuples(st.integers(0, 1199), st.floats(-5e4, 5e4)), max_size=5),

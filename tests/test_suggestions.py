@@ -37,6 +37,7 @@ def test_the_parser_finds_printed_commands_and_not_prose():
     assert shlex.split(suggestions(text)[1])[2] == "my rec.csv"
 
 
+@pytest.mark.slow
 def test_every_printed_suggestion_runs_as_printed(tmp_path, monkeypatch, capsys):
     """The demo's next steps, in order, and whatever those commands suggest in turn, from one directory."""
     monkeypatch.chdir(tmp_path)
