@@ -483,6 +483,33 @@ def _parse_value(text):
     return int(number) if number.is_integer() and "." not in text and "e" not in text.lower() else number
 
 
+def parse_spec(spec, option="--effect") -> tuple:
+    """Parse ``NAME[:key=value,key=value]`` into ``(name, {key: value})``: the one parser of effect specs.
+
+    Values are numbers (integers stay integers), tuples written ``a/b``, or
+    words. The effect's own code checks names, keys and kinds of values.
+
+    Examples
+    --------
+    >>> parse_spec("floor_mode:frequency=3.48,modal_mass=8583")
+    ('floor_mode', {'frequency': 3.48, 'modal_mass': 8583})
+    >>> parse_spec("harmonics:blf=0.04/0.03")
+    ('harmonics', {'blf': (0.04, 0.03)})
+    """
+    name, _, rest = str(spec).partition(":")
+    name = name.strip()
+    if not name:
+        raise OptionError(f"{option} {spec!r}: give an effect name, e.g. floor_mode or harmonics:count=2")
+    values = {}
+    for item in filter(None, (part.strip() for part in rest.split(","))):
+        key, eq, value = item.partition("=")
+        key = key.strip()
+        if not eq or not key or not value.strip():
+            raise OptionError(f"{option} {spec!r}: {item!r} must look like key=value")
+        values[key] = _parse_value(value)
+    return name, values
+
+
 def make_effect(spec) -> Effect:
     """Build an effect from a name, ``"NAME:key=value,..."``, or pass an :class:`Effect` through.
 
@@ -495,16 +522,9 @@ def make_effect(spec) -> Effect:
     """
     if isinstance(spec, Effect):
         return spec
-    name, _, rest = str(spec).partition(":")
-    name = name.strip()
+    name, kwargs = parse_spec(spec, "effect")
     if name not in EFFECTS:
         raise OptionError(f"unknown effect {name!r}; choose one of {', '.join(sorted(EFFECTS))}")
-    kwargs = {}
-    for item in filter(None, (part.strip() for part in rest.split(","))):
-        key, eq, value = item.partition("=")
-        if not eq:
-            raise OptionError(f"effect {name!r}: option {item!r} must look like key=value")
-        kwargs[key.strip()] = _parse_value(value)
     try:
         return EFFECTS[name](**kwargs)
     except TypeError:

@@ -73,37 +73,26 @@ def _numbers(text: str) -> tuple[float, ...]:
 
 
 def parse_effect(spec: str) -> tuple[str, dict]:
-    """Parse ``NAME[:key=value,key=value]`` into ``(name, {key: value})``.
+    """``simulate --effect NAME[:key=value,...]``: :func:`~smd_statespace.effects.parse_spec` with numbers only.
 
-    Values are numbers; a tuple is written ``a/b`` (e.g. ``blf=0.04/0.03``).
-    Names and keys are checked by the simulator, not here.
+    The simulator's effects take numbers and tuples of numbers (``a/b``); a
+    word is refused here, naming the key. Names and keys are checked by the
+    simulator.
 
     Examples
     --------
-    >>> parse_effect("floor_mode:frequency=3.48,modal_mass=8583")
-    ('floor_mode', {'frequency': 3.48, 'modal_mass': 8583.0})
     >>> parse_effect("harmonics:blf=0.04/0.03")
     ('harmonics', {'blf': (0.04, 0.03)})
     """
-    name, _, rest = spec.partition(":")
-    name = name.strip()
-    if not name:
-        raise OptionError(f"--effect {spec!r}: give an effect name, e.g. floor_mode or harmonics:blf=0.04/0.03")
-    params = {}
-    for item in filter(None, (part.strip() for part in rest.split(","))):
-        key, eq, value = item.partition("=")
-        key = key.strip()
-        if not eq or not key:
-            raise OptionError(f"--effect {spec!r}: {item!r} must look like key=value")
-        try:
-            numbers = tuple(float(part) for part in value.split("/"))
-        except ValueError:
-            raise OptionError(
-                f"--effect {spec!r}: value {value.strip()!r} of {key!r} is not a number (write a tuple as a/b)"
-            ) from None
-        params[key] = numbers if "/" in value else numbers[0]
-    return name, params
+    from ..effects import parse_spec
 
+    name, values = parse_spec(spec)
+    for key, value in values.items():
+        parts = value if isinstance(value, tuple) else (value,)
+        if not all(isinstance(part, (int, float)) for part in parts):
+            raise OptionError(f"--effect {spec!r}: value of {key!r} is not a number (write a tuple as a/b)")
+        values[key] = tuple(float(part) for part in parts) if isinstance(value, tuple) else float(value)
+    return name, values
 
 
 def demo_out_dir(out) -> Path:
