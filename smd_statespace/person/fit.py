@@ -374,7 +374,9 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     variation : {"auto", "independent", "smooth", "random_walk", "both"}
         How the force coefficients vary (:mod:`~smd_statespace.person.model`):
         jumping at every cycle start (``"independent"``), drifting smoothly
-        in time (``"smooth"``), ... ``"auto"`` (default) fits
+        in time (``"smooth"``), a random walk from cycle to cycle
+        (``"random_walk"``) or a wandering template plus draws (``"both"``).
+        ``"auto"`` (default) fits
         :data:`AUTO_VARIATIONS` at the first cycle timing and keeps the lowest
         AIC among the fits whose ``f_h`` and ``xi_h`` are off their search
         bounds (the list of fits is ``result.comparison``); with
