@@ -280,3 +280,16 @@ def test_likelihood_ratio_of_an_absent_effect_is_chi_square_1():
     statistics = np.array(statistics)
     assert stats.kstest(statistics, stats.chi2(1).cdf).pvalue > 0.05
     assert 0.5 < statistics.mean() < 1.6  # chi2(1) has mean 1; 40 draws give an sd of the mean of about 0.22
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("effects, warned", [
+    ({"cubic_stiffness": {"beta": 1500.0}}, True), ({"harmonics": {"blf": (0.04, 0.03)}}, True), (None, False)])
+def test_identify_warns_when_the_base_model_misses_an_effect_and_names_the_next_command(effects, warned):
+    """Hidden cubic spring or extra harmonics: a warning in words with the diagnose command; a clean record: none."""
+    sim = simulate_bouncing(mass=70, f_b=1.6, f_h=1.92, xi_h=0.3, duration=30, seed=1, effects=effects)
+    result = identify_person(sim.record)
+    said = [w for w in result.warnings if "serially correlated" in w]
+    assert bool(said) is warned
+    if warned:
+        assert "smd-statespace diagnose" in said[0] and "--estimator record" in said[0]
