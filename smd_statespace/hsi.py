@@ -865,12 +865,6 @@ def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, m
     -------
     HSIStudy
     """
-    from .effects import FloorMode
-    from .model import SMDModel
-    from .runner import CycleRunner
-    from .signals import preprocess
-    from .simulate import simulate_bouncing
-
     started = _time.perf_counter()
     settings = _settings({"duration": duration, "warmup": warmup, "estimator": estimator, "max_passes": max_passes,
                           "fs": fs, "noise": noise, "repeats": repeats, "mass_scales": mass_scales})
@@ -880,10 +874,32 @@ def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, m
         if unknown:
             raise OptionError(f"hsi_study: unknown person keys {sorted(unknown)}; valid: {', '.join(HSI_PERSON)}")
         who.update(person)
-    warm, length = float(settings["warmup"]), float(settings["duration"])
     plate, mode1 = FloorModel.table3(), FloorModel.table3([1])
-    weight = who["mass"] * G
+    ls_rows, records, states, floor_rows = _simulate_conditions(who, settings, seed, plate, mode1)
 
+    tables, medians, counts = _identify_conditions(records, plate, settings, seed, identify, progress)
+
+    least = pd.DataFrame(ls_rows)
+    table = _table4(least, medians, who, plate, mode1)
+    sensitivity = _sensitivity(least, settings, plate)
+
+    settings.update(seed=seed, person={k: (list(v) if isinstance(v, tuple) else v) for k, v in who.items()},
+                    cycles_identified=counts, mass_scales=list(settings["mass_scales"]))
+    return HSIStudy(table=table, sensitivity=sensitivity, floors=pd.DataFrame(floor_rows).set_index("floor"),
+                    least_squares=least, records=records, states=states, cycles=tables, settings=settings,
+                    seconds=_time.perf_counter() - started)
+
+
+def _simulate_conditions(who, settings, seed, plate, mode1):
+    """Steps 1, 2 and 4 of :func:`hsi_study`: every repeat's records on each floor and their least-squares fits.
+
+    Returns ``(least-squares rows, records, states, floor rows)``; the records
+    and states are those of the first repeat (the main ones).
+    """
+    from .simulate import simulate_bouncing
+
+    warm, length = float(settings["warmup"]), float(settings["duration"])
+    weight = who["mass"] * G
     ls_rows, records, states, floor_rows = [], {}, {}, []
     for repeat, child in enumerate(np.random.SeedSequence(seed).spawn(settings["repeats"])):
         force_seed, floor_seed = child.spawn(2)
@@ -929,6 +945,15 @@ def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, m
             if floor is plate:
                 records[plate.name] = _cut(record, warm)
         states["rigid floor"] = synthetic.states[late].assign(time=lambda f: f["time"] - warm).reset_index(drop=True)
+    return ls_rows, records, states, floor_rows
+
+
+def _identify_conditions(records, plate, settings, seed, identify, progress):
+    """Step 3 of :func:`hsi_study`: the library's identification; returns ``(tables, medians, counts)``."""
+    from .effects import FloorMode
+    from .model import SMDModel
+    from .runner import CycleRunner
+    from .signals import preprocess
 
     tables, counts = {}, {}
     nan = {name: np.nan for name in REPORTED}
@@ -942,16 +967,20 @@ def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, m
         key = f"{condition} / {model_name} model"
         tables[key] = runner.run(preprocess(records[condition]))
         medians[key], counts[key] = _median_parameters(tables[key])
+    return tables, medians, counts
 
-    least = pd.DataFrame(ls_rows)
 
-    def ls_changes(condition, model="rigid"):
-        base = least[(least["condition"] == "rigid floor")].set_index("repeat")[list(REPORTED)]
-        other = least[(least["condition"] == condition) & (least["model"] == model)].set_index("repeat")[list(REPORTED)]
-        return 100.0 * (other / base - 1.0)
+def _ls_changes(least, condition, model="rigid"):
+    """Change (%) of each repeat's least-squares parameters from the rigid floor to ``condition``."""
+    base = least[(least["condition"] == "rigid floor")].set_index("repeat")[list(REPORTED)]
+    other = least[(least["condition"] == condition) & (least["model"] == model)].set_index("repeat")[list(REPORTED)]
+    return 100.0 * (other / base - 1.0)
 
-    main_change, mode1_change = ls_changes(plate.name), ls_changes(mode1.name)
-    floor_change = ls_changes(plate.name, "floor_mode")
+
+def _table4(least, medians, who, plate, mode1):
+    """Step 5 of :func:`hsi_study`: Table 4's comparison, one row per parameter."""
+    main_change, mode1_change = _ls_changes(least, plate.name), _ls_changes(least, mode1.name)
+    floor_change = _ls_changes(least, plate.name, "floor_mode")
     ekf_rigid = medians["rigid floor / rigid model"]
     ekf_plate = medians[f"{plate.name} / rigid model"]
     ekf_floor = medians[f"{plate.name} / floor_mode model"]
@@ -977,11 +1006,15 @@ def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, m
             "article_change_%": 100.0 * article.TABLE4["difference"][key],
         })
     table = pd.DataFrame(rows).set_index("parameter")
+    return table
 
+
+def _sensitivity(least, settings, plate):
+    """Step 4 of :func:`hsi_study` with scaled modal masses: parameter changes against the floor response."""
     sens_rows = []
     for scale in settings["mass_scales"]:
         name = _scaled(plate, scale).name
-        change = ls_changes(name)
+        change = _ls_changes(least, name)
         level = least[(least["condition"] == name) & (least["model"] == "rigid")]["floor_acc_rms"].mean()
         row = {"mass_scale": scale, "floor_acc_rms": float(level)}
         for parameter in REPORTED:
@@ -989,12 +1022,7 @@ def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, m
             row[f"{parameter}_change_sd_%"] = float(change[parameter].std(ddof=1)) if len(change) > 1 else np.nan
         sens_rows.append(row)
     sensitivity = pd.DataFrame(sens_rows).set_index("mass_scale")
-
-    settings.update(seed=seed, person={k: (list(v) if isinstance(v, tuple) else v) for k, v in who.items()},
-                    cycles_identified=counts, mass_scales=list(settings["mass_scales"]))
-    return HSIStudy(table=table, sensitivity=sensitivity, floors=pd.DataFrame(floor_rows).set_index("floor"),
-                    least_squares=least, records=records, states=states, cycles=tables, settings=settings,
-                    seconds=_time.perf_counter() - started)
+    return sensitivity
 
 
 # ---------------------------------------------------------------------------
