@@ -15,8 +15,8 @@ Two Markdown pages are written from the code itself, so they cannot drift from i
 
 Run from the repository root::
 
-    python -m smd_statespace.docs_reference            # rewrite docs/api.md and docs/cli.md
-    python -m smd_statespace.docs_reference --check    # exit 1 if either is out of date
+    python tools/docs_reference.py            # rewrite docs/api.md and docs/cli.md
+    python tools/docs_reference.py --check    # exit 1 if either is out of date
 
 ``tests/test_reference.py`` runs the same build and comparison, so a broken
 docstring or a new option without a regenerated reference fails the tests.
@@ -39,12 +39,15 @@ from pathlib import Path
 
 PACKAGE = "smd_statespace"
 
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+"""The repository's docs folder (this script lives in ``tools/``, beside it)."""
+
 EXCLUDED_MODULES = ("smd_statespace.__main__", "smd_statespace.commands")
 """Modules left out of the API reference (the commands are documented in ``docs/cli.md``)."""
 
 API_HEADER = """# API reference
 
-Generated from the numpydoc docstrings by `python -m smd_statespace.docs_reference`; do not
+Generated from the numpydoc docstrings by `python tools/docs_reference.py`; do not
 edit by hand (the tests regenerate it and fail if it differs). Equation numbers are those of
 Wang, Chen & Nagayama (2019); the [theory page](theory.md) maps them to this code, and the
 [command-line reference](cli.md) lists the `smd-statespace` options.
@@ -53,7 +56,7 @@ Wang, Chen & Nagayama (2019); the [theory page](theory.md) maps them to this cod
 CLI_HEADER = """# Command-line reference
 
 Generated from the argument parser (`smd_statespace.cli.build_parser`) by
-`python -m smd_statespace.docs_reference`; do not edit by hand (the tests regenerate it and
+`python tools/docs_reference.py`; do not edit by hand (the tests regenerate it and
 fail if it differs). Errors are one line on stderr, `smd-statespace: error: ...`, with exit
 status 2. Worked examples: [tutorial-identify.md](tutorial-identify.md).
 """
@@ -444,7 +447,7 @@ def build_cli() -> str:
     """The text of ``docs/cli.md``: ``--help`` of the command and of every subcommand."""
     import os
 
-    from .cli import build_parser
+    from smd_statespace.cli import build_parser
 
     old = os.environ.get("COLUMNS")
     os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal; fix the width so the page is stable
@@ -471,8 +474,8 @@ PAGES = {"api.md": build_api, "cli.md": build_cli}
 
 def main(argv=None) -> int:
     """Write (or with ``--check`` compare) the generated pages; return the exit status."""
-    parser = argparse.ArgumentParser(prog="python -m smd_statespace.docs_reference", description=__doc__.split("\n")[0])
-    parser.add_argument("--docs", default="docs", help="the docs directory (default: docs)")
+    parser = argparse.ArgumentParser(prog="python tools/docs_reference.py", description=__doc__.split("\n")[0])
+    parser.add_argument("--docs", default=str(DOCS), help=f"the docs directory (default: {DOCS})")
     parser.add_argument("--check", action="store_true", help="do not write; exit 1 if a page is out of date")
     args = parser.parse_args(argv)
     docs = Path(args.docs)
@@ -491,7 +494,7 @@ def main(argv=None) -> int:
             path.write_text(text, encoding="utf-8")
             print(f"wrote {path}")
     if stale:
-        print("out of date (run python -m smd_statespace.docs_reference): " + ", ".join(stale), file=sys.stderr)
+        print("out of date (run python tools/docs_reference.py): " + ", ".join(stale), file=sys.stderr)
         return 1
     return 0
 
