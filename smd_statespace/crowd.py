@@ -6,10 +6,10 @@ and their sum. Each person
 
 - is drawn from the article's skew-normal fits (Table 2, Eq. 19) for the
   band holding ``f_b``, or from a user's own table in the same layout
-  (:func:`fit_table`), by :func:`~smd_statespace.simulate.sample_population`:
+  (:func:`fit_table`), by :func:`~smd_statespace.population.sample_population`:
   ``f_h``, ``xi_h``, BLF1-3 independent (the article gives marginals only),
   the body mass from ``N(65, 10)`` kg truncated to 45-100 kg
-  (:data:`~smd_statespace.simulate.MASS_DISTRIBUTION`), ``K_h`` and ``C_h``
+  (:data:`~smd_statespace.population.MASS_DISTRIBUTION`), ``K_h`` and ``C_h``
   from Eq. 17-18;
 - has its own phase offset (the start of its first cycle uniform over
   ``phase_spread`` of a cycle; 1 = unsynchronised) and its own
@@ -59,8 +59,9 @@ from matplotlib.figure import Figure
 from . import article
 from .errors import OptionError
 from .io import G
-from .simulate import (GRF_PHASE_LAG, TRUNCATION_SD, _draw_cycles, _population_columns, _stiffness,
-                       _damping_coefficient, acceleration_frf, default_phases)
+from .model import c_h, k_h
+from .population import _population_columns
+from .simulate import GRF_PHASE_LAG, TRUNCATION_SD, _draw_cycles, acceleration_frf, default_phases
 
 __all__ = [
     "CROWD_SETTINGS",
@@ -248,7 +249,7 @@ def _check_count(n, name="n"):
 def draw_people(n, f_b, seed=None, table=None, bounds=None) -> pd.DataFrame:
     """Draw ``n`` people bouncing at ``f_b``: the crowd's parameters, without simulating forces.
 
-    Person ``i`` is :func:`~smd_statespace.simulate.sample_population` of one
+    Person ``i`` is :func:`~smd_statespace.population.sample_population` of one
     person with the parameter seed of :func:`person_seeds` ``(seed, i)``.
 
     Parameters
@@ -262,7 +263,7 @@ def draw_people(n, f_b, seed=None, table=None, bounds=None) -> pd.DataFrame:
     table : see :func:`fit_table`
         Default the article's Table 2.
     bounds : dict, optional
-        Overrides of :data:`~smd_statespace.simulate.POPULATION_BOUNDS`.
+        Overrides of :data:`~smd_statespace.population.POPULATION_BOUNDS`.
 
     Returns
     -------
@@ -286,8 +287,8 @@ def _draw_parameters(root, indices, draws, f_b, fits, bounds):
     """Parameters of people ``indices`` at their draws ``draws``: arrays, as :func:`sample_population`."""
     rows = [_population_columns(1, f_b, person_seeds(root, i, d)[0], fits, bounds) for i, d in zip(indices, draws)]
     columns = {key: np.concatenate([row[key] for row in rows]) for key in rows[0]}
-    columns["K_h"] = _stiffness(columns["mass"], columns["f_h"])  # Eq. 17
-    columns["C_h"] = _damping_coefficient(columns["mass"], columns["f_h"], columns["xi_h"])  # Eq. 18
+    columns["K_h"] = k_h(columns["f_h"], columns["mass"])  # Eq. 17
+    columns["C_h"] = c_h(columns["xi_h"], columns["f_h"], columns["mass"])  # Eq. 18
     return columns
 
 
@@ -568,7 +569,7 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
     table : see :func:`fit_table`
         Skew-normal fits; default the article's Table 2.
     bounds : dict, optional
-        Overrides of :data:`~smd_statespace.simulate.POPULATION_BOUNDS`.
+        Overrides of :data:`~smd_statespace.population.POPULATION_BOUNDS`.
     fb_variation, coef_variation : float
         Cycle-to-cycle relative SD of the frequency (0-0.2) and of the
         harmonics (0-1); defaults in :data:`CROWD_SETTINGS`.
