@@ -181,6 +181,14 @@ def is_batch(args) -> bool:
             or (glob.has_magic(record) and not Path(record).exists()))
 
 
+def _refuse_effects(args):
+    """The record estimator takes no ``--effect`` yet: one line (after an unknown or malformed effect is named)."""
+    if args.effect:
+        build_model(args)
+        raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
+                          "(--estimator ekf) to identify with an effect")
+
+
 def run_batch_identify(args) -> int:
     """Identify many records (see :mod:`smd_statespace.batch`); 1 when some failed, else 0."""
     import sys
@@ -192,9 +200,8 @@ def run_batch_identify(args) -> int:
         raise OptionError("--truth applies to one record, not to a batch")
     directory = out_dir(args.out)
     model = build_model(args)
-    if args.estimator == "record" and args.effect:
-        raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
-                          "(--estimator ekf) to identify with an effect")
+    if args.estimator == "record":
+        _refuse_effects(args)
     records = collect_records(args.record, args.mass, args.manifest)
     options = dict(max_passes=args.max_passes, seed=args.seed, **estimator_options(args.estimator, args))
     started = time.perf_counter()
@@ -220,10 +227,7 @@ def run_person(args) -> int:
     from ..person import identify_person
     from ..person.output import write_person
 
-    if args.effect:
-        build_model(args)  # an unknown or malformed effect is named first
-        raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
-                          "(--estimator ekf) to identify with an effect")
+    _refuse_effects(args)
     directory = out_dir(args.out)
     record = read_record(args.record, args.mass)
     started = time.perf_counter()

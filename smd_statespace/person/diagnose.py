@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal, stats
 
-from .fit import at_bound, fit_model
+from .fit import fit_model
 from .model import RecordModel, Regressor
 
 __all__ = ["CANDIDATES", "ALL_CANDIDATES", "PersonDiagnosis", "diagnose_person"]
@@ -210,7 +210,7 @@ def diagnose_person(result, candidates=CANDIDATES, alpha=0.01) -> PersonDiagnosi
         # a refit that runs f_h or xi_h to a search bound has not found an effect: the effect's term
         # and the person's resonance together imitate the residual (measured: a cubic spring "explained"
         # hidden harmonics with f_h 6 Hz, xi_h 3)
-        row["on_bound"] = at_bound(model, fitted["params"], 0) or at_bound(model, fitted["params"], 1)
+        row["on_bound"] = model.person_at_bound(fitted["params"])
         row["significant"] = bool(row["p_value"] < level) and not row["on_bound"]
         start = 2 + model.n_coefficients
         names = [r.name for r in model.regressors]

@@ -314,17 +314,6 @@ def corrected_timing(model: RecordModel, params) -> CycleTiming:
     return CycleTiming(new, "model")
 
 
-def at_bound(model: RecordModel, params, which) -> bool:
-    """True when parameter ``which`` is within 0.1 % of its search range from a bound."""
-    low, high = model.bounds[which]
-    return bool(min(params[which] - low, high - params[which]) < 1e-3 * (high - low))
-
-
-def _on_bound(model: RecordModel, params) -> bool:
-    """True when ``f_h`` or ``xi_h`` sits on a search bound."""
-    return at_bound(model, params, 0) or at_bound(model, params, 1)
-
-
 def _fit_timing(model_for, timing, variation, first=None):
     """Fit with a phase template and re-place the cycle starts; returns the best ``(model, fit)`` by likelihood.
 
@@ -464,7 +453,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         fits.append((model, fit_model(model, quick=timing == "model")))
     comparison = [{"variation": m.variation, "loglike": f["loglike"], "n_params": len(f["params"]),
                    "aic": 2 * len(f["params"]) - 2 * f["loglike"], "converged": f["converged"],
-                   "on_bound": _on_bound(m, f["params"])} for m, f in fits]
+                   "on_bound": m.person_at_bound(f["params"])} for m, f in fits]
     # a fit with f_h or xi_h on its search bound has not estimated them (a variation model that is
     # too flexible lets the person's resonance imitate a missing effect): it wins only if all do
     eligible = [i for i, row in enumerate(comparison) if not row["on_bound"]] or list(range(len(fits)))

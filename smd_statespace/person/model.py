@@ -284,6 +284,15 @@ class RecordModel:
         return [F_H_BOUNDS, XI_H_BOUNDS] + [
             smooth if name == "log_smooth_time" else LOG_VAR_BOUNDS for name in self.param_names[2:]]
 
+    def at_bound(self, params, which) -> bool:
+        """True when parameter ``which`` is within 0.1 % of its search range from a bound (not an estimate)."""
+        low, high = self.bounds[which]
+        return bool(min(params[which] - low, high - params[which]) < 1e-3 * (high - low))
+
+    def person_at_bound(self, params) -> bool:
+        """True when ``f_h`` or ``xi_h`` sits on a search bound."""
+        return self.at_bound(params, 0) or self.at_bound(params, 1)
+
     def start_params(self, f_h=2.5, xi_h=0.3, log_var=-3.0) -> np.ndarray:
         """A starting point: the given ``f_h``, ``xi_h``, one log variance ratio for every group and,
         for variation "smooth", a length scale of two mean bouncing cycles."""

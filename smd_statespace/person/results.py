@@ -174,13 +174,11 @@ class PersonResult:
         """True when the standard error of ``f_h`` or ``xi_h`` is below :data:`DETERMINED_FRACTION` of its yardstick,
         the estimate is not at a search bound and (``f_h``, smooth variation) not at the bouncing frequency
         (:data:`F_B_COINCIDENCE`)."""
-        from .fit import at_bound
-
         which = {"f_h": 0, "xi_h": 1}[name]
         if name == "f_h" and self.at_bouncing_frequency:
             return False
         return bool(np.isfinite(self.se[which]) and self.se[which] < DETERMINED_FRACTION * PRIOR_SD[name]
-                    and not at_bound(self.model, self.params, which))
+                    and not self.model.at_bound(self.params, which))
 
     @property
     def at_bouncing_frequency(self) -> bool:
@@ -277,7 +275,7 @@ class PersonResult:
         for which, name in enumerate(("f_h", "xi_h")):
             low, high = self.model.bounds[which]
             value = self.params[which]
-            if min(value - low, high - value) < 1e-3 * (high - low):
+            if self.model.at_bound(self.params, which):
                 out.append(f"{name} = {value:.3g} sits on its search bound ({low:g}-{high:g}): not an estimate; "
                            "the model may not fit this record (run diagnose)")
             elif name == "f_h" and self.at_bouncing_frequency:
@@ -343,12 +341,10 @@ class PersonResult:
         ``model_adequate`` (the innovations pass the Ljung-Box test at
         :data:`WHITENESS_ALPHA`).
         """
-        from .fit import at_bound
-
         row = {key: value for key, value in self.to_dict().items() if np.isscalar(value)}
         row["warnings"] = " | ".join(self.warnings)
         reasons = [f"{name} on search bound" for which, name in enumerate(("f_h", "xi_h"))
-                   if at_bound(self.model, self.params, which)]
+                   if self.model.at_bound(self.params, which)]
         row["implausible"] = bool(reasons)
         row["implausible_reason"] = "; ".join(reasons)
         row["model_adequate"] = bool(row["ljung_box_p"] >= WHITENESS_ALPHA)
