@@ -8,7 +8,7 @@ from ..errors import OptionError
 from ..estimators import ESTIMATORS
 from .common import (add_model_arguments, add_record_arguments, add_run_arguments, build_model, load_truth, out_dir,
                      prepare_record, truth_values)
-from .identify import identify
+from .identify import identify, plausible_cycles
 
 COMPARED = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3")
 
@@ -66,10 +66,9 @@ def comparison_table(tables: dict, seconds: dict, truth: dict | None = None) -> 
     """One row per estimator: medians, interquartile range of f_h, determined shares, errors, time."""
     rows = []
     for name, table in tables.items():
-        ok = table[table["status"] == "ok"]
-        implausible = ok["implausible"].astype(bool) if "implausible" in ok else pd.Series(False, index=ok.index)
-        ok = ok[~implausible]  # impossible estimates are not summarised (counted instead)
-        row = {"estimator": name, "cycles": len(ok), "implausible": int(implausible.sum()),
+        ok = plausible_cycles(table)  # impossible estimates are not summarised (counted instead)
+        implausible = int((table["status"] == "ok").sum()) - len(ok)
+        row = {"estimator": name, "cycles": len(ok), "implausible": implausible,
                "failed": int((table["status"] == "failed").sum())}
         for parameter in COMPARED:
             row[parameter] = ok[parameter].median()
