@@ -48,7 +48,7 @@ from tqdm import tqdm
 from . import __version__
 from .errors import OptionError, RecordError, SMDInputError
 from .io import check_mass
-from .plausibility import flagged, reason_counts
+from .plausibility import implausible_ok
 from .runner import DEFAULT_ESTIMATOR
 
 RECORD_ESTIMATOR = "record"
@@ -354,8 +354,7 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     atomic_write_csv(table, results)
     cycle = table["cycle"] if "cycle" in table else pd.Series(np.nan, index=table.index)
     failed = table[(table["status"] == "failed") & cycle.isna()]  # a record's one row: it was not identified
-    bad = (table["status"] == "ok").to_numpy() & flagged(table)
-    reasons = reason_counts(table.loc[bad, "implausible_reason"]) if "implausible_reason" in table else {}
+    _, bad, reasons = implausible_ok(table)
     return BatchSummary(records=len(records), identified=len(pending), resumed=len(records) - len(pending),
                         failures=dict(zip(failed["record"], failed["reason"])),
                         cycles=table["status"].value_counts().to_dict(), results=results, table=table,

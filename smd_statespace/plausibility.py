@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 __all__ = ["XI_H_MIN", "C_H_MIN", "PRIOR_MARGIN", "MAX_BLF", "MAX_GRF_HARMONIC", "implausible_reasons",
-           "flagged", "reason_counts"]
+           "flagged", "reason_counts", "implausible_ok"]
 
 XI_H_MIN = 0.0
 """Smallest damping ratio ``xi_h`` (-): below 0 the SMD's damper would feed energy into the body (Eq. 2)."""
@@ -149,3 +149,12 @@ def reason_counts(reasons) -> dict:
         for reason in filter(None, (part.strip() for part in text.split(";"))):
             counts[reason] = counts.get(reason, 0) + 1
     return dict(sorted(counts.items(), key=lambda item: (-item[1], item[0])))
+
+
+def implausible_ok(table: pd.DataFrame) -> tuple:
+    """``(ok, implausible, reasons)``: the ``ok`` rows, those of them flagged implausible (boolean masks), and
+    :func:`reason_counts` of the flagged ones' ``implausible_reason`` (``{}`` without that column)."""
+    ok = (table["status"] == "ok").to_numpy() if "status" in table else np.zeros(len(table), dtype=bool)
+    bad = ok & flagged(table)
+    reasons = reason_counts(table.loc[bad, "implausible_reason"]) if "implausible_reason" in table else {}
+    return ok, bad, reasons

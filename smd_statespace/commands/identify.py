@@ -119,13 +119,11 @@ def summary_table(table: pd.DataFrame, truth: dict | None = None) -> pd.DataFram
 
 def implausible_warning(table: pd.DataFrame) -> str:
     """A ``warning:`` line counting the cycles flagged ``implausible`` and why; ``""`` when there are none."""
-    from ..plausibility import flagged, reason_counts
+    from ..plausibility import implausible_ok
 
-    ok = (table["status"] == "ok").to_numpy() if "status" in table else np.zeros(len(table), dtype=bool)
-    bad = ok & flagged(table)
+    ok, bad, counts = implausible_ok(table)
     if not bad.any():
         return ""
-    counts = reason_counts(table.loc[bad, "implausible_reason"]) if "implausible_reason" in table else {}
     why = ", ".join(f"{reason}: {n}" for reason, n in counts.items())
     return (f"warning: {int(bad.sum())} of {int(ok.sum())} identified cycles gave estimates that cannot be true "
             f"({why}); they are marked implausible and undetermined in results.csv and left out of the summary")
