@@ -49,7 +49,7 @@ DURATION, FS, NOISE = 30.0, 100.0, 0.01
 KINDS = {
     "clean": [None],
     "harmonics": [{"harmonics": {"blf": (0.022, 0.016)}}, {"harmonics": {"blf": (0.065, 0.048)}}],
-    "cubic_stiffness": [{"cubic_stiffness": {"beta": 450.0}}, {"cubic_stiffness": {"beta": 1500.0}}],
+    "cubic_stiffness": [{"cubic_stiffness": {"beta_3": 450.0}}, {"cubic_stiffness": {"beta_3": 1500.0}}],
     "floor_measured": [{"floor_mode": {"modal_mass": 2000.0}}, {"floor_mode": {"modal_mass": 700.0}}],
     "floor_unmeasured": [{"floor_mode": {"modal_mass": 2000.0}}, {"floor_mode": {"modal_mass": 700.0}}],
 }

@@ -22,6 +22,8 @@ command-line form ``NAME:key=value,key=value``.
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 
 from . import article
@@ -35,20 +37,41 @@ class Harmonics(Effect):
 
     Adds the coefficients ``a_k, b_k`` (g) for ``k = n+1 ... n+count`` and
     their terms ``g (a_k cos(k theta) + b_k sin(k theta))`` to the
-    acceleration, with the same prior range as the base coefficients.
+    acceleration, with the same prior range as the base coefficients. In a
+    simulation they are extra harmonics of the force with amplitudes ``blf``
+    and ``phases``, varying from cycle to cycle like the base ones.
 
     Parameters
     ----------
-    count : int
-        Number of harmonics to add.
+    count : int, optional
+        Number of harmonics to add (default 2, or ``len(blf)``).
+    blf : float or sequence of float, optional
+        Simulation: amplitudes ``BLF_k`` (g) of the added harmonics (default
+        :data:`DEFAULT_BLF`, cut to ``count``).
+    phases : sequence of float, optional
+        Simulation: their phases (rad); default the simulator's GRF-shape rule
+        (:func:`~smd_statespace.simulate.default_phases`).
     """
 
     name = "harmonics"
+    DEFAULT_BLF = (0.04, 0.03, 0.02, 0.01)
 
-    def __init__(self, count: int = 2):
-        if isinstance(count, bool) or int(count) != count or count < 1:
-            raise OptionError(f"harmonics: count must be a whole number >= 1, got {count!r}")
+    def __init__(self, count: int | None = None, blf=None, phases=None):
+        where = "harmonics"
+        self.blf = None if blf is None else tuple(float(v) for v in np.atleast_1d(_numbers(blf, "blf", where)))
+        if self.blf is not None and (not self.blf or min(self.blf) < 0):
+            raise OptionError(f"{where}: blf must be amplitudes >= 0 (g), got {blf!r}")
+        if count is None:
+            count = 2 if self.blf is None else len(self.blf)
+        if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+            raise OptionError(f"{where}: count must be a whole number >= 1, got {count!r}")
         self.count = int(count)
+        if self.blf is not None and len(self.blf) != self.count:
+            raise OptionError(f"{where}: blf has {len(self.blf)} amplitudes, count is {self.count}")
+        self.phases = None if phases is None else tuple(float(v) for v in np.atleast_1d(_numbers(phases, "phases",
+                                                                                                   where)))
+        if self.phases is not None and len(self.phases) != self.count:
+            raise OptionError(f"{where}: phases has {len(self.phases)} values, the effect adds {self.count} harmonics")
 
     def orders(self, model) -> np.ndarray:
         """Harmonic orders this effect adds to ``model``."""
@@ -63,18 +86,40 @@ class Harmonics(Effect):
             for k in self.orders(model) for c in "ab"
         )
 
+    def _names(self, model):
+        return [f"{c}{k}" for k in self.orders(model) for c in "ab"]
+
     def acceleration(self, model, x, t, inputs):
         basis = model.fourier_basis(t, inputs, harmonics=self.orders(model))
-        return G * np.sum(x[..., model.effect_slice(self)] * basis, axis=-1)
+        coefficients = np.stack(np.broadcast_arrays(*(model.value(x, name) for name in self._names(model))), -1)
+        return G * np.sum(coefficients * basis, axis=-1)
 
     def acceleration_jacobian(self, model, x, t, inputs):
         jac = np.zeros(x.shape)
-        jac[..., model.effect_slice(self)] = G * model.fourier_basis(t, inputs, harmonics=self.orders(model))
+        jac[..., model.effect_slice(self)] = G * model.fourier_basis(t, inputs, harmonics=[
+            int(name[1:]) for name in self._names(model) if name in model.state_names][::2])
         return jac
+
+    def for_simulation(self, model, mass):
+        """The coefficient slots at 0: the simulator puts these harmonics into the force itself."""
+        return self.with_values(**{name: 0.0 for name in self._names(model)})
+
+    def force_harmonics(self, model):
+        if self.blf is None and self.count > len(self.DEFAULT_BLF):
+            raise OptionError(f"harmonics: give blf=... (g) to simulate {self.count} extra harmonics")
+        return (self.blf or self.DEFAULT_BLF[:self.count]), self.phases
+
+    def simulation_truth(self):
+        return {"blf": list(self.blf or self.DEFAULT_BLF[:self.count]),
+                "phases": None if self.phases is None else list(self.phases)}
 
     @property
     def spec(self) -> str:
-        return f"{self.name}:count={self.count}"
+        options = f"count={self.count}"
+        for key in ("blf", "phases"):
+            if getattr(self, key) is not None:
+                options += f",{key}={_spec_value(getattr(self, key))}"
+        return _with_values(f"{self.name}:{options}", self)
 
     def __repr__(self):
         return f"Harmonics(count={self.count})"
@@ -84,20 +129,31 @@ class CubicStiffness(Effect):
     """A nonlinear leg spring: restoring force ``K_h (u + beta_3 u^3)``.
 
     Adds the parameter ``beta_3`` (1/m^2) and the acceleration term
-    ``-omega_h^2 beta_3 u^3``. ``beta_3 > 0`` hardens the spring (the
+    ``-omega_h^2 beta_3 r^3`` with ``r = u - z`` the leg's compression (``z``
+    the floor displacement when a ``floor_mode`` effect is present, else 0).
+    Its Jacobian is the automatic one (central differences). ``beta_3 > 0`` hardens the spring (the
     apparent natural frequency rises with amplitude), ``beta_3 < 0`` softens it.
+    A simulation without a given ``beta_3`` uses 400 1/m^2: at a COM
+    amplitude of 2 cm the stiffness is then 16 % higher at the extremes,
+    which raises the apparent natural frequency by about 6 %.
 
     Parameters
     ----------
     beta_range : (float, float)
         Uniform prior of ``beta_3`` (1/m^2). At a COM amplitude of 3 cm,
         ``beta_3 = 1000`` changes the stiffness by 90 %.
+
+    Examples
+    --------
+    >>> make_effect("cubic_stiffness:beta_3=400").values  # known: simulated truth, or fixed in identification
+    {'beta_3': 400.0}
     """
 
     name = "cubic_stiffness"
+    simulation_defaults = {"beta_3": 400.0}
 
     def __init__(self, beta_range=(-1000.0, 1000.0)):
-        low, high = (float(v) for v in beta_range)
+        low, high = _numbers(beta_range, "beta_range", "cubic_stiffness", pair=True)
         if not low < high:
             raise OptionError(f"cubic_stiffness: beta_range must satisfy low < high, got {beta_range!r}")
         self.beta_range = (low, high)
@@ -109,22 +165,12 @@ class CubicStiffness(Effect):
 
     def acceleration(self, model, x, t, inputs):
         omega = TWO_PI * x[..., F_H]
-        beta = x[..., model.index("beta_3")]
-        return -(omega**2) * beta * x[..., U] ** 3
-
-    def acceleration_jacobian(self, model, x, t, inputs):
-        omega = TWO_PI * x[..., F_H]
-        i_beta = model.index("beta_3")
-        beta, u = x[..., i_beta], x[..., U]
-        jac = np.zeros(x.shape)
-        jac[..., U] = -3.0 * omega**2 * beta * u**2
-        jac[..., F_H] = -2.0 * TWO_PI * omega * beta * u**3
-        jac[..., i_beta] = -(omega**2) * u**3
-        return jac
+        compression = x[..., U] - model.floor_motion(x, t, inputs)[0]  # the leg acts on u - z (Section 6)
+        return -(omega**2) * model.value(x, "beta_3") * compression**3
 
     @property
     def spec(self) -> str:
-        return f"{self.name}:beta_range={_spec_value(self.beta_range)}"
+        return _with_values(f"{self.name}:beta_range={_spec_value(self.beta_range)}", self)
 
     def __repr__(self):
         return f"CubicStiffness(beta_range={self.beta_range})"
@@ -142,7 +188,7 @@ class FloorMode(Effect):
     of Eq. 10. ``u''`` stays the absolute COM acceleration, which the GRF
     measures through Eq. 3. Where ``z`` comes from depends on ``source``:
 
-    ``"measured"`` (default)
+    ``"measured"``
         The record has a ``floor_acc`` column; its high-passed, integrated
         velocity and displacement (:func:`smd_statespace.signals.preprocess`)
         are exogenous inputs (``requires = ("floor_disp", "floor_vel")``). No
@@ -158,6 +204,46 @@ class FloorMode(Effect):
         Slots ``z`` (m), ``z_dot`` (m/s), then the parameters ``f_f`` (Hz),
         ``xi_f`` (-) and ``mass_ratio`` (-), all three non-linear.
 
+    The default source is ``"modal"`` when any option of the modal floor is
+    given, else ``"measured"``.
+
+    A simulation (:func:`~smd_statespace.simulate.simulate_bouncing`,
+    ``simulate --effect floor_mode:...``) integrates the modal floor with
+    the given ``frequency``, ``damping`` and ``mass_ratio`` as the truth
+    (defaults: mode 1 of the article's plate, Table 3: 3.48 Hz, 0.0037, and
+    ``M_h / modal_mass`` with ``modal_mass`` 8583 kg), writes the floor
+    acceleration as the record's ``floor_acc`` column (white noise of
+    ``noise`` times its RMS), and adds ``ambient`` floor vibration from other
+    sources (see :func:`~smd_statespace.simulate.ambient_floor_excitation`).
+
+    The simulated record starts in the coupled (person + floor) periodic
+    steady state of the first cycle's force: with ``fb_variation=0`` and
+    ``coef_variation=0`` the floor amplitude is constant from ``t = 0``.
+    With cycle-to-cycle variation it is not, because the default floor mode
+    is lightly damped (half-power bandwidth ``2 xi_f f_f`` = 0.026 Hz, decay
+    time ``1 / (xi_f w_f)`` = 12 s) and a force harmonic near it (e.g. the
+    2nd at ``f_b`` = 1.75 Hz) moves across the resonance as ``f_b`` varies:
+    the start is the steady state of the first cycle's frequency alone
+    (often off resonance: at a constant ``f_b`` of 1.72, 1.75 and 1.78 Hz
+    the floor amplitude is 0.55, 0.95 and 0.33 m/s^2), and the floor then
+    takes about its decay time to settle to the response to the varying
+    force, which itself wanders (beats) as the cycle frequencies come and
+    go. At ``f_b`` 1.75 Hz, ``f_h`` 1.8 Hz, ``xi_h`` 0.33, 70 kg and the
+    default variations, the amplitude over the first 5 s averages 0.58
+    m/s^2 (SD 0.24 over 30 seeds) against 0.94 m/s^2 (SD 0.18) over the
+    last 5 s of 30 s records. Drop the first ~15 s, or set
+    ``fb_variation=0``, where a stationary floor response matters. With
+    ``variation="smooth"`` the integration starts a run-in of up to 60 s
+    (about 5 decay times) before the record, so the floor has settled by
+    ``t = 0``.
+
+    Whether the GRF shows ``ambient`` floor vibration depends on its
+    frequency, not on periodicity: below about ``n f_b`` a cycle's Fourier
+    force absorbs any smooth floor motion (measured: 0.2 m/s^2 at 3.48 Hz
+    left nothing in the residual); above it the floor reaches the GRF
+    through the leg's transmissibility (about 0.15 at 9 Hz), so about
+    1 m/s^2 is needed to stand out of 1 % BW noise.
+
     =============== ================ =========================================
     symbol          slot / option    meaning (unit)
     =============== ================ =========================================
@@ -170,13 +256,14 @@ class FloorMode(Effect):
 
     Parameters
     ----------
-    source : {"measured", "modal"}
+    source : {"measured", "modal"}, optional
         Where the floor motion comes from (see above).
         :meth:`for_record` picks it from the record.
     frequency : float, optional
-        ``"modal"`` only: a seed of the floor frequency (Hz), e.g. a peak of
-        the residual spectrum. The prior of ``f_f`` is then uniform on
-        ``frequency * (1 -+ frequency_spread)``.
+        ``"modal"``: the floor frequency (Hz). Estimated mode: a seed, e.g. a
+        peak of the residual spectrum; the prior of ``f_f`` is then uniform
+        on ``frequency * (1 -+ frequency_spread)``. Known mode (with
+        ``damping``) and simulation: the value.
     frequency_spread : float, optional
         ``"modal"`` only: relative half-width of that prior (default 0.15).
     frequency_range : (float, float), optional
@@ -188,19 +275,29 @@ class FloorMode(Effect):
         ``"modal"`` only: prior range of ``M_h / m_f`` (default 0.001-0.05;
         one 70 kg person on the article's plate, 8583 kg: 0.008).
     damping, mass_ratio : float, optional
-        ``"modal"`` only: a *known* mode. With ``frequency`` and ``damping``
+        ``"modal"``: a *known* mode. With ``frequency`` and ``damping``
         (and ``mass_ratio``, default 0.008: 70 kg on mode 1 of the article's
         plate) given, ``f_f``, ``xi_f`` and ``M_h / m_f`` are constants, as
         from a modal test of the floor (the article's Table 3), and only the
         floor's motion ``z``, ``z_dot`` is estimated. Fewer values per cycle
         than an estimated mode: a floor mode is one frequency for the whole
-        record.
+        record. In a simulation: the true values.
     displacement, velocity : float, optional
         ``"modal"`` only: nominal magnitudes of ``z`` (m, default 1e-3) and
         ``z'`` (m/s, default 1e-2): the prior spread of the unobserved floor
         state and, times ``process_noise``, its process noise per step. They
         are fixed, not scaled by the person's data, because the floor moves
         one or two orders of magnitude less than the COM.
+    modal_mass : float, optional
+        Simulation only: the floor's modal mass (kg, default 8583, Table 3)
+        when ``mass_ratio`` is not given; the simulated person's mass over it
+        is the mass ratio. (Identification reads ``mass_ratio``.)
+    noise : float, optional
+        Simulation only: floor-acceleration noise as a fraction of its RMS
+        (default: the simulation's GRF noise fraction).
+    ambient : float, optional
+        Simulation only: RMS floor acceleration (m/s^2) from other sources
+        (default 0).
 
     Attributes
     ----------
@@ -210,7 +307,7 @@ class FloorMode(Effect):
     requires_columns : tuple of str
         Record columns those signals come from: ``("floor_acc",)`` when measured.
     slot_names : tuple of str
-        Names of the slots the ``"modal"`` source adds, in state order
+        Names of the slots the ``"modal"`` source estimates, in state order
         (``z``, ``z_dot`` only for a known mode).
     known : bool
         Whether the modal floor's ``f_f``, ``xi_f`` and mass ratio are given constants.
@@ -219,7 +316,7 @@ class FloorMode(Effect):
     --------
     >>> make_effect("floor_mode")
     FloorMode(source='measured')
-    >>> make_effect("floor_mode:source=modal,frequency=3.48").slot_names
+    >>> make_effect("floor_mode:frequency=3.48").slot_names
     ('z', 'z_dot', 'f_f', 'xi_f', 'mass_ratio')
     >>> make_effect("floor_mode:source=modal,frequency=3.48,damping=0.0037").slot_names
     ('z', 'z_dot')
@@ -235,30 +332,42 @@ class FloorMode(Effect):
         "displacement": 1e-3,
         "velocity": 1e-2,
     }
+    SIMULATION_ONLY = ("modal_mass", "noise", "ambient")
     KNOWN_MASS_RATIO = 70.0 / article.TABLE3[0].modal_mass
     """Default ``M_h / m_f`` of a known mode: a 70 kg person on mode 1 of the article's plate (0.008)."""
-    slot_names = ("z", "z_dot", "f_f", "xi_f", "mass_ratio")
+    ALL_SLOTS = ("z", "z_dot", "f_f", "xi_f", "mass_ratio")
     known = False
 
-    def __init__(self, source="measured", *, frequency=None, frequency_spread=None, frequency_range=None,
+    def __init__(self, source=None, *, frequency=None, frequency_spread=None, frequency_range=None,
                  damping_range=None, mass_ratio_range=None, displacement=None, velocity=None, damping=None,
-                 mass_ratio=None, **unknown):
+                 mass_ratio=None, modal_mass=None, noise=None, ambient=None, **unknown):
         where = "floor_mode"
         if unknown:
-            valid = ["source", "frequency", "damping", "mass_ratio"] + list(self.MODAL_DEFAULTS)
+            valid = ["source", "frequency", "damping", "mass_ratio"] + list(self.MODAL_DEFAULTS) + list(
+                self.SIMULATION_ONLY)
             raise OptionError(
                 f"effect {where!r}: unknown option {', '.join(map(repr, unknown))}; valid: {', '.join(valid)}"
             )
+        modal = {"frequency": frequency, "frequency_spread": frequency_spread, "frequency_range": frequency_range,
+                 "damping_range": damping_range, "mass_ratio_range": mass_ratio_range,
+                 "displacement": displacement, "velocity": velocity, "damping": damping, "mass_ratio": mass_ratio}
+        given = [key for key, value in modal.items() if value is not None]
+        if source is None:
+            source = "modal" if given else "measured"
         if source not in self.SOURCES:
             raise OptionError(
                 f"{where}: source {source!r} is unknown; choose 'measured' (the record has a floor_acc column) "
                 "or 'modal' (estimate one floor mode)"
             )
         self.source = source
-        modal = {"frequency": frequency, "frequency_spread": frequency_spread, "frequency_range": frequency_range,
-                 "damping_range": damping_range, "mass_ratio_range": mass_ratio_range,
-                 "displacement": displacement, "velocity": velocity, "damping": damping, "mass_ratio": mass_ratio}
-        given = [key for key, value in modal.items() if value is not None]
+        self.modal_mass = None if modal_mass is None else _positive(modal_mass, "modal_mass (kg)", where)
+        self.noise = None if noise is None else _nonnegative(noise, "noise", where)
+        self.ambient = 0.0 if ambient is None else _nonnegative(ambient, "ambient (m/s^2)", where)
+        self.simulation_given = {key: value for key, value in
+                                 (("modal_mass", modal_mass), ("noise", noise), ("ambient", ambient))
+                                 if value is not None}
+        self._excitation = None
+        self.slot_names = self.ALL_SLOTS
         if source == "measured":
             if given:
                 raise OptionError(
@@ -268,6 +377,7 @@ class FloorMode(Effect):
             self.requires = ("floor_disp", "floor_vel")
             self.requires_columns = ("floor_acc",)
             self.given = {}
+            self.slot_names = ()
             return
         self.requires = ()
         self.requires_columns = ()
@@ -305,20 +415,14 @@ class FloorMode(Effect):
         if clash:
             raise OptionError(f"{where}: {clash[0]} is a prior range of an estimated mode; a known mode "
                               "(frequency, damping, mass_ratio given) has none")
-        damping = _positive(damping, "damping (ratio)", where)
+        damping = _nonnegative(damping, "damping (ratio)", where)
         if damping >= 1.0:
             raise OptionError(f"{where}: damping must be a ratio below 1, got {damping!r}")
         self.known = True
         self.slot_names = ("z", "z_dot")
-        self.known_values = (float(frequency), damping,
-                             _positive(self.KNOWN_MASS_RATIO if mass_ratio is None else mass_ratio,
-                                       "mass_ratio", where))
-
-    def _modal_values(self, model, x):
-        """Floor frequency ``f_f`` (Hz), damping ratio ``xi_f`` and mass ratio of state(s) ``x``."""
-        if self.known:
-            return self.known_values
-        return tuple(x[..., model.index(name)] for name in ("f_f", "xi_f", "mass_ratio"))
+        self._values = {"f_f": float(frequency), "xi_f": damping,
+                        "mass_ratio": _positive(self.KNOWN_MASS_RATIO if mass_ratio is None else mass_ratio,
+                                                "mass_ratio", where)}
 
     @classmethod
     def for_record(cls, record, **options) -> "FloorMode":
@@ -333,6 +437,16 @@ class FloorMode(Effect):
             return cls("measured")
         return cls("modal", **options)
 
+    @classmethod
+    def candidate(cls, check):
+        """The measured floor, or a known mode at the residual's strongest unlocked line (or None).
+
+        See :func:`smd_statespace.missing.floor_candidate`.
+        """
+        from .missing import floor_candidate
+
+        return floor_candidate(check)
+
     @property
     def modal(self) -> bool:
         """Whether the floor mode is estimated (``source="modal"``)."""
@@ -344,13 +458,9 @@ class FloorMode(Effect):
         f_lo, f_hi = self.frequency_range
         d_lo, d_hi = self.damping_range
         m_lo, m_hi = self.mass_ratio_range
-        motion = (
+        return (
             Slot("z", "dynamic", "m", nominal=self.displacement, description="floor displacement at the person"),
             Slot("z_dot", "dynamic", "m/s", nominal=self.velocity, description="floor velocity at the person"),
-        )
-        if self.known:
-            return motion
-        return motion + (
             Slot("f_f", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
                  description="floor modal frequency", linear=False),
             Slot("xi_f", "parameter", "-", d_lo, d_hi, nominal=0.5 * (d_lo + d_hi),
@@ -383,53 +493,125 @@ class FloorMode(Effect):
         return jac
 
     def slot_rates(self, model, x, t, inputs, acc):
-        rates = np.zeros(x.shape[:-1] + (len(self.slot_names) if self.modal else 0,))
-        if not self.modal:
+        width = _slot_count(model, self)
+        rates = np.zeros(x.shape[:-1] + (width,))
+        if not width:
             return rates
         z, z_dot = x[..., model.index("z")], x[..., model.index("z_dot")]
-        f_f, xi_f, mu = self._modal_values(model, x)
+        f_f, xi_f, mu = (model.value(x, name) for name in ("f_f", "xi_f", "mass_ratio"))
         omega_f = TWO_PI * f_f
         rates[..., 0] = z_dot
         rates[..., 1] = -(omega_f**2) * z - 2.0 * xi_f * omega_f * z_dot - mu * acc
+        if self._excitation is not None:  # a simulation's ambient floor vibration
+            rates[..., 1] += self._excitation.scalar(t) if np.ndim(t) == 0 else self._excitation(t)
         return rates
 
     def slot_rates_jacobian(self, model, x, t, inputs, acc, acc_jacobian):
-        width = len(self.slot_names) if self.modal else 0
+        width = _slot_count(model, self)
         jac = np.zeros(x.shape[:-1] + (width, x.shape[-1]))
-        if not self.modal:
+        if not width:
             return jac
         i_z, i_v = model.index("z"), model.index("z_dot")
         z, z_dot = x[..., i_z], x[..., i_v]
-        f_f, xi_f, mu = self._modal_values(model, x)
+        f_f, xi_f, mu = (model.value(x, name) for name in ("f_f", "xi_f", "mass_ratio"))
         omega_f = TWO_PI * f_f
         jac[..., 0, i_v] = 1.0
         row = -np.asarray(mu)[..., None] * acc_jacobian
         row[..., i_z] += -(omega_f**2)
         row[..., i_v] += -2.0 * xi_f * omega_f
-        if not self.known:
-            i_f, i_xi, i_mu = (model.index(name) for name in ("f_f", "xi_f", "mass_ratio"))
-            row[..., i_f] += -TWO_PI * (2.0 * omega_f * z + 2.0 * xi_f * z_dot)
-            row[..., i_xi] += -2.0 * omega_f * z_dot
-            row[..., i_mu] += -acc
+        derivatives = {"f_f": -TWO_PI * (2.0 * omega_f * z + 2.0 * xi_f * z_dot), "xi_f": -2.0 * omega_f * z_dot,
+                       "mass_ratio": -acc}
+        for name, derivative in derivatives.items():
+            if name in model.state_names:
+                row[..., model.index(name)] += derivative
         jac[..., 1, :] = row
         return jac
 
-    @property
-    def constants(self) -> dict:
-        if not self.known:
-            return {}
-        return dict(zip(("f_f", "xi_f", "mass_ratio"), self.known_values))
+    # -- forward simulation ---------------------------------------------------
+
+    def simulation_values(self, mass) -> dict:
+        """True ``f_f`` (Hz), ``xi_f`` and ``mass_ratio`` of a simulated floor for a person of ``mass`` (kg)."""
+        plate = article.TABLE3[0]
+        values = self.values
+        ratio = values.get("mass_ratio") if "mass_ratio" in self.given else None
+        if ratio is None:
+            ratio = mass / (self.modal_mass or plate.modal_mass)
+        return {"f_f": values.get("f_f", self.frequency if self.modal and self.frequency else plate.frequency),
+                "xi_f": values.get("xi_f", plate.damping), "mass_ratio": float(ratio)}
+
+    def for_simulation(self, model, mass):
+        values = self.simulation_values(mass)
+        twin = FloorMode("modal", frequency=values["f_f"], damping=values["xi_f"], mass_ratio=values["mass_ratio"],
+                         **self.simulation_given)
+        twin.simulated_mass = float(mass)
+        return twin
+
+    def draw_simulation_inputs(self, rng, duration):
+        from .simulate import ambient_floor_excitation, ambient_line_count
+
+        f_f, xi_f = self.values["f_f"], self.values["xi_f"]
+        phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(f_f, duration))
+        self._excitation = ambient_floor_excitation(self.ambient, f_f, xi_f, duration, phases)
+
+    def measured_signals(self, states, normals, noise):
+        z_ddot = states["z_ddot"].to_numpy()
+        level = noise if self.noise is None else self.noise
+        return {"floor_acc": z_ddot + level * float(np.sqrt(np.mean(z_ddot**2))) * normals}
+
+    def simulation_truth(self):
+        values = self.values
+        truth = {"frequency": values["f_f"], "damping": values["xi_f"], "mass_ratio": values["mass_ratio"],
+                 "noise": self.noise, "ambient": self.ambient}
+        if hasattr(self, "simulated_mass"):
+            truth["modal_mass"] = self.simulated_mass / values["mass_ratio"]
+        return truth
 
     @property
     def spec(self) -> str:
-        if not self.modal:
-            return self.name
-        options = "".join(f",{key}={_spec_value(value)}" for key, value in self.given.items())
-        return f"{self.name}:source=modal{options}"
+        given = {**self.given, **self.simulation_given}
+        if not given:
+            return self.name if not self.modal else f"{self.name}:source=modal"
+        options = ",".join(f"{key}={_spec_value(value)}" for key, value in given.items())
+        return f"{self.name}:source={self.source},{options}"
 
     def __repr__(self):
-        options = "".join(f", {key}={value!r}" for key, value in self.given.items())
+        options = "".join(f", {key}={value!r}" for key, value in {**self.given, **self.simulation_given}.items())
         return f"FloorMode(source={self.source!r}{options})"
+
+
+def _slot_count(model, effect) -> int:
+    where = model.effect_slice(effect)
+    return where.stop - where.start
+
+
+def _with_values(spec: str, effect) -> str:
+    """``spec`` with the effect's known values appended (``key=value`` in the same spec)."""
+    values = effect.values
+    if not values:
+        return spec
+    glue = "," if ":" in spec else ":"
+    return spec + glue + ",".join(f"{key}={_spec_value(value)}" for key, value in values.items())
+
+
+def _numbers(value, label, where, pair=False):
+    """``value`` (a number or a sequence of numbers) as floats; ``pair``: exactly two."""
+    try:
+        numbers = tuple(float(v) for v in np.atleast_1d(value))
+    except (TypeError, ValueError):
+        raise OptionError(f"{where}: {label} must be {'a pair low/high' if pair else 'numbers'}, got {value!r}") from None
+    if not all(np.isfinite(numbers)) or (pair and len(numbers) != 2):
+        raise OptionError(f"{where}: {label} must be {'a pair low/high' if pair else 'finite numbers'}, got {value!r}")
+    return numbers
+
+
+def _nonnegative(value, label, where):
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{where}: {label} must be a number, got {value!r}") from None
+    if not (np.isfinite(number) and number >= 0):
+        raise OptionError(f"{where}: {label} must be a number >= 0, got {value!r}")
+    return number
 
 
 def _spec_value(value) -> str:
@@ -510,8 +692,13 @@ def parse_spec(spec, option="--effect") -> tuple:
     return name, values
 
 
-def make_effect(spec) -> Effect:
+def make_effect(spec, option="effect") -> Effect:
     """Build an effect from a name, ``"NAME:key=value,..."``, or pass an :class:`Effect` through.
+
+    Keys are the effect's options (its constructor's arguments) or the
+    names of its parameter slots, which fix those at known values
+    (:meth:`Effect.with_values`): the truth in a simulation, a constant in
+    identification.
 
     Examples
     --------
@@ -522,16 +709,41 @@ def make_effect(spec) -> Effect:
     """
     if isinstance(spec, Effect):
         return spec
-    name, kwargs = parse_spec(spec, "effect")
+    name, options = parse_spec(spec, option)
+    return build_effect(name, options)
+
+
+def build_effect(name: str, options=None) -> Effect:
+    """The registered effect ``name`` from a dict of options and known parameter values (see :func:`make_effect`).
+
+    Examples
+    --------
+    >>> build_effect("cubic_stiffness", {"beta_3": 400.0}).values
+    {'beta_3': 400.0}
+    """
     if name not in EFFECTS:
         raise OptionError(f"unknown effect {name!r}; choose one of {', '.join(sorted(EFFECTS))}")
+    options = {} if options is None else options
+    if not hasattr(options, "items"):
+        raise OptionError(f"effect {name!r} takes a dict of options, got {options!r}")
+    cls = EFFECTS[name]
+    signature = inspect.signature(cls.__init__).parameters
+    named = [key for key, p in signature.items() if key != "self" and p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)]
+    arguments = {key: value for key, value in options.items() if key in named}
+    values = {key: value for key, value in options.items() if key not in named}
     try:
-        return EFFECTS[name](**kwargs)
-    except TypeError:
-        import inspect
+        effect = cls(**arguments)
+    except TypeError as exc:
+        raise OptionError(f"effect {name!r}: {exc}; valid options: {', '.join(named) or 'none'}") from None
+    if values:
+        from .model import SMDModel
 
-        valid = [p for p in inspect.signature(EFFECTS[name].__init__).parameters if p != "self"]
-        bad = [key for key in kwargs if key not in valid]
-        raise OptionError(
-            f"effect {name!r}: unknown option {', '.join(map(repr, bad)) or repr(kwargs)}; valid: {', '.join(valid) or 'none'}"
-        ) from None
+        parameters = [slot.name for slot in effect.slots(SMDModel()) if slot.kind == "parameter"]
+        bad = [key for key in values if key not in parameters]
+        if bad:
+            raise OptionError(
+                f"effect {name!r}: unknown option {', '.join(map(repr, bad))}; valid options: "
+                f"{', '.join(named) or 'none'}; parameters that take a known value: {', '.join(parameters) or 'none'}"
+            )
+        effect = effect.with_values(**values)
+    return effect

@@ -55,6 +55,7 @@ shape ``(n_state,)`` or a particle cloud of shape ``(n_particles, n_state)``.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
@@ -206,14 +207,38 @@ class CycleInputs:
 
 
 class Effect:
-    """A physical effect that extends the SMD model.
+    """A physical effect that extends the SMD model, defined once for every use.
 
     Subclasses declare extra state slots and add terms to the COM
-    acceleration (the only non-trivial row of Eq. 10), with their Jacobian.
-    Effects with dynamic slots of their own (a floor displacement, ...) also
-    give those slots' rates. Every method receives the full state ``x`` of
-    shape ``(..., n_state)`` and the ``model`` (use ``model.index(name)`` to
-    find slots); returned arrays keep the leading axes.
+    acceleration (the only non-trivial row of Eq. 10). Effects with dynamic
+    slots of their own (a floor displacement, ...) also give those slots'
+    rates. Every method receives the full state ``x`` of shape
+    ``(..., n_state)`` and the ``model``; read a slot with
+    ``model.value(x, name)`` (which also serves a parameter given a known
+    value) or ``x[..., model.index(name)]``; returned arrays keep the
+    leading axes.
+
+    The same two terms serve every use of the effect:
+
+    - estimation: every estimator (per cycle and record level) runs the
+      model's rate, with Jacobians by central differences unless the
+      effect gives analytic ones (:func:`~smd_statespace.jacobians.check_jacobians`
+      compares them);
+    - forward simulation: :func:`~smd_statespace.simulate.simulate_bouncing`
+      and :func:`~smd_statespace.simulate.integrate_response` integrate the
+      same acceleration and slot rates with the parameters at known values
+      (:meth:`with_values`, :attr:`simulation_defaults`,
+      :meth:`for_simulation`), so ``simulate --effect NAME:slot=value``
+      works for every registered effect;
+    - diagnosis: :meth:`candidate` configures the effect for a record and
+      :meth:`score_terms` gives the terms a missing effect would add to the
+      acceleration (derivatives of :meth:`acceleration` in its parameters),
+      which ``diagnose`` correlates with the residual and the record-level
+      diagnosis fits.
+
+    A parameter slot given a value (``NAME:slot=value`` on the command line,
+    :meth:`with_values` in code) is a known constant: it leaves the
+    estimated state, and the simulator uses it as the truth.
 
     Attributes
     ----------
@@ -230,11 +255,135 @@ class Effect:
     name = "effect"
     requires: tuple[str, ...] = ()
     record_parameters: int = 0
+    simulation_defaults: Mapping[str, float] = {}
+    """Typical true values of the effect's parameter slots (by slot name), used by the simulator when not given."""
+
+    @property
+    def values(self) -> dict:
+        """Known values of the effect's parameter slots (slot name to value, SI units); default none."""
+        return dict(self.__dict__.get("_values", {}))
 
     @property
     def constants(self) -> dict:
-        """Fixed physical values the effect was given (name to value, SI units); default none."""
+        """Fixed physical values the effect was given (name to value, SI units): its :attr:`values`."""
+        return self.values
+
+    def with_values(self, **values) -> "Effect":
+        """A copy of this effect with parameter slots fixed at known values (SI units).
+
+        The model drops those slots from the estimated state and reads the
+        constants instead (:meth:`SMDModel.value`); the simulator takes them
+        as the truth. Names are checked against :meth:`slots` when a model is
+        built.
+
+        Examples
+        --------
+        >>> from smd_statespace.effects import CubicStiffness
+        >>> CubicStiffness().with_values(beta_3=400.0).values
+        {'beta_3': 400.0}
+        """
+        twin = copy.copy(self)
+        merged = self.values
+        for key, value in values.items():
+            try:
+                merged[key] = float(value)
+            except (TypeError, ValueError):
+                raise OptionError(f"effect {self.name!r}: value of {key!r} must be a number, got {value!r}") from None
+            if not np.isfinite(merged[key]):
+                raise OptionError(f"effect {self.name!r}: value of {key!r} must be finite, got {value!r}")
+        twin._values = merged
+        return twin
+
+    def for_simulation(self, model: "SMDModel", mass: float) -> "Effect":
+        """This effect ready for forward simulation: every parameter slot at a known value.
+
+        Default: the given :attr:`values`, then :attr:`simulation_defaults`;
+        a parameter with neither is an error naming it. ``model`` is the
+        simulated person's model (base options set), ``mass`` the body mass
+        (kg). Override to translate physical options (a floor's modal mass)
+        into slot values.
+        """
+        if self.requires:
+            raise OptionError(
+                f"effect {self.name!r} needs measured signals ({', '.join(self.requires)}); it cannot be simulated"
+            )
+        values = {**self.simulation_defaults, **self.values}
+        missing = [slot.name for slot in self.slots(model) if slot.kind == "parameter" and slot.name not in values]
+        if missing:
+            raise OptionError(
+                f"effect {self.name!r}: give the true value of {', '.join(missing)} to simulate it, "
+                f"e.g. {self.name}:{missing[0]}=VALUE"
+            )
+        return self.with_values(**values)
+
+    def draw_simulation_inputs(self, rng: np.random.Generator, duration: float) -> None:
+        """Draw what a simulation of this effect needs at random (default: nothing).
+
+        Called on the object :meth:`for_simulation` returned, after the
+        person's own random numbers, so the effect leaves those unchanged.
+        """
+
+    def force_harmonics(self, model: "SMDModel"):
+        """Extra force harmonics the simulator adds to the force of Eq. 4, or None (default).
+
+        Returns ``(blf, phases)``: amplitudes (g) and phases (rad, or None for
+        the simulator's default shape) of orders ``n+1, n+2, ...``.
+        """
+        return None
+
+    def measured_signals(self, states, normals, noise: float) -> dict:
+        """Record columns a simulation of this effect adds (default: none).
+
+        ``states`` is the simulator's states table (columns ``u, u_dot,
+        u_ddot``, every dynamic slot and its rate), ``normals`` standard
+        normal numbers (one per sample) for measurement noise, ``noise`` the
+        simulation's noise fraction.
+        """
         return {}
+
+    def simulation_truth(self) -> dict:
+        """What a simulation with this effect records as its truth (default: the :attr:`values`)."""
+        return self.values
+
+    @classmethod
+    def candidate(cls, check) -> "Effect | None":
+        """This effect configured as a candidate for a record, or None to leave it out.
+
+        ``check`` is the :class:`~smd_statespace.diagnostics.ModelCheck` of
+        the model without it. Default: the effect with its default options.
+        """
+        return cls()
+
+    def score_terms(self, model: "SMDModel", x, t, inputs: CycleInputs) -> dict:
+        """The terms this effect would add to ``u''``, one per unknown coefficient (m/s^2 per unit).
+
+        The derivative of :meth:`acceleration` in each of the effect's
+        parameter slots at ``x`` (the score direction of the
+        missing-effect test), or, for an effect with no parameter slots
+        (a measured input), its acceleration itself. ``x`` has the
+        effect's parameters at their null values (usually 0); terms that
+        vanish everywhere (an effect whose term needs its own dynamic state)
+        are left out.
+
+        Returns
+        -------
+        dict of str to ndarray, each of shape ``x.shape[:-1]``
+        """
+        from .jacobians import expand_time, numeric_jacobian
+
+        x = np.asarray(x, dtype=float)
+        where = model.effect_slice(self)
+        names = [slot.name for slot in model.slots[where] if slot.kind == "parameter"]
+        if not names:
+            term = self.acceleration(model, x, t, inputs)
+            return {self.name: term} if np.any(term != 0) else {}
+        jac = numeric_jacobian(lambda z: self.acceleration(model, z, expand_time(t), inputs), x)
+        out = {}
+        for name in names:
+            term = jac[..., model.index(name)]
+            if np.any(term != 0):
+                out[f"{self.name}:{name}"] = term
+        return out
 
     @property
     def spec(self) -> str:
@@ -461,7 +610,20 @@ class SMDModel:
             if names.count(name) > 1:
                 raise OptionError(f"effect {name!r} is given twice; give each effect once")
         base = self._base_slots()
-        effect_slots = [tuple(effect.slots(self)) for effect in self.effects]
+        effect_slots = []
+        self.constants = {}
+        for effect in self.effects:
+            declared = tuple(effect.slots(self))
+            known = effect.values
+            parameters = {slot.name for slot in declared if slot.kind == "parameter"}
+            unknown = [name for name in known if name not in parameters]
+            if unknown:
+                raise OptionError(
+                    f"effect {effect.name!r} has no parameter slot {unknown[0]!r} to give a value; "
+                    f"its parameters: {', '.join(sorted(parameters)) or 'none'}"
+                )
+            self.constants.update(known)
+            effect_slots.append(tuple(slot for slot in declared if slot.name not in known))
         self.slots = base + tuple(slot for group in effect_slots for slot in group)
         self.state_names = tuple(slot.name for slot in self.slots)
         seen = set()
@@ -517,6 +679,30 @@ class SMDModel:
             return self._index[name]
         except KeyError:
             raise OptionError(f"no state slot {name!r}; the model has {', '.join(self.state_names)}") from None
+
+    def value(self, x, name: str):
+        """Slot ``name`` of state(s) ``x``, or its known constant when an effect was given one.
+
+        Returns an array of shape ``x.shape[:-1]`` (a float for a constant,
+        which broadcasts the same way).
+        """
+        if name in self._index:
+            return np.asarray(x)[..., self._index[name]]
+        if name in self.constants:
+            return self.constants[name]
+        raise OptionError(f"no state slot or known value {name!r}; the model has {', '.join(self.state_names)}")
+
+    def floor_motion(self, x, t, inputs: CycleInputs):
+        """Floor displacement ``z`` (m) and velocity ``z'`` (m/s) under the person: the first effect's that has one, else 0.
+
+        The leg acts on the COM motion relative to the floor (Section 6), so
+        every effect with a leg term (a cubic spring, a user's nonlinear
+        damper) reads ``u - z`` through this.
+        """
+        for effect in self.effects:
+            if hasattr(effect, "floor_motion"):
+                return effect.floor_motion(self, x, t, inputs)
+        return 0.0, 0.0
 
     def effect_slice(self, effect: Effect) -> slice:
         """Positions of ``effect``'s own slots in the state vector."""

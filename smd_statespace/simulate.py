@@ -67,10 +67,10 @@ from scipy.interpolate import CubicSpline, PPoly
 from . import article
 from .errors import OptionError
 from .io import G, Record, check_mass, make_record, write_record
-from .model import c_h, k_h
+from .effects import build_effect, make_effect
+from .model import CycleInputs, SMDModel, c_h, k_h
 
 __all__ = [
-    "EFFECTS",
     "VARIATIONS",
     "SMOOTH_CORRELATION_CYCLES",
     "DEFAULT_BLF",
@@ -160,74 +160,6 @@ steady state, harmonic ``i`` of the dynamic GRF is
 cycle start): a sharp main peak with a fast rise and a slower fall, between
 the symmetric all-cosine shape (peak 1.5-1.7 BW, shallow double trough) and a
 sawtooth (all-sine, peak-to-trough range largest).
-"""
-
-EFFECTS = {
-    "floor_mode": {
-        "frequency": article.TABLE3[0].frequency,
-        "damping": article.TABLE3[0].damping,
-        "modal_mass": article.TABLE3[0].modal_mass,
-        "noise": None,
-        "ambient": 0.0,
-    },
-    "harmonics": {"blf": (0.04, 0.03), "phases": None},
-    "cubic_stiffness": {"beta": 400.0},
-}
-"""Physical effects beyond the base model and their default parameters.
-
-``floor_mode``
-    The person bounces on one vibrating floor mode (Section 6). ``frequency``
-    (Hz), ``damping`` (ratio), ``modal_mass`` (kg) default to mode 1 of Table 3.
-    The SMD spring and damper act on the COM displacement relative to the floor
-    and the floor is driven by the dynamic GRF ``-M_h u''`` (z upward)::
-
-        u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + g F(t)
-        m_f z'' + c_f z' + k_f z = -M_h u''
-
-    The record then has a ``floor_acc`` column (``z''``) with white noise of
-    standard deviation ``noise`` times its RMS (``noise=None``: the ``noise``
-    argument of :func:`simulate_bouncing`).
-
-    The record starts in the coupled (person + floor) periodic steady state of
-    the first cycle's force: with ``fb_variation=0`` and ``coef_variation=0``
-    the floor amplitude is constant from ``t = 0``. With cycle-to-cycle
-    variation it is not, because the default floor mode is lightly damped
-    (half-power bandwidth ``2 xi_f f_f`` = 0.026 Hz, decay time
-    ``1 / (xi_f w_f)`` = 12 s) and a force harmonic near it (e.g. the 2nd at
-    ``f_b`` = 1.75 Hz) moves across the resonance as ``f_b`` varies: the
-    start is the steady state of the first cycle's frequency alone (often
-    off resonance: at a constant ``f_b`` of 1.72, 1.75 and 1.78 Hz the floor
-    amplitude is 0.55, 0.95 and 0.33 m/s^2), and the floor then takes about
-    its decay time to settle to the response to the varying force, which
-    itself wanders (beats) as the cycle frequencies come and go. At
-    ``f_b`` 1.75 Hz, ``f_h`` 1.8 Hz, ``xi_h`` 0.33, 70 kg and the default
-    variations, the amplitude over the first 5 s averages 0.58 m/s^2 (SD
-    0.24 over 30 seeds) against 0.94 m/s^2 (SD 0.18) over the last 5 s of
-    30 s records; seed 1 builds up from 0.44 to 1.07 m/s^2. Drop the first
-    ~15 s, or set ``fb_variation=0``, where a stationary floor response
-    matters. With ``variation="smooth"`` the integration starts a run-in of
-    up to 60 s (about 5 floor decay times, :data:`SMOOTH_RUN_IN_DECAYS`)
-    before the record, so the floor has settled by ``t = 0``.
-
-    ``ambient`` (m/s^2, default 0) adds what other occupants, walkers or
-    machines do to the floor: a random excitation of the mode, white in the
-    band ``0.5 f_f``-``1.5 f_f`` (a random-phase multisine with lines
-    ``1 / duration`` apart, so it is smooth for the ODE solver), scaled so
-    that the floor alone (no person on it) would vibrate with this RMS
-    acceleration. Whether the GRF then shows the floor depends on its
-    frequency, not on periodicity: below about ``n f_b`` a cycle's Fourier
-    force absorbs any smooth floor motion (measured: 0.2 m/s^2 at 3.48 Hz
-    left nothing in the residual); above it the floor reaches the GRF
-    through the leg's transmissibility (about 0.15 at 9 Hz), so about
-    1 m/s^2 is needed to stand out of 1 % BW noise.
-``harmonics``
-    Force harmonics ``n+1, n+2, ...`` with amplitudes ``blf`` (g) and optional
-    ``phases`` (rad; default: the same GRF-shape rule as the base harmonics).
-``cubic_stiffness``
-    A nonlinear leg spring ``w_h^2 (r + beta r^3)``, ``r = u - z`` (m):
-    ``beta`` (1/m^2) > 0 hardens, < 0 softens. At the default 400 1/m^2 and a
-    COM amplitude of 2 cm the stiffness is 16 % higher at the extremes, which
-    raises the apparent natural frequency by about 6 %.
 """
 
 SAMPLE_SETTINGS = {
@@ -367,114 +299,148 @@ def _resolve_seed(seed):
 # effects
 
 
-def _check_effects(effects, allowed=tuple(EFFECTS), where="simulate_bouncing"):
-    """Validate ``effects`` and return ``{name: params}`` with defaults filled in."""
+def _simulation_effects(effects, mass, where="simulate_bouncing"):
+    """Effects ready for forward simulation (every parameter at its true value), in the order given.
+
+    ``effects`` is a sequence of :class:`~smd_statespace.model.Effect`
+    objects or ``NAME[:key=value,...]`` specs, or a dict ``{name: {key:
+    value}}`` with the same keys (:func:`~smd_statespace.effects.build_effect`).
+    """
     if effects is None:
-        return {}
-    if isinstance(effects, str) or not hasattr(effects, "items"):
+        return ()
+    if isinstance(effects, str):
+        effects = [effects]
+    try:
+        if hasattr(effects, "items"):
+            built = [build_effect(name, options) for name, options in effects.items()]
+        else:
+            built = [make_effect(effect) for effect in effects]
+    except OptionError as exc:
+        raise OptionError(f"{where}: {exc}") from None
+    except TypeError:
         raise OptionError(
-            f"{where}: effects must be a dict {{name: {{parameter: value}}}}, got {effects!r}; "
-            f"valid effects: {', '.join(allowed)}"
-        )
-    resolved = {}
-    for name, params in effects.items():
-        if name not in allowed:
-            raise OptionError(f"{where}: unknown effect {name!r}; valid effects: {', '.join(allowed)}")
-        defaults = EFFECTS[name]
-        if params is None:
-            params = {}
-        if not hasattr(params, "items"):
-            raise OptionError(
-                f"{where}: effect {name!r} takes a dict of parameters, got {params!r}; "
-                f"valid parameters: {', '.join(defaults)}"
-            )
-        for key in params:
-            if key not in defaults:
-                raise OptionError(
-                    f"{where}: effect {name!r} has no parameter {key!r}; valid parameters: {', '.join(defaults)}"
-                )
-        merged = {**defaults, **params}
-        label = f"effect {name!r} parameter"
-        if name == "floor_mode":
-            merged["frequency"] = _number(merged["frequency"], f"{label} 'frequency' (Hz)", positive=True, where=where)
-            merged["damping"] = _number(merged["damping"], f"{label} 'damping'", nonnegative=True, where=where)
-            merged["modal_mass"] = _number(
-                merged["modal_mass"], f"{label} 'modal_mass' (kg)", positive=True, where=where
-            )
-            if merged["noise"] is not None:
-                merged["noise"] = _number(merged["noise"], f"{label} 'noise'", nonnegative=True, where=where)
-            merged["ambient"] = _number(merged["ambient"], f"{label} 'ambient' (m/s^2)", nonnegative=True,
-                                        where=where)
-        elif name == "harmonics":
-            blf = _vector(merged["blf"], f"{label} 'blf'", nonnegative=True, where=where)
-            merged["blf"] = tuple(float(v) for v in blf)
-            if merged["phases"] is not None:
-                phases = _vector(merged["phases"], f"{label} 'phases'", where=where)
-                if phases.size != blf.size:
-                    raise OptionError(
-                        f"{where}: {label} 'phases' has {phases.size} values, 'blf' has {blf.size}"
-                    )
-                merged["phases"] = tuple(float(v) for v in phases)
-        elif name == "cubic_stiffness":
-            merged["beta"] = _number(merged["beta"], f"{label} 'beta' (1/m^2)", where=where)
-        resolved[name] = merged
-    return resolved
+            f"{where}: effects must be a list of effects or specs (e.g. ['floor_mode', 'cubic_stiffness:beta_3=400']) "
+            f"or a dict {{name: {{option: value}}}}, got {effects!r}"
+        ) from None
+    names = [effect.name for effect in built]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise OptionError(f"{where}: effect {twice[0]!r} is given twice; give each effect once")
+    person = SMDModel(n_harmonics=1)
+    try:
+        return tuple(effect.for_simulation(person, mass) for effect in built)
+    except OptionError as exc:
+        raise OptionError(f"{where}: {exc}") from None
 
 
 # ---------------------------------------------------------------------------
 # the dynamical system
 
 
-@dataclass(frozen=True)
-class _System:
-    """Right-hand side of the (possibly coupled, possibly nonlinear) SMD model.
+def _slot_width(where: slice) -> int:
+    return where.stop - where.start
 
-    State ``x = [u, u', (z, z')]`` (m, m/s); input ``g F(t)`` (m/s^2).
+
+class _System:
+    """Right-hand side of Eq. 2 plus the effects' own terms, for forward simulation.
+
+    The integrated state is ``[u, u', (the effects' dynamic slots)]`` (m,
+    m/s, ...); the input is ``g F(t)`` (m/s^2). The effects' terms are their
+    own :meth:`~smd_statespace.model.Effect.acceleration` and
+    :meth:`~smd_statespace.model.Effect.slot_rates`, evaluated on the
+    augmented state of an :class:`~smd_statespace.model.SMDModel` whose
+    parameters are the truth (``f_h``, ``xi_h`` and every effect parameter a
+    known value; the model's own force coefficients are zero, the force is
+    the simulator's).
     """
 
-    omega_h: float
-    xi_h: float
-    beta: float = 0.0
-    floor: tuple | None = None  # (omega_f, xi_f, mass_ratio M_h / m_f)
-    floor_excitation: object = None  # _Multisine: external floor acceleration (m/s^2), or None
-
-    @property
-    def n_state(self):
-        return 2 if self.floor is None else 4
-
-    def accelerations(self, x, force_g, excitation=0.0):
-        """Return ``(u'', z'')`` for states ``x`` (shape (n_state, ...)), input ``g F`` and floor excitation."""
-        if self.floor is None:
-            relative, relative_rate = x[0], x[1]
+    def __init__(self, f_h, xi_h, effects=()):
+        self.omega_h = 2.0 * np.pi * float(f_h)
+        self.xi_h = float(xi_h)
+        self.effects = tuple(effects)
+        self.model = SMDModel(n_harmonics=1, effects=self.effects) if self.effects else None
+        if self.model is None:
+            self.names = ("u", "u_dot")
         else:
-            relative, relative_rate = x[0] - x[2], x[1] - x[3]
-        spring = relative if self.beta == 0.0 else relative + self.beta * relative**3
-        # Eq. 2 (relative to the floor when there is one, Section 6)
-        u_ddot = -(self.omega_h**2) * spring - 2.0 * self.xi_h * self.omega_h * relative_rate + force_g
-        if self.floor is None:
-            return u_ddot, None
-        omega_f, xi_f, mass_ratio = self.floor
-        z_ddot = -(omega_f**2) * x[2] - 2.0 * xi_f * omega_f * x[3] - mass_ratio * u_ddot + excitation
-        return u_ddot, z_ddot
+            dynamic = [i for i, slot in enumerate(self.model.slots) if slot.kind == "dynamic"]
+            self.dynamic = np.array(dynamic)
+            self.names = tuple(self.model.state_names[i] for i in dynamic)
+            self.template = np.zeros(self.model.n_state)
+            self.template[self.model.index("f_h")] = f_h
+            self.template[self.model.index("xi_h")] = xi_h
+            self.inputs = CycleInputs(f_b=1.0)
+            self._widths = [(effect, _slot_width(self.model.effect_slice(effect))) for effect in self.effects]
+        self.n_state = len(self.names)
+        self.a_matrix, self.b_vector = self._linear_matrices()
+        self.linear = self._is_linear()
+
+    def rates(self, x, force_g, t):
+        """``(dx/dt, u'')`` for states ``x`` (shape (n_state, ...)) under input ``g F`` at time(s) ``t``."""
+        w2, c = self.omega_h**2, 2.0 * self.xi_h * self.omega_h
+        acc = -w2 * x[0] - c * x[1] + force_g  # Eq. 2
+        if self.model is None:
+            return np.stack(np.broadcast_arrays(x[1], acc)), acc
+        x = np.asarray(x, dtype=float)
+        full = np.broadcast_to(self.template, x.shape[1:] + self.template.shape).copy()
+        full[..., self.dynamic] = np.moveaxis(x, 0, -1)
+        for effect in self.effects:
+            acc = acc + effect.acceleration(self.model, full, t, self.inputs)
+        parts = [np.broadcast_to(x[1], np.shape(acc)), acc]
+        for effect in self.effects:
+            own = effect.slot_rates(self.model, full, t, self.inputs, acc)
+            parts.extend(np.moveaxis(own, -1, 0))
+        return np.stack(parts), acc
 
     def rhs(self, t, x, force):
         """Time derivative of the state ``x`` (shape (n_state,)) at time ``t`` (s)."""
-        excitation = 0.0 if self.floor_excitation is None else self.floor_excitation.scalar(t)
-        u_ddot, z_ddot = self.accelerations(x.tolist(), G * force.scalar(t), excitation)
-        if self.floor is None:
-            return np.array([x[1], u_ddot])
-        return np.array([x[1], u_ddot, x[3], z_ddot])
+        u, v = x[0], x[1]
+        acc = -(self.omega_h**2) * u - 2.0 * self.xi_h * self.omega_h * v + G * force.scalar(t)  # Eq. 2
+        if self.model is None:  # the fast path of the base model
+            return np.array([v, acc])
+        full = self.template.copy()
+        full[self.dynamic] = x
+        for effect in self.effects:
+            acc = acc + effect.acceleration(self.model, full, t, self.inputs)
+        out = np.empty(self.n_state)
+        out[0], out[1] = v, acc
+        start = 2
+        for effect, width in self._widths:
+            if width:
+                out[start:start + width] = effect.slot_rates(self.model, full, t, self.inputs, acc)
+                start += width
+        return out
 
-    def linear_matrices(self):
-        """``(A, B)`` of the linear part: ``x' = A x + B g F`` (cubic term dropped)."""
-        w2, c = self.omega_h**2, 2.0 * self.xi_h * self.omega_h
-        if self.floor is None:
-            return np.array([[0.0, 1.0], [-w2, -c]]), np.array([0.0, 1.0])
-        omega_f, xi_f, mu = self.floor
-        person = np.array([-w2, -c, w2, c])
-        floor = -mu * person + np.array([0.0, 0.0, -(omega_f**2), -2.0 * xi_f * omega_f])
-        a_matrix = np.array([[0.0, 1.0, 0.0, 0.0], person, [0.0, 0.0, 0.0, 1.0], floor])
-        return a_matrix, np.array([0.0, 1.0, 0.0, -mu])
+    def _linear_matrices(self):
+        """``(A, B)`` of the linearisation at rest: ``x' = A x + B g F`` (central differences, step 1e-4)."""
+        step = 1e-4
+        eye = np.eye(self.n_state) * step
+        a_matrix = (self.rates(eye, 0.0, 0.0)[0] - self.rates(-eye, 0.0, 0.0)[0]) / (2.0 * step)
+        zero = np.zeros(self.n_state)
+        b_vector = (self.rates(zero, 1.0, 0.0)[0] - self.rates(zero, -1.0, 0.0)[0]) / 2.0
+        return a_matrix, b_vector
+
+    def _is_linear(self):
+        """Whether the rates are linear in the state (superposition holds at typical amplitudes)."""
+        if self.model is None:
+            return True
+        scale = np.array([0.02, 0.2] + [self.model.slots[i].nominal or 0.02 for i in self.dynamic[2:]])
+        first, second = scale * np.linspace(1.0, -0.7, self.n_state), scale * np.linspace(-0.4, 0.9, self.n_state)
+        rest = self.rates(np.zeros(self.n_state), 0.0, 0.0)[0]
+
+        def moved(x):
+            return self.rates(x, 0.0, 0.0)[0] - rest
+
+        both = moved(first + second)
+        return bool(np.allclose(both, moved(first) + moved(second), rtol=1e-8, atol=1e-10 * np.abs(both).max()))
+
+    def eigenvalues(self):
+        """Eigenvalues of the linearisation (1/s): natural frequencies and decay rates of the system."""
+        return np.linalg.eigvals(self.a_matrix)
+
+    def slowest_decay(self):
+        """Longest decay time (s) of the linearisation, 60 s when undamped."""
+        rate = float(np.min(-self.eigenvalues().real))
+        return 1.0 / rate if rate > 0 else 60.0
 
 
 class _CycleForce:
@@ -565,7 +531,7 @@ def _cycle_coefficients(cycles):
 
 def _linear_steady_state(system, force):
     """State at the cycle start of the periodic response of the linear part to ``force``."""
-    a_matrix, b_vector = system.linear_matrices()
+    a_matrix, b_vector = system.a_matrix, system.b_vector
     identity = np.eye(system.n_state)
     try:
         state = -np.linalg.solve(a_matrix, b_vector * G * force.a0)
@@ -596,8 +562,8 @@ def _integrate_cycle(system, force, x0, t_start, t_end, t_eval):
     )
     if solution.status != 0 or not np.all(np.isfinite(solution.y)):
         hint = ""
-        if system.beta != 0.0:
-            hint = f"; the cubic_stiffness beta={system.beta:g} 1/m^2 may make the leg spring unstable"
+        if not system.linear:
+            hint = f"; the effect(s) {', '.join(e.spec for e in system.effects)} may make the system unstable"
         raise OptionError(f"integration failed at t={t_start:.3f} s ({solution.message}){hint}")
     return solution.y[:, :-1], solution.y[:, -1]
 
@@ -610,7 +576,7 @@ def _periodic_state(system, force, period, t_start):
     of several decay times if shooting fails.
     """
     guess = _linear_steady_state(system, force)
-    if system.beta == 0.0:
+    if system.linear:
         return guess
     empty = np.empty(0)
 
@@ -622,25 +588,13 @@ def _periodic_state(system, force, period, t_start):
     state = solution.x * scale
     if solution.success and np.all(np.abs(mismatch(state)) <= 1e-9 * scale + 1e-12):
         return state
-    decay = 1.0 / (system.xi_h * system.omega_h) if system.xi_h > 0 else 60.0
+    decay = system.slowest_decay()
     for _ in range(int(np.ceil(min(60.0, max(3.0, 10.0 * decay)) / period))):
         guess = _integrate_cycle(system, force, guess, t_start, t_start + period, empty)[1]
     return guess
 
 
-def _build_system(f_h, xi_h, mass, effects, floor_excitation=None):
-    floor = None
-    if "floor_mode" in effects:
-        params = effects["floor_mode"]
-        floor = (2.0 * np.pi * params["frequency"], params["damping"], mass / params["modal_mass"])
-    elif floor_excitation is not None:
-        raise OptionError("integrate_response: floor_excitation needs the floor_mode effect")
-    beta = effects["cubic_stiffness"]["beta"] if "cubic_stiffness" in effects else 0.0
-    return _System(omega_h=2.0 * np.pi * f_h, xi_h=xi_h, beta=beta, floor=floor, floor_excitation=floor_excitation)
-
-
-def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial_state=None,
-                       floor_excitation=None):
+def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial_state=None):
     """Integrate the SMD model (Eq. 2) under a piecewise-constant cycle force.
 
     The low-level engine of :func:`simulate_bouncing`, for user-defined forces
@@ -661,34 +615,37 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
     xi_h : float
         SMD damping ratio (-), >= 0 (0 allowed here, for energy checks).
     mass : float
-        Body mass (kg); matters only with ``floor_mode``.
-    effects : dict, optional
-        ``floor_mode`` and/or ``cubic_stiffness`` (see :data:`EFFECTS`);
-        extra force harmonics are simply extra columns of ``cycles``.
+        Body mass (kg); matters only to effects that use it (a floor's
+        ``modal_mass``).
+    effects : list of Effect or str, or dict, optional
+        Registered effects (:mod:`smd_statespace.effects`, a user's
+        included) as objects, ``NAME[:key=value,...]`` specs or ``{name:
+        {key: value}}``; their parameters take the given values, else the
+        effect's :attr:`~smd_statespace.model.Effect.simulation_defaults`.
+        Extra force harmonics are simply extra columns of ``cycles`` (the
+        ``harmonics`` effect belongs to :func:`simulate_bouncing`), and the
+        random ``ambient`` floor vibration too.
     initial_state : array_like, optional
-        ``[u, u']`` (m, m/s), or ``[u, u', z, z']`` with a floor, at
-        ``t_start[0]``. Default: the periodic steady state of the first
-        cycle's force (no start-up transient).
-    floor_excitation : callable, optional
-        External acceleration of the floor mode (m/s^2) from other sources,
-        ``e(t)`` added to ``z''`` (needs ``floor_mode``); an object with
-        ``scalar(t)`` and vectorised ``__call__(t)`` such as
-        :func:`ambient_floor_excitation` returns. The default start state
-        ignores it.
+        ``[u, u']`` (m, m/s), then the effects' dynamic slots (``[u, u', z,
+        z']`` with a floor), at ``t_start[0]``. Default: the periodic steady
+        state of the first cycle's force (no start-up transient).
 
     Returns
     -------
     pandas.DataFrame
         Columns ``time, cycle, u, u_dot, u_ddot, force_bio`` (m, m/s, m/s^2,
-        ``g F`` in m/s^2) and, with a floor, ``z, z_dot, z_ddot``.
-        Accelerations are evaluated from the equations of motion, not by
-        differencing.
+        ``g F`` in m/s^2) and every dynamic slot of the effects with its rate
+        (a floor: ``z, z_dot, z_ddot``). Accelerations are evaluated from the
+        equations of motion, not by differencing.
     """
     where = "integrate_response"
     f_h = _number(f_h, "f_h (Hz)", positive=True, where=where)
     xi_h = _number(xi_h, "xi_h", nonnegative=True, where=where)
     mass = check_mass(mass, source="mass")
-    effects = _check_effects(effects, allowed=("floor_mode", "cubic_stiffness"), where=where)
+    effects = _simulation_effects(effects, mass, where=where)
+    person = SMDModel(n_harmonics=1)
+    if any(effect.force_harmonics(person) is not None for effect in effects):
+        raise OptionError(f"{where}: extra force harmonics are columns a5, b5, ... of cycles, not an effect here")
     required = {"t_start", "t_end", "f_b", "a0"}
     if not isinstance(cycles, pd.DataFrame) or not required <= set(cycles.columns) or len(cycles) == 0:
         raise OptionError(
@@ -706,21 +663,27 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
         )
     if np.any(t_end <= t_start) or np.any(np.abs(t_start[1:] - t_end[:-1]) > 1e-9):
         raise OptionError(f"{where}: cycles must have t_end > t_start and be contiguous (t_start[j+1] == t_end[j])")
-    system = _build_system(f_h, xi_h, mass, effects, floor_excitation)
+    system = _System(f_h, xi_h, effects)
+    if initial_state is not None:
+        initial_state = _vector(initial_state, "initial_state", where=where)
+        if initial_state.size != system.n_state:
+            raise OptionError(
+                f"{where}: initial_state needs {system.n_state} values ({', '.join(system.names)}), "
+                f"got {initial_state.size}"
+            )
+    return _cycle_states(system, cycles, time, initial_state)
+
+
+def _cycle_states(system, cycles, time, state=None):
+    """The states table of ``system`` under the piecewise cycle force (checked arguments)."""
+    t_start = cycles["t_start"].to_numpy(dtype=float)
+    t_end = cycles["t_end"].to_numpy(dtype=float)
     _, a, b = _cycle_coefficients(cycles)
     f_b = cycles["f_b"].to_numpy(dtype=float)
     a0 = cycles["a0"].to_numpy(dtype=float)
     forces = [_CycleForce(t_start[j], f_b[j], a0[j], a[j], b[j]) for j in range(len(cycles))]
-
-    if initial_state is None:
+    if state is None:
         state = _periodic_state(system, forces[0], 1.0 / f_b[0], t_start[0])
-    else:
-        state = _vector(initial_state, "initial_state", where=where)
-        if state.size != system.n_state:
-            raise OptionError(
-                f"{where}: initial_state needs {system.n_state} values "
-                f"({'u, u_dot, z, z_dot' if system.floor else 'u, u_dot'}), got {state.size}"
-            )
 
     bounds = np.searchsorted(time, t_start, side="left")
     bounds = np.append(bounds, time.size)
@@ -737,13 +700,17 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
     for j in np.unique(cycle_index):
         mask = cycle_index == j
         force_g[mask] = G * forces[j](time[mask])
-    return _states_frame(system, time, cycle_index, states, force_g, floor_excitation)
+    return _states_frame(system, time, cycle_index, states, force_g)
 
 
-def _states_frame(system, time, cycle_index, states, force_g, floor_excitation):
-    """The states table of :func:`integrate_response`; accelerations from the equations of motion."""
-    excitation = 0.0 if floor_excitation is None else floor_excitation(time)
-    u_ddot, z_ddot = system.accelerations(states, force_g, excitation)
+def _states_frame(system, time, cycle_index, states, force_g):
+    """The states table of :func:`integrate_response`; accelerations from the equations of motion.
+
+    Every dynamic slot of the effects gets a column and so does its rate,
+    named by differentiation (``z`` -> ``z_dot``, ``z_dot`` -> ``z_ddot``)
+    unless that is a slot already.
+    """
+    rates, u_ddot = system.rates(states, force_g, time)
     frame = {
         "time": time,
         "cycle": cycle_index,
@@ -752,8 +719,11 @@ def _states_frame(system, time, cycle_index, states, force_g, floor_excitation):
         "u_ddot": u_ddot,
         "force_bio": force_g,
     }
-    if system.floor is not None:
-        frame.update(z=states[2], z_dot=states[3], z_ddot=z_ddot)
+    for k, name in enumerate(system.names[2:], start=2):
+        frame[name] = states[k]
+        rate = name[:-4] + "_ddot" if name.endswith("_dot") else name + "_dot"
+        if rate not in system.names:
+            frame[rate] = rates[k]
     return pd.DataFrame(frame)
 
 
@@ -992,14 +962,9 @@ class _SmoothForce:
         return amplitude * np.cos(phase), amplitude * np.sin(phase)
 
 
-def _smooth_run_in(f_h, xi_h, effects):
-    """Run-in (s) before the record in smooth mode (:data:`SMOOTH_RUN_IN_DECAYS`)."""
-    decay = 1.0 / (xi_h * 2.0 * np.pi * f_h)
-    if "floor_mode" in effects:
-        floor = effects["floor_mode"]
-        damping = floor["damping"] * 2.0 * np.pi * floor["frequency"]
-        decay = max(decay, 1.0 / damping if damping > 0 else np.inf)
-    return min(SMOOTH_RUN_IN_DECAYS * decay, SMOOTH_RUN_IN_MAX)
+def _smooth_run_in(system):
+    """Run-in (s) before the record in smooth mode (:data:`SMOOTH_RUN_IN_DECAYS` of the slowest decay)."""
+    return min(SMOOTH_RUN_IN_DECAYS * system.slowest_decay(), SMOOTH_RUN_IN_MAX)
 
 
 def _smooth_force(rng_blocks, run_in_knots, geometry, f_b, fb_variation, a0, blf, phases, coef_variation):
@@ -1050,7 +1015,7 @@ def _smooth_cycles(force, first, duration, nodes=24):
     return t_start, t_end, 1.0 / (t_end - t_start), 0.5 * weights @ a, 0.5 * weights @ b
 
 
-def _smooth_states(force, run_in, cycles, time, f_h, xi_h, mass, effects, floor_excitation):
+def _smooth_states(system, force, run_in, cycles, time):
     """Integrate Eq. 2 under a smooth force: one DOP853 run through the run-in and the record.
 
     ``run_in`` is the cycle that starts the run-in, ``(t_start, t_end, f_b,
@@ -1058,12 +1023,11 @@ def _smooth_states(force, run_in, cycles, time, f_h, xi_h, mass, effects, floor_
     that cycle's averaged coefficients at its frequency, the nearest periodic
     force to the smooth one (:data:`SMOOTH_RUN_IN_DECAYS`).
     """
-    system = _build_system(f_h, xi_h, mass, effects, floor_excitation)
     t_start, t_end, f_first, a, b = run_in
     state = _periodic_state(system, _CycleForce(t_start, f_first, force.a0, a, b), 1.0 / f_first, t_start)
     states, _ = _integrate_cycle(system, force, state, t_start, float(cycles["t_end"].iloc[-1]), time)
     cycle_index = np.searchsorted(cycles["t_start"].to_numpy(), time, side="right") - 1
-    return _states_frame(system, time, cycle_index, states, G * force(time), floor_excitation)
+    return _states_frame(system, time, cycle_index, states, G * force(time))
 
 
 # ---------------------------------------------------------------------------
@@ -1096,12 +1060,16 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
         raise OptionError(
             f"simulate_bouncing: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)"
         )
-    effects = _check_effects(effects)
-    extra_blf = np.asarray(effects["harmonics"]["blf"]) if "harmonics" in effects else np.empty(0)
+    effects = _simulation_effects(effects, mass)
+    person = SMDModel(n_harmonics=1)
+    forcing = [effect.force_harmonics(person) for effect in effects]
+    extra = [pair for pair in forcing if pair is not None]
+    extra_blf = np.concatenate([np.asarray(pair[0], dtype=float) for pair in extra]) if extra else np.empty(0)
+    given_extra = [pair[1] for pair in extra]
+    system = _System(f_h, xi_h, [effect for effect, pair in zip(effects, forcing) if pair is None])
     n_base, n_extra = blf.size, extra_blf.size
-    highest = (n_base + n_extra) * f_b
-    if "floor_mode" in effects:
-        highest = max(highest, effects["floor_mode"]["frequency"])
+    natural = np.abs(system.eigenvalues().imag).max() / (2.0 * np.pi) if system.effects else 0.0
+    highest = max((n_base + n_extra) * f_b, natural)
     if fs < 4.0 * highest:
         raise OptionError(
             f"simulate_bouncing: fs {fs:g} Hz is too low; it must be at least 4 x the highest frequency "
@@ -1114,15 +1082,14 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
         phases = _vector(phases, "phases (rad)")
         if phases.size != n_base:
             raise OptionError(f"simulate_bouncing: phases has {phases.size} values, blf has {n_base}")
-    if n_extra:
-        given = effects["harmonics"]["phases"]
-        extra_phases = default_extra if given is None else np.asarray(given, dtype=float)
-        effects["harmonics"]["phases"] = tuple(float(v) for v in extra_phases)
-    else:
-        extra_phases = np.empty(0)
+    extra_phases = np.asarray(default_extra, dtype=float)
+    if any(given is not None for given in given_extra):
+        extra_phases = np.concatenate([default_extra[:len(pair[0])] if given is None else np.asarray(given, float)
+                                       for pair, given in zip(extra, given_extra)])
     return SimpleNamespace(
         mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=duration, fs=fs, blf=blf, phases=phases, a0=a0,
-        fb_variation=fb_variation, coef_variation=coef_variation, noise=noise, effects=effects,
+        fb_variation=fb_variation, coef_variation=coef_variation, noise=noise, effects=effects, system=system,
+        extra_phases=extra_phases,
         variation=variation, all_blf=np.concatenate([blf, extra_blf]),
         all_phases=np.concatenate([phases, extra_phases]),
     )
@@ -1151,16 +1118,7 @@ def _draw_blocks(rng, n_rows, n_base, n_extra, n_samples):
     return (start_fraction, eps, amp_noise, phase_noise), grf_noise, floor_noise
 
 
-def _ambient_excitation(rng, effects, duration):
-    """The ambient floor excitation (drawn last, so that it leaves every other random number unchanged)."""
-    if "floor_mode" not in effects:
-        return None
-    floor = effects["floor_mode"]
-    ambient_phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(floor["frequency"], duration))
-    return ambient_floor_excitation(floor["ambient"], floor["frequency"], floor["damping"], duration, ambient_phases)
-
-
-def _jump_record(settings, rng_blocks, time, excitation):
+def _jump_record(settings, rng_blocks, time):
     """``(cycles, states)`` of the jumps variation."""
     s = settings
     t_start, t_end, frequency, amplitude, phase = _draw_cycles(
@@ -1170,13 +1128,10 @@ def _jump_record(settings, rng_blocks, time, excitation):
     a = np.column_stack([amplitude[:, i] * np.cos(phase[:, i]) for i in range(n_total)])
     b = np.column_stack([amplitude[:, i] * np.sin(phase[:, i]) for i in range(n_total)])
     cycles = _cycles_frame(t_start, t_end, frequency, s.a0, a, b, amplitude)
-    dynamics = {name: params for name, params in s.effects.items() if name != "harmonics"}
-    states = integrate_response(cycles, time, s.f_h, s.xi_h, mass=s.mass, effects=dynamics,
-                                floor_excitation=excitation)
-    return cycles, states
+    return cycles, _cycle_states(s.system, cycles, time)
 
 
-def _smooth_record(settings, rng_blocks, run_in_knots, geometry, time, excitation):
+def _smooth_record(settings, rng_blocks, run_in_knots, geometry, time):
     """``(cycles, states)`` of the smooth variation (``geometry`` from :func:`_smooth_geometry`)."""
     s = settings
     force = _smooth_force(rng_blocks, run_in_knots, geometry, s.f_b, s.fb_variation, s.a0, s.all_blf,
@@ -1187,9 +1142,7 @@ def _smooth_record(settings, rng_blocks, run_in_knots, geometry, time, excitatio
     keep = slice(-min(first, 0), None)  # cycles 0, 1, ...: the one holding t = 0 and the later ones
     cycles = _cycles_frame(t_start[keep], t_end[keep], frequency[keep], s.a0, a[keep], b[keep],
                            np.hypot(a[keep], b[keep]))
-    dynamics = {name: params for name, params in s.effects.items() if name != "harmonics"}
-    states = _smooth_states(force, run_in, cycles, time, s.f_h, s.xi_h, s.mass, dynamics, excitation)
-    return cycles, states
+    return cycles, _smooth_states(s.system, force, run_in, cycles, time)
 
 
 def _measured_record(settings, states, grf_noise, floor_noise):
@@ -1197,13 +1150,22 @@ def _measured_record(settings, states, grf_noise, floor_noise):
     s = settings
     weight = s.mass * G
     force = s.mass * (G + states["u_ddot"].to_numpy()) + s.noise * weight * grf_noise  # Eq. 3
-    floor_acc = None
-    if "floor_mode" in s.effects:
-        z_ddot = states["z_ddot"].to_numpy()
-        floor_noise_level = s.effects["floor_mode"]["noise"]
-        floor_noise_level = s.noise if floor_noise_level is None else floor_noise_level
-        floor_acc = z_ddot + floor_noise_level * float(np.sqrt(np.mean(z_ddot**2))) * floor_noise
-    return make_record(states["time"].to_numpy(), force, s.mass, floor_acc=floor_acc, source="synthetic")
+    columns = {}
+    for effect in s.effects:
+        columns.update(effect.measured_signals(states, floor_noise, s.noise))
+    return make_record(states["time"].to_numpy(), force, s.mass, source="synthetic", **columns)
+
+
+def _effects_truth(settings):
+    """``{name: {key: value}}`` of the simulated effects, with the extra harmonics' phases as simulated."""
+    out = {}
+    for effect in settings.effects:
+        truth = {key: (list(value) if isinstance(value, tuple) else value)
+                 for key, value in effect.simulation_truth().items()}
+        if "phases" in truth and effect.force_harmonics(SMDModel(n_harmonics=1)) is not None:
+            truth["phases"] = [float(v) for v in settings.extra_phases]
+        out[effect.name] = truth
+    return out
 
 
 def _truth(settings, seed_record, n_cycles):
@@ -1232,8 +1194,7 @@ def _truth(settings, seed_record, n_cycles):
         "blf": [float(v) for v in s.blf],
         "phases": [float(v) for v in s.phases],
         "a0": s.a0,
-        "effects": {name: {k: (list(v) if isinstance(v, tuple) else v) for k, v in params.items()}
-                    for name, params in s.effects.items()},
+        "effects": _effects_truth(s),
         "seed": seed_record,
         "fs": s.fs,
         "duration": s.duration,
@@ -1305,13 +1266,13 @@ def simulate_bouncing(
 
     ``a0`` is the same at all times. The record starts at a random point of
     the first cycle without a start-up transient: with ``"jumps"`` in the
-    periodic steady state of that cycle's force (but see ``floor_mode`` in
-    :data:`EFFECTS`: with cycle-to-cycle variation a lightly damped floor
-    needs its decay time to settle); with ``"smooth"`` the integration starts
+    periodic steady state of that cycle's force (but a lightly damped floor,
+    ``floor_mode``, needs its decay time to settle under cycle-to-cycle
+    variation: see :class:`~smd_statespace.effects.FloorMode`); with ``"smooth"`` the integration starts
     :data:`SMOOTH_RUN_IN_DECAYS` decay times earlier (at most
     :data:`SMOOTH_RUN_IN_MAX`), in the periodic steady state of the
     averaged coefficients of the cycle there, so that the mismatch has
-    decayed by ``t = 0``. The effects of :data:`EFFECTS` work with both
+    decayed by ``t = 0``. Every registered effect works with both
     variations (extra harmonics vary like the base ones).
 
     Parameters
@@ -1346,8 +1307,17 @@ def simulate_bouncing(
         GRF noise standard deviation as a fraction of body weight
         ``M_h g``; also the default floor-acceleration noise (fraction of
         its RMS).
-    effects : dict, optional
-        ``{name: {parameter: value}}``, names and defaults in :data:`EFFECTS`.
+    effects : list of Effect or str, or dict, optional
+        Physical effects beyond the base model, each defined once in
+        :mod:`smd_statespace.effects` (a user's registered effect too):
+        objects, ``NAME[:key=value,...]`` specs as on the command line, or
+        ``{name: {key: value}}``. Keys are the effect's options or its
+        parameter slots' true values (``cubic_stiffness:beta_3=400``,
+        ``floor_mode:frequency=3.48,damping=0.0037,ambient=0.5``,
+        ``harmonics:blf=0.04/0.03``); parameters not given take the effect's
+        :attr:`~smd_statespace.model.Effect.simulation_defaults`. The
+        simulator integrates the effect's own acceleration and slot rates
+        (:class:`~smd_statespace.model.Effect`).
     seed : None, int, numpy.random.SeedSequence or numpy.random.Generator
         Source of randomness (through :func:`numpy.random.default_rng`). With
         None a fresh SeedSequence is made and its entropy stored in the truth,
@@ -1386,15 +1356,16 @@ def simulate_bouncing(
         n_rows = geometry[1]
     rng_blocks, grf_noise, floor_noise = _draw_blocks(rng, n_rows, s.blf.size, s.all_blf.size - s.blf.size,
                                                       n_samples)
-    excitation = _ambient_excitation(rng, s.effects, s.duration)
+    for effect in s.effects:  # drawn last, so that they leave every other random number unchanged
+        effect.draw_simulation_inputs(rng, s.duration)
     if s.variation == "jumps":
-        cycles, states = _jump_record(s, rng_blocks, time, excitation)
+        cycles, states = _jump_record(s, rng_blocks, time)
     else:
         # Drawn last: the run-in's length depends on the effects; the record's processes do not use them.
-        n_run = int(np.ceil(_smooth_run_in(s.f_h, s.xi_h, s.effects) * s.f_b))
+        n_run = int(np.ceil(_smooth_run_in(s.system) * s.f_b))
         run_in_knots = np.clip(rng.standard_normal((n_run, 1 + 2 * s.all_blf.size)), -TRUNCATION_SD,
                                TRUNCATION_SD)
-        cycles, states = _smooth_record(s, rng_blocks, run_in_knots, geometry, time, excitation)
+        cycles, states = _smooth_record(s, rng_blocks, run_in_knots, geometry, time)
     record = _measured_record(s, states, grf_noise, floor_noise)
     return SyntheticRecord(record=record, truth=_truth(s, seed_record, len(cycles)), states=states, cycles=cycles)
 

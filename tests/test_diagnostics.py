@@ -67,7 +67,7 @@ def harmonics():
 @pytest.fixture(scope="module")
 def cubic():
     # Same seed as `clean`: the same force and noise, plus a hardening spring.
-    return identify(simulate_bouncing(**dict(SETTINGS, effects={"cubic_stiffness": {"beta": 800.0}})).record)
+    return identify(simulate_bouncing(**dict(SETTINGS, effects={"cubic_stiffness": {"beta_3": 800.0}})).record)
 
 
 @pytest.fixture(scope="module")

@@ -47,7 +47,7 @@ def check_found(result, name):
 @pytest.mark.slow
 @pytest.mark.parametrize("seed,f_b,f_h,beta", [(1, 1.6, 1.92, 1500.0), (12, 1.5, 1.8, 1200.0)])
 def test_hidden_cubic_stiffness_is_found(seed, f_b, f_h, beta):
-    result = diagnose(record(seed, f_b, f_h, 0.3, {"cubic_stiffness": {"beta": beta}}), max_passes=3)
+    result = diagnose(record(seed, f_b, f_h, 0.3, {"cubic_stiffness": {"beta_3": beta}}), max_passes=3)
     best = check_found(result, "cubic_stiffness")
     assert best.check.serial_correlation_ratio() < 2.0  # as white as on a clean record
     assert best.check.table["beta_3"].median() > 0  # hardening, as simulated

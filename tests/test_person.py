@@ -284,7 +284,7 @@ def test_likelihood_ratio_of_an_absent_effect_is_chi_square_1():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("effects, warned", [
-    ({"cubic_stiffness": {"beta": 1500.0}}, True), ({"harmonics": {"blf": (0.04, 0.03)}}, True), (None, False)])
+    ({"cubic_stiffness": {"beta_3": 1500.0}}, True), ({"harmonics": {"blf": (0.04, 0.03)}}, True), (None, False)])
 def test_identify_warns_when_the_base_model_misses_an_effect_and_names_the_next_command(effects, warned):
     """Hidden cubic spring or extra harmonics: a warning in words with the diagnose command; a clean record: none."""
     sim = simulate_bouncing(mass=70, f_b=1.6, f_h=1.92, xi_h=0.3, duration=30, seed=1, effects=effects)

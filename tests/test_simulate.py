@@ -19,7 +19,6 @@ from smd_statespace import article
 from smd_statespace.errors import MassError, OptionError
 from smd_statespace.io import G, read_record
 from smd_statespace.simulate import (
-    EFFECTS,
     MASS_DISTRIBUTION,
     POPULATION_BOUNDS,
     SAMPLE_SETTINGS,
@@ -175,7 +174,7 @@ def test_floor_mode_undamped_energy_is_conserved():
     mass, f_h, modal_mass, f_f, beta = 70.0, 2.4, 900.0, 3.0, 300.0
     effects = {
         "floor_mode": {"frequency": f_f, "damping": 0.0, "modal_mass": modal_mass},
-        "cubic_stiffness": {"beta": beta},
+        "cubic_stiffness": {"beta_3": beta},
     }
     time = np.arange(0, 10.0, 0.01)
     states = integrate_response(
@@ -196,9 +195,10 @@ def test_floor_mode_undamped_energy_is_conserved():
 
 def test_floor_mode_response_matches_two_dof_frequency_response():
     mass, f_b, f_h, xi_h = 70.0, 1.75, 1.81, 0.33  # Table 4 rigid floor; 2nd harmonic near the 3.48 Hz mode
-    floor = EFFECTS["floor_mode"]
     sim = simulate_bouncing(mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=4.0, fs=200.0, seed=2,
                             effects={"floor_mode": {}}, **EXACT)
+    floor = sim.truth["effects"]["floor_mode"]
+    assert (floor["frequency"], floor["damping"], floor["modal_mass"]) == (3.48, 0.0037, 8583.0)  # Table 3, mode 1
     states, cycles = sim.states, sim.cycles
     assert np.array_equal(sim.record.floor_acc, states["z_ddot"].to_numpy())
     assert np.allclose(sim.record.force, mass * (G + states["u_ddot"]), rtol=1e-13)
@@ -252,7 +252,7 @@ def test_cubic_stiffness_changes_the_natural_frequency_the_right_way():
     wh = 2 * np.pi * f_h
     periods = {}
     for beta in (400.0, 0.0, -150.0):
-        effects = {"cubic_stiffness": {"beta": beta}}
+        effects = {"cubic_stiffness": {"beta_3": beta}}
         states = integrate_response(zero_force_cycles(5.0), time, f_h=f_h, xi_h=0.0, effects=effects,
                                     initial_state=[amplitude, 0.0])
         periods[beta] = _zero_crossing_period(time, states["u"].to_numpy())
@@ -267,7 +267,7 @@ def test_cubic_stiffness_changes_the_natural_frequency_the_right_way():
 
 def test_cubic_stiffness_in_a_record_and_zero_beta_changes_nothing():
     base = simulate_bouncing(duration=3.0, seed=5)
-    zero = simulate_bouncing(duration=3.0, seed=5, effects={"cubic_stiffness": {"beta": 0.0}})
+    zero = simulate_bouncing(duration=3.0, seed=5, effects={"cubic_stiffness": {"beta_3": 0.0}})
     hard = simulate_bouncing(duration=3.0, seed=5, effects={"cubic_stiffness": {}}, **EXACT)
     linear = simulate_bouncing(duration=3.0, seed=5, **EXACT)
     assert np.allclose(zero.record.force, base.record.force, rtol=0, atol=1e-9)
@@ -458,12 +458,12 @@ def test_shipped_sample_is_current(tmp_path):
         (dict(noise=-0.01), OptionError, "noise"),
         (dict(seed=-1), OptionError, "seed"),
         (dict(seed="abc"), OptionError, "seed"),
-        (dict(effects="floor_mode"), OptionError, "effects"),
+        (dict(effects=42), OptionError, "effects must be"),
         (dict(effects={"flor_mode": {}}), OptionError, "flor_mode.*floor_mode"),
         (dict(effects={"floor_mode": {"freq": 3.0}}), OptionError, "'freq'.*frequency"),
         (dict(effects={"floor_mode": {"modal_mass": 0}}), OptionError, "modal_mass"),
         (dict(effects={"harmonics": {"blf": (0.1,), "phases": (0.0, 1.0)}}), OptionError, "phases"),
-        (dict(effects={"cubic_stiffness": {"beta": "x"}}), OptionError, "beta"),
+        (dict(effects={"cubic_stiffness": {"beta_3": "x"}}), OptionError, "beta_3"),
         (dict(effects={"cubic_stiffness": 400}), OptionError, "cubic_stiffness"),
     ],
 )

@@ -72,29 +72,6 @@ def _numbers(text: str) -> tuple[float, ...]:
 
 
 
-def parse_effect(spec: str) -> tuple[str, dict]:
-    """``simulate --effect NAME[:key=value,...]``: :func:`~smd_statespace.effects.parse_spec` with numbers only.
-
-    The simulator's effects take numbers and tuples of numbers (``a/b``); a
-    word is refused here, naming the key. Names and keys are checked by the
-    simulator.
-
-    Examples
-    --------
-    >>> parse_effect("harmonics:blf=0.04/0.03")
-    ('harmonics', {'blf': (0.04, 0.03)})
-    """
-    from ..effects import parse_spec
-
-    name, values = parse_spec(spec)
-    for key, value in values.items():
-        parts = value if isinstance(value, tuple) else (value,)
-        if not all(isinstance(part, (int, float)) for part in parts):
-            raise OptionError(f"--effect {spec!r}: value of {key!r} is not a number (write a tuple as a/b)")
-        values[key] = tuple(float(part) for part in parts) if isinstance(value, tuple) else float(value)
-    return name, values
-
-
 def demo_out_dir(out) -> Path:
     """Check the demo's output directory before any work, so a bad ``--out`` fails fast.
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..errors import OptionError, SMDInputError
 from ..simulate import VARIATIONS
-from .common import _nonnegative, _numbers, _positive, _seed, parse_effect
+from .common import _nonnegative, _numbers, _positive, _seed
 
 
 def add_simulate(subparsers):
@@ -42,24 +42,24 @@ def add_simulate(subparsers):
                              "harmonics, jumping at the boundaries; default) or smooth (frequency and harmonics "
                              "drift continuously, correlated over about 2.5 cycles)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
-                        help="physical effect, repeatable: floor_mode, harmonics, cubic_stiffness "
-                             "(e.g. floor_mode:frequency=3.48, floor_mode:frequency=9.5,ambient=1.0 or "
-                             "harmonics:blf=0.04/0.03)")
+                        help="physical effect, repeatable: any registered effect (floor_mode, harmonics, "
+                             "cubic_stiffness, a user's); keys are its options or its parameters' true values "
+                             "(e.g. floor_mode:frequency=3.48, floor_mode:frequency=9.5,ambient=1.0, "
+                             "harmonics:blf=0.04/0.03, cubic_stiffness:beta_3=400)")
     return parser
 
 
 def run_simulate(args) -> int:
     """Run ``smd-statespace simulate``."""
+    from ..effects import make_effect
     from ..io import check_mass
     from ..simulate import DEFAULT_BLF, simulate_bouncing
 
     mass = check_mass(args.mass, source="--mass")
-    effects = {}
-    for spec in args.effect:
-        name, params = parse_effect(spec)
-        if name in effects:
-            raise OptionError(f"--effect {name!r} is given twice; give each effect once")
-        effects[name] = params
+    effects = [make_effect(spec, "--effect") for spec in args.effect]
+    names = [effect.name for effect in effects]
+    if len(set(names)) < len(names):
+        raise OptionError(f"--effect {max(names, key=names.count)!r} is given twice; give each effect once")
     out = Path(args.out)
     truth = None if args.truth is None else Path(args.truth)
     for label, path in (("--out", out), ("--truth", truth)):
@@ -86,7 +86,7 @@ def run_simulate(args) -> int:
         raise type(exc)(str(exc).replace("simulate_bouncing: ", "", 1)) from None
     csv_path, truth_path = synthetic.write(out, truth)
     record, info = synthetic.record, synthetic.truth
-    extra = f", effects {', '.join(effects)}" if effects else ""
+    extra = f", effects {', '.join(names)}" if effects else ""
     extra += ", smooth variation" if args.variation == "smooth" else ""
     seed = f"seed {info['seed']}" if args.seed is not None else "random seed (in the truth file)"
     print(
