@@ -13,8 +13,8 @@ is added::
 
 Effects (:data:`KINDS`): extra harmonics 5-6 (``harmonics``), a cubic spring
 (``cubic_stiffness``), a floor mode with the floor acceleration measured
-(``floor_mode``, the record's ``floor_acc`` kept: candidate
-``floor_measured``) and without it (the same records, ``floor_acc`` dropped:
+(kind ``floor_measured``: the record's ``floor_acc`` kept, so the candidate
+``floor_mode`` takes the measured floor) and without it (the same records, ``floor_acc`` dropped:
 only ``harmonics`` and ``cubic_stiffness`` can be proposed, so a correct
 answer is "no candidate fits", which is what is counted). The effect's size
 is measured on every record as the RMS of the GRF difference it makes
@@ -56,7 +56,7 @@ KINDS = {
 """Hidden effects at a small and a large size (about 2x and 5x the noise on a typical record)."""
 
 EXPECTED = {"clean": None, "harmonics": "harmonics", "cubic_stiffness": "cubic_stiffness",
-            "floor_measured": "floor_measured", "floor_unmeasured": None}
+            "floor_measured": "floor_mode", "floor_unmeasured": None}
 """The right answer of ``diagnose`` per kind (None: nothing proposed)."""
 
 

@@ -47,14 +47,14 @@ hidden effect       what reaches the residual                which diagnostic sh
 =================== ======================================== ============================================
 ``harmonics``       lines at ``(n+1) f_b``, ``(n+2) f_b``:   :meth:`ModelCheck.residual_spectrum`: top
                     fit 95 -> 82-87 %, residual 1.1-1.3 ->   peak "harmonic 5"; candidate
-                    3.3-4.6 % BW                             ``harmonics 5-6`` (R about 0.9) strongest
+                    3.3-4.6 % BW                             ``harmonics`` (R about 0.9) strongest
 ``cubic_stiffness`` mostly absorbed (identified ``f_h`` up   :meth:`ModelCheck.cross_correlation`:
-                    3-12 %); fit -0.5 to -1.5 points,        ``u^3`` strongest, 2-3.5 times its value
-                    residual +0.1-0.3 % BW                   on the same record without the effect
+                    3-12 %); fit -0.5 to -1.5 points,        ``cubic_stiffness`` strongest, 2-3.5 times
+                    residual +0.1-0.3 % BW                   its value without the effect
 ``floor_mode``      below ``n f_b`` (the article's 3.48 Hz   nothing: fit, residual and correlations as
                     plate): about 99 % absorbed              on a rigid floor. Above ``n f_b`` (a floor
                                                              excited by other sources): candidate
-                                                             ``floor coupling`` and a non-harmonic peak
+                                                             ``floor_mode`` and a non-harmonic peak
 =================== ======================================== ============================================
 
 :attr:`ModelCheck.residual_unabsorbed` (the residual minus everything a small
@@ -872,24 +872,23 @@ class ModelCheck:
     def default_candidates(self) -> dict:
         """Candidate terms of the COM acceleration that a missing physical effect would add.
 
-        ``harmonics k-(k+1)`` (four columns)
-            ``cos(j theta), sin(j theta)`` per cycle for the two orders ``j``
-            above the model's (:meth:`harmonic_signal`): force harmonics the
-            model lacks (their coefficients taken the same in every cycle).
-        ``floor coupling``
-            ``w_h^2 z + 2 xi_h w_h z'`` with the measured floor displacement
-            ``z``, velocity ``z'`` and each cycle's identified ``f_h``,
-            ``xi_h``: exactly what a vibrating floor adds (Section 6). Only
-            when the record has a floor acceleration, as are ``floor_acc`` and
-            ``floor_disp``.
+        Every registered effect not in the model (:mod:`smd_statespace.effects`,
+        a user's included), as its class configures itself for this record
+        (:meth:`Effect.candidate <smd_statespace.model.Effect.candidate>`),
+        contributes its own terms (:meth:`effect_terms`), named by the
+        effect: ``harmonics`` (four columns: ``g cos(j theta), g sin(j
+        theta)`` for the two orders above the model's), ``cubic_stiffness``
+        (``-w_h^2 u^3``), ``floor_mode`` (with a measured floor: ``w_h^2 z +
+        2 xi_h w_h z'``, exactly what a vibrating floor adds, Section 6). A
+        term that needs the effect's own unmeasured state (a floor mode
+        without accelerometer) is left out. Besides them, model-free probes:
+
         ``u``, ``u_dot``
             a stiffness or damping the cycle's identification did not catch.
         ``u^2``
             an asymmetric spring.
-        ``u^3``
-            a cubic spring (``-w_h^2 beta u^3``).
-        ``u_dot|u_dot|``
-            quadratic (aerodynamic-like) damping.
+        ``floor_acc``, ``floor_disp``
+            the measured floor signals, when the record has them.
 
         ``u``, ``u_dot``, ``f_h`` and ``xi_h`` are the free simulation's
         (:meth:`simulated_state`), not the pipeline's ``disp`` and ``vel``:
@@ -901,22 +900,56 @@ class ModelCheck:
 
         Returns
         -------
-        dict of str to ndarray, each of shape ``(len(preprocessed.time),)`` or ``(len(preprocessed.time), 2)``
+        dict of str to ndarray, each of shape ``(len(preprocessed.time),)`` or ``(len(preprocessed.time), q)``
         """
+        from .effects import EFFECTS
+
         pre = self.preprocessed
+        out = {}
+        present = {effect.name for effect in self.model.effects}
+        for name, cls in EFFECTS.items():
+            effect = None if name in present else cls.candidate(self)
+            terms = {} if effect is None else self.effect_terms(effect)
+            if terms:
+                columns = np.column_stack(list(terms.values()))
+                out[name] = columns[:, 0] if columns.shape[1] == 1 else columns
         u = self.simulated_state("u")
-        v = self.simulated_state("u_dot")
-        top = int(self.harmonic_orders().max())
-        out = {f"harmonics {top + 1}-{top + 2}": np.hstack([self.harmonic_signal(top + 1), self.harmonic_signal(top + 2)])}
+        out.update({"u": u, "u_dot": self.simulated_state("u_dot"), "u^2": u**2})
         if getattr(pre, "floor_acc", None) is not None:
-            omega = TWO_PI * self.simulated_state("f_h")
-            xi_h = self.simulated_state("xi_h")
-            floor_disp = np.asarray(pre.floor_disp, dtype=float)
-            floor_vel = np.asarray(pre.floor_vel, dtype=float)
-            out["floor coupling"] = omega**2 * floor_disp + 2.0 * xi_h * omega * floor_vel
             out["floor_acc"] = np.asarray(pre.floor_acc, dtype=float)
-            out["floor_disp"] = floor_disp
-        out.update({"u": u, "u_dot": v, "u^2": u**2, "u^3": u**3, "u_dot|u_dot|": v * np.abs(v)})
+            out["floor_disp"] = np.asarray(pre.floor_disp, dtype=float)
+        return out
+
+    def effect_terms(self, effect) -> dict:
+        """The terms ``effect`` would add to ``u''`` along this check's free simulation (m/s^2 per unit).
+
+        The model extended by ``effect`` is evaluated on the free
+        simulation's state (:meth:`simulated_state`; the effect's own slots
+        at 0) cycle by cycle, with each cycle's inputs, and the effect gives
+        its :meth:`~smd_statespace.model.Effect.score_terms`. Samples outside
+        the checked cycles are 0. An effect whose measured signals the record
+        lacks gives none.
+
+        Returns
+        -------
+        dict of str to ndarray, each of shape ``(len(preprocessed.time),)``
+        """
+        from .estimators import cycle_data
+
+        model = self.model.with_effects(effect)
+        pre = self.preprocessed
+        x = np.zeros((len(pre.time), model.n_state))
+        for name in self.model.state_names:
+            x[:, model.index(name)] = self.simulated_state(name)
+        out = {}
+        for cycle in self.cycles:
+            try:
+                data = cycle_data(model, pre, cycle)
+            except OptionError:
+                return {}
+            samples = np.arange(cycle.start, cycle.stop + 1)
+            for key, values in effect.score_terms(model, x[samples], data.t, data.inputs).items():
+                out.setdefault(key, np.zeros(len(pre.time)))[samples] = values
         return out
 
     def simulated_state(self, name) -> np.ndarray:
@@ -959,12 +992,11 @@ class ModelCheck:
         the bouncing harmonics, which is also where the free simulation's
         unavoidable error sits, and what lies in that span the identification
         absorbs into the force coefficients anyway. After it, a cubic spring
-        makes ``u^3`` the strongest (about twice its value on the same record
-        without the effect), and missing force harmonics make
-        ``harmonics n+1-n+2`` and ``u_dot|u_dot|`` (whose harmonics above
-        ``n`` are large) the strongest.
+        makes its term ``cubic_stiffness`` the strongest (about twice its value
+        on the same record without the effect), and missing force harmonics
+        make ``harmonics`` the strongest.
 
-        Multi-column candidates (``harmonics k-(k+1)``: cosines and sines) are scored
+        Multi-column candidates (``harmonics``: cosines and sines) are scored
         by the multiple correlation of a least-squares fit of all their
         columns (``corr`` is then NaN); single columns by the Pearson
         correlation. For each lag ``tau`` (whole samples, ``|tau| <=

@@ -25,6 +25,7 @@ from __future__ import annotations
 import inspect
 
 import numpy as np
+from scipy import signal
 
 from . import article
 from .errors import OptionError
@@ -108,6 +109,12 @@ class Harmonics(Effect):
         if self.blf is None and self.count > len(self.DEFAULT_BLF):
             raise OptionError(f"harmonics: give blf=... (g) to simulate {self.count} extra harmonics")
         return (self.blf or self.DEFAULT_BLF[:self.count]), self.phases
+
+    def record_candidate(self, result):
+        """Record level: ``count`` more force harmonics, template coefficients and a spread each (3 per harmonic)."""
+        from .person.diagnose import RecordCandidate, with_harmonics
+
+        return RecordCandidate(3 * self.count, [with_harmonics(result, self.count)])
 
     def simulation_truth(self):
         return {"blf": list(self.blf or self.DEFAULT_BLF[:self.count]),
@@ -437,15 +444,110 @@ class FloorMode(Effect):
             return cls("measured")
         return cls("modal", **options)
 
+    CANDIDATE_DAMPING = 0.01
+    """Damping ratio of the modal floor candidate seeded from the residual spectrum (floors: about 0.3-3 %)."""
+
     @classmethod
     def candidate(cls, check):
         """The measured floor, or a known mode at the residual's strongest unlocked line (or None).
 
-        See :func:`smd_statespace.missing.floor_candidate`.
+        A floor excited by anything but this person moves at its own
+        frequency with no fixed phase to the bouncing cycle. The residual's
+        phase-locked part (:meth:`~smd_statespace.diagnostics.ModelCheck.phase_locked`:
+        missing harmonics, a nonlinearity) is removed first, so that such a
+        line is found even next to a multiple of ``f_b``; a peak is taken
+        only where at least half of the residual's power is unlocked. Weak
+        lines at ``(k + 1/2) f_b`` come from cycle-to-cycle variation of the
+        force: one is taken only when it is stronger than every harmonic
+        line of the residual. The line's frequency, read off the record,
+        counts as one fitted parameter (:attr:`record_parameters`).
         """
-        from .missing import floor_candidate
+        if check.preprocessed.floor_acc is not None:
+            return cls("measured")
+        freq, psd, whole = check.residual_spectrum()
+        unlocked = check.residual - check.phase_locked()
+        _, psd_unlocked, peaks = check.residual_spectrum(values=unlocked)
+        bins = np.clip(np.searchsorted(freq, peaks["frequency"]), 0, freq.size - 1)
+        mostly_unlocked = psd_unlocked[bins] >= 0.5 * psd[bins]
+        half = (peaks["f_over_fb"] % 1.0 - 0.5).abs() < 0.1
+        harmonic_power = whole.loc[whole["label"] != "non-harmonic", "power"].max()
+        dominant = peaks["power"] > (0.0 if np.isnan(harmonic_power) else harmonic_power)
+        other = peaks[mostly_unlocked & (~half | dominant)]
+        if other.empty:
+            return None
+        frequency = float(other["frequency"].iloc[0])  # peaks are sorted strongest first
+        # A floor mode is one frequency for the whole record: a known mode at the line, not a per-cycle estimate.
+        effect = cls("modal", frequency=round(frequency, 3), damping=cls.CANDIDATE_DAMPING)
+        effect.record_parameters = 1
+        return effect
 
-        return floor_candidate(check)
+    @classmethod
+    def diagnosis_notes(cls, base, judged) -> list:
+        """What the residual cannot say about a measured floor motion (see :mod:`smd_statespace.missing`).
+
+        The floor's coupling is the measured floor's own acceleration term
+        (:meth:`~smd_statespace.diagnostics.ModelCheck.effect_terms`) times
+        the body mass; the note says how large it is, how much of it a
+        cycle's force absorbs and how ``f_h``, ``xi_h`` move with the floor
+        modelled.
+        """
+        pre = base.preprocessed
+        if pre.floor_acc is None or any(effect.name == cls.name for effect in base.model.effects):
+            return []
+        terms = base.effect_terms(cls("measured"))
+        if not terms:
+            return []
+        coupling = pre.mass * next(iter(terms.values()))[base.sample_index]
+        size = float(np.sqrt(np.mean(coupling**2)))
+        left = float(np.sqrt(np.mean(base.remove_absorbable(coupling) ** 2)))
+        absorbed = 1.0 - left / size
+        note = (f"floor_mode: the measured floor moves; its coupling M_h (w_h^2 z + 2 xi_h w_h z') is "
+                f"{100 * size / base.weight:.2f} % BW RMS, {100 * absorbed:.0f} % of it absorbed by the per-cycle "
+                "force")
+        if absorbed >= 0.9:
+            note += f" (it lies below n f_b = {base.model.n_harmonics * base.f_b:.1f} Hz), so the residual cannot test it"
+        with_floor = next((c.check for c in judged if c.name == cls.name), None)
+        if with_floor is not None:
+            medians = [(check.table.loc[check.table["status"] == "ok", ["f_h", "xi_h"]].median()) for check in
+                       (base, with_floor)]
+            note += (f"; modelling the floor moves the median f_h {medians[0]['f_h']:.2f} -> {medians[1]['f_h']:.2f} "
+                     f"Hz and xi_h {medians[0]['xi_h']:.2f} -> {medians[1]['xi_h']:.2f} (Section 6, Table 4)")
+        return [note]
+
+    RECORD_DAMPING_TRIALS = (0.005, 0.02)
+    """Floor damping ratios tried by the record-level form of the floor without an accelerometer."""
+
+    @classmethod
+    def record_default(cls, result):
+        """The measured floor when the record has a floor acceleration; else None (the modal floor only when asked)."""
+        return cls("measured") if getattr(result.record, "floor_acc", None) is not None else None
+
+    def record_candidate(self, result):
+        """Record level: ``-kappa z''`` with the measured ``z''``, or the floor predicted from the GRF.
+
+        Measured: the leg acts on the motion relative to the floor, so the
+        floor acceleration moves the relative state but is not part of
+        ``GRF / M_h`` (``kappa`` should be 1; 1 parameter). Modal: ``z'' =
+        -mu H_f(s) u''`` from the measured ``u''``, ``H_f = s^2 / (s^2 + 2
+        xi_f w_f s + w_f^2)``, ``f_f`` at the strongest unexplained line of
+        the innovations (the given ``frequency`` if any), ``xi_f`` the better
+        of :data:`RECORD_DAMPING_TRIALS` (3 parameters: ``f_f``, ``xi_f``, ``mu``).
+        """
+        from .person.diagnose import RecordCandidate, innovation_line, with_regressor
+        from .person.model import Regressor
+
+        if not self.modal:
+            floor = getattr(result.record, "floor_acc", None)
+            if floor is None:
+                return None
+            term = Regressor("kappa", -np.asarray(floor, dtype=float), "-", observed=False)
+            return RecordCandidate(1, [with_regressor(result, term)], "kappa")
+        model = result.model
+        f_f = self.frequency or innovation_line(result)
+        trials = (self.values["xi_f"],) if self.known else self.RECORD_DAMPING_TRIALS
+        models = [with_regressor(result, Regressor("mu", -_floor_response(model.time, model.y, f_f, xi_f), "-",
+                                                   observed=False)) for xi_f in trials]
+        return RecordCandidate(3, models, "mu", [{"f_f": f_f, "xi_f": xi_f} for xi_f in trials])
 
     @property
     def modal(self) -> bool:
@@ -577,6 +679,13 @@ class FloorMode(Effect):
     def __repr__(self):
         options = "".join(f", {key}={value!r}" for key, value in {**self.given, **self.simulation_given}.items())
         return f"FloorMode(source={self.source!r}{options})"
+
+
+def _floor_response(time, acc, f_f, xi_f):
+    """``H_f(s) acc``: a floor mode's acceleration per unit mass ratio under the GRF of COM acceleration ``acc``."""
+    w = 2.0 * np.pi * f_f
+    _, out, _ = signal.lsim(([1.0, 0.0, 0.0], [1.0, 2.0 * xi_f * w, w * w]), acc, time)
+    return out
 
 
 def _slot_count(model, effect) -> int:

@@ -73,10 +73,6 @@ from .errors import OptionError
 from .model import TWO_PI, SMDModel
 
 
-FLOOR_DAMPING = 0.01
-"""Damping ratio of the modal floor candidate seeded from the residual spectrum (floors: about 0.3-3 %)."""
-
-
 @dataclass
 class Candidate:
     """One refit: the effect, its model check and the evidence for it."""
@@ -161,57 +157,16 @@ def _effect_parameters(check: ModelCheck) -> dict:
 
 
 def default_candidates(model: SMDModel, base: ModelCheck) -> list:
-    """Every registered effect not yet in ``model``, configured for this record.
+    """Every registered effect not yet in ``model``, configured for this record by its own class.
 
-    ``floor_mode`` uses the measured floor acceleration when the record has
-    one; otherwise it is a known mode at the strongest line of the residual
-    that is not locked to the bouncing cycle (see :func:`_floor_candidate`;
-    if there is none, it is left out).
+    :meth:`Effect.candidate <smd_statespace.model.Effect.candidate>` decides
+    (``floor_mode``: the measured floor when the record has one, else a known
+    mode at the strongest line of the residual that is not locked to the
+    bouncing cycle, or nothing); an effect that returns None is left out.
     """
     present = {effect.name for effect in model.effects}
-    candidates = []
-    for name in EFFECTS:
-        if name in present:
-            continue
-        if name == "floor_mode":
-            effect = _floor_candidate(base)
-            if effect is not None:
-                candidates.append(effect)
-            continue
-        candidates.append(make_effect(name))
-    return candidates
-
-
-def _floor_candidate(base: ModelCheck):
-    """The floor effect to try: the measured floor, or a known mode at the residual's strongest unlocked line.
-
-    A floor excited by anything but this person moves at its own frequency
-    with no fixed phase to the bouncing cycle. The residual's phase-locked
-    part (:meth:`ModelCheck.phase_locked`: missing harmonics, a
-    nonlinearity) is removed first, so that such a line is found even next
-    to a multiple of ``f_b``; a peak is taken only where at least half of
-    the residual's power is unlocked. Weak lines at ``(k + 1/2) f_b`` come
-    from cycle-to-cycle variation of the force: one is taken only when it is
-    stronger than every harmonic line of the residual.
-    """
-    if base.preprocessed.floor_acc is not None:
-        return make_effect("floor_mode:source=measured")
-    freq, psd, whole = base.residual_spectrum()
-    unlocked = base.residual - base.phase_locked()
-    _, psd_unlocked, peaks = base.residual_spectrum(values=unlocked)
-    bins = np.clip(np.searchsorted(freq, peaks["frequency"]), 0, freq.size - 1)
-    mostly_unlocked = psd_unlocked[bins] >= 0.5 * psd[bins]
-    half = (peaks["f_over_fb"] % 1.0 - 0.5).abs() < 0.1
-    harmonic_power = whole.loc[whole["label"] != "non-harmonic", "power"].max()
-    dominant = peaks["power"] > (0.0 if pd.isna(harmonic_power) else harmonic_power)
-    other = peaks[mostly_unlocked & (~half | dominant)]
-    if other.empty:
-        return None
-    frequency = float(other["frequency"].iloc[0])  # peaks are sorted strongest first
-    # A floor mode is one frequency for the whole record: a known mode at the line, not a per-cycle estimate.
-    effect = make_effect(f"floor_mode:source=modal,frequency={frequency:.3f},damping={FLOOR_DAMPING}")
-    effect.record_parameters = 1
-    return effect
+    chosen = (cls.candidate(base) for name, cls in EFFECTS.items() if name not in present)
+    return [effect for effect in chosen if effect is not None]
 
 
 def _judge(base: ModelCheck, check: ModelCheck, effect, n_candidates: int, alpha: float, min_improvement: float):
@@ -240,33 +195,6 @@ def _judge(base: ModelCheck, check: ModelCheck, effect, n_candidates: int, alpha
         f"{base.serial_correlation_ratio():.2f} -> {check.serial_correlation_ratio():.2f}"
     )
     return Candidate(effect, check, extra, f_statistic, lr, pvalue, score, filter_lr, rms_fall, significant, evidence)
-
-
-def _floor_notes(base: ModelCheck, judged) -> list:
-    """What the residual cannot say about a measured floor motion (see the module docstring)."""
-    pre = base.preprocessed
-    if pre.floor_acc is None or any(effect.name == "floor_mode" for effect in base.model.effects):
-        return []
-    table = base.table.set_index("cycle").loc[base.cycle_index]
-    omega, xi = TWO_PI * table["f_h"].to_numpy(), table["xi_h"].to_numpy()
-    rows = base.sample_index
-    coupling = pre.mass * (omega**2 * pre.floor_disp[rows] + 2.0 * xi * omega * pre.floor_vel[rows])
-    size = float(np.sqrt(np.mean(coupling**2)))
-    if size == 0.0:
-        return []
-    left = float(np.sqrt(np.mean(base.remove_absorbable(coupling) ** 2)))
-    absorbed = 1.0 - left / size
-    note = (f"floor_mode: the measured floor moves; its coupling M_h (w_h^2 z + 2 xi_h w_h z') is "
-            f"{100 * size / base.weight:.2f} % BW RMS, {100 * absorbed:.0f} % of it absorbed by the per-cycle force")
-    if absorbed >= 0.9:
-        note += f" (it lies below n f_b = {base.model.n_harmonics * base.f_b:.1f} Hz), so the residual cannot test it"
-    with_floor = next((c.check for c in judged if c.name == "floor_mode"), None)
-    if with_floor is not None:
-        medians = [(check.table.loc[check.table["status"] == "ok", ["f_h", "xi_h"]].median()) for check in
-                   (base, with_floor)]
-        note += (f"; modelling the floor moves the median f_h {medians[0]['f_h']:.2f} -> {medians[1]['f_h']:.2f} Hz "
-                 f"and xi_h {medians[0]['xi_h']:.2f} -> {medians[1]['xi_h']:.2f} (Section 6, Table 4)")
-    return [note]
 
 
 def diagnose(preprocessed, model: SMDModel | None = None, estimator: str = "ekf", candidates=None,
@@ -301,5 +229,6 @@ def diagnose(preprocessed, model: SMDModel | None = None, estimator: str = "ekf"
         check = check_model(preprocessed, extended, estimator=estimator, **runner_options)
         judged.append(_judge(base, check, effect, len(effects), alpha, min_improvement))
     judged.sort(key=lambda c: (not c.significant, -c.score))
-    notes = [] if any(c.significant and c.name == "floor_mode" for c in judged) else _floor_notes(base, judged)
+    notes = [note for name, cls in EFFECTS.items() if not any(c.significant and c.name == name for c in judged)
+             for note in cls.diagnosis_notes(base, judged)]
     return Diagnosis(base, judged, alpha, min_improvement, notes)

@@ -354,6 +354,36 @@ class Effect:
         """
         return cls()
 
+    @classmethod
+    def diagnosis_notes(cls, base, judged) -> list:
+        """Plain-word notes for :func:`~smd_statespace.missing.diagnose` when this effect is not found (default none).
+
+        ``base`` is the base model's :class:`~smd_statespace.diagnostics.ModelCheck`,
+        ``judged`` the candidates' refits.
+        """
+        return []
+
+    @classmethod
+    def record_default(cls, result) -> "Effect | None":
+        """This effect as a default candidate of the record-level diagnosis, or None to leave it out.
+
+        ``result`` is the base :class:`~smd_statespace.person.results.PersonResult`.
+        Default: the effect with its default options.
+        """
+        return cls()
+
+    def record_candidate(self, result):
+        """How this effect enters the record-level model of ``result``'s record.
+
+        Returns a :class:`~smd_statespace.person.diagnose.RecordCandidate`
+        (extended model(s), number of parameters) or None to skip. Default:
+        the effect's :meth:`score_terms` on the base fit's smoothed path as
+        regressors (:func:`~smd_statespace.person.diagnose.score_term_candidate`).
+        """
+        from .person.diagnose import score_term_candidate
+
+        return score_term_candidate(result, self)
+
     def score_terms(self, model: "SMDModel", x, t, inputs: CycleInputs) -> dict:
         """The terms this effect would add to ``u''``, one per unknown coefficient (m/s^2 per unit).
 

@@ -128,7 +128,8 @@ def test_option_errors_name_the_problem():
     with pytest.raises(OptionError, match="source 'floor'"):
         make_effect("floor_mode:source=floor")
     with pytest.raises(OptionError, match="'frequency' applies to source='modal' only"):
-        make_effect("floor_mode:frequency=3.48")
+        make_effect("floor_mode:source=measured,frequency=3.48")
+    assert make_effect("floor_mode:frequency=3.48").source == "modal"  # a modal option implies the modal floor
     with pytest.raises(OptionError, match="frequency_range must satisfy"):
         FloorMode("modal", frequency_range=(5.0, 4.0))
     with pytest.raises(OptionError, match="not both"):
@@ -160,7 +161,7 @@ def test_known_mode_options_are_checked():
     with pytest.raises(OptionError, match="damping must be a ratio below 1"):
         make_effect("floor_mode:source=modal,frequency=3,damping=1.5")
     with pytest.raises(OptionError, match="'damping' applies to source='modal' only"):
-        make_effect("floor_mode:damping=0.01")
+        make_effect("floor_mode:source=measured,damping=0.01")
 
 
 def _floor_record(seed, **options):

@@ -212,7 +212,7 @@ def test_constant_offset_absorbs_a_wrong_body_mass():
 @pytest.mark.parametrize("effects, expected", [
     (None, None),
     ({"harmonics": {"blf": (0.04, 0.03)}}, "harmonics"),
-    ({"floor_mode": {}}, "floor_measured"),
+    ({"floor_mode": {}}, "floor_mode"),  # with the record's floor_acc: the measured floor
 ])
 def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects, expected):
     """Hidden extra harmonics and a floor with an accelerometer are ranked first; a clean record is adequate."""

@@ -59,19 +59,16 @@ def before_after(before, after) -> pd.DataFrame:
 
 def run_person_diagnose(args) -> int:
     """``diagnose --estimator record``: candidate effects on the record-level model."""
-    from ..errors import OptionError
     from ..io import read_record
     from ..person import identify_person
     from ..person.diagnose import diagnose_person
 
-    if args.effect:
-        raise OptionError("--effect is not available with --estimator record yet; the candidates are tried in turn")
     directory = out_dir(args.out)
     record = read_record(args.record, args.mass)
     base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks)
     print(f"{record.source}: record-level model")
     print(base.summary())
-    result = diagnose_person(base, alpha=args.alpha)
+    result = diagnose_person(base, candidates=args.effect or None, alpha=args.alpha)
     print("\ncandidate effects added to the record-level model (likelihood ratio, best first):")
     columns = ["n_params", "lr", "p_value", "significant", "noise_change_%", "f_h_before", "f_h", "xi_h_before",
                "xi_h", "estimate", "estimate_sd"]

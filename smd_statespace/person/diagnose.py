@@ -5,24 +5,34 @@ Each candidate effect enters the record-level model
 (the per-cycle method re-fitted an effect in every cycle, so a penalised score
 threw it away), the other parameters are re-fitted from the base fit, and the
 likelihood-ratio statistic is referred to chi-square with the effect's true
-number of parameters (Bonferroni over the candidates):
+number of parameters (Bonferroni over the candidates).
 
+Every registered effect (:mod:`smd_statespace.effects`, a user's too) says
+how it enters the record-level model, :meth:`Effect.record_candidate
+<smd_statespace.model.Effect.record_candidate>`:
+
+any effect, by default
+    Its own score terms (:meth:`~smd_statespace.model.Effect.score_terms`:
+    the derivative of its acceleration term in each parameter, at 0) on the
+    base fit's smoothed path, one regressor with one coefficient each
+    (:func:`score_term_candidate`). A cubic spring becomes
+    ``-w_h^2 beta_3 u^3`` with ``u`` the smoothed displacement (1 parameter).
 ``harmonics``
     Two more harmonics of the force (orders ``n+1, n+2``): their template
     coefficients and one cycle-to-cycle spread each (6 parameters).
-``cubic_stiffness``
-    A hardening or softening leg, ``-w_h^2 beta u^3`` in ``u''`` with ``u``
-    the displacement smoothed by the base fit (``beta`` in 1/m^2; 1 parameter).
-``floor_measured``
+``floor_mode`` with an accelerometer
     The leg acts on the motion relative to a floor whose acceleration is
     measured (the record's ``floor_acc``): ``-kappa z''`` moves the relative
     state but is not part of ``GRF / M_h``; ``kappa`` should be 1 (1 parameter).
-``floor_mode``
-    A floor mode without an accelerometer: its acceleration is predicted from
-    the measured GRF, ``z'' = -mu H_f(s) u''`` (``H_f = s^2 / (s^2 + 2 xi_f w_f
-    s + w_f^2)``), with ``f_f`` at the strongest unexplained line of the
-    innovations' spectrum and ``xi_f`` the better of two trial values; ``mu``
-    is the person-to-modal mass ratio (3 parameters).
+``floor_mode`` without one (only when asked for)
+    Its acceleration is predicted from the measured GRF, ``z'' = -mu H_f(s)
+    u''`` (``H_f = s^2 / (s^2 + 2 xi_f w_f s + w_f^2)``), with ``f_f`` at the
+    strongest unexplained line of the innovations' spectrum
+    (:func:`innovation_line`) and ``xi_f`` the better of two trial values;
+    ``mu`` is the person-to-modal mass ratio (3 parameters). Not tried by
+    default: on a clean simulated record (f_b 2 Hz, f_h 2.5 Hz, seed 21) it
+    was a false alarm (LR 65 for 3 parameters), its predicted floor acting as
+    a free filter that absorbs the base model's own misfit.
 
 A cubic spring makes harmonics of the bouncing frequency, so "harmonics" and
 "cubic_stiffness" can explain the same residual; the report says so when both
@@ -31,27 +41,43 @@ are significant and what separates them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 from scipy import signal, stats
 
+from ..effects import EFFECTS, make_effect
+from ..model import F_H, U, U_DOT, XI_H, CycleInputs, SMDModel
 from .fit import fit_model
 from .model import RecordModel, Regressor
 
-__all__ = ["CANDIDATES", "ALL_CANDIDATES", "PersonDiagnosis", "diagnose_person"]
+__all__ = ["RecordCandidate", "PersonDiagnosis", "diagnose_person", "score_term_candidate", "innovation_line",
+           "with_regressor", "with_harmonics"]
 
-CANDIDATES = ("harmonics", "cubic_stiffness", "floor_measured")
-"""Candidate effects tried by default. ``floor_mode`` is tried only when asked for: on a clean
-simulated record (f_b 2 Hz, f_h 2.5 Hz, seed 21) it was a false alarm (LR 65 for 3 parameters),
-its predicted floor acting as a free filter that absorbs the base model's own misfit."""
 
-ALL_CANDIDATES = CANDIDATES + ("floor_mode",)
-"""Every candidate :func:`diagnose_person` knows."""
+@dataclass
+class RecordCandidate:
+    """One effect as the record-level model takes it: what :func:`diagnose_person` fits.
 
-FLOOR_DAMPING_TRIALS = (0.005, 0.02)
-"""Floor damping ratios tried for the floor mode without an accelerometer."""
+    Attributes
+    ----------
+    n_params : int
+        The effect's parameters (degrees of freedom of the likelihood-ratio test).
+    models : list of RecordModel
+        The base model extended by the effect; with several (trial values
+        of a setting), the one with the highest likelihood is kept.
+    parameter : str or None
+        The regressor whose coefficient the table reports (None: the extra
+        harmonics' amplitude).
+    settings : dict
+        Values read off the record to build the models (e.g. ``f_f``), by model.
+    """
+
+    n_params: int
+    models: list
+    parameter: str | None = None
+    settings: list = field(default_factory=list)
 
 
 @dataclass
@@ -119,7 +145,7 @@ def _start(model: RecordModel, base_model: RecordModel, base_params, default=-6.
     return np.array([named.get(name, default) for name in model.param_names])
 
 
-def _innovation_line(result):
+def innovation_line(result):
     """Frequency (Hz) of the strongest line of the innovations' spectrum away from the bouncing harmonics."""
     innov = result.standardized_innovations()
     fs = result.record.fs
@@ -130,61 +156,67 @@ def _innovation_line(result):
     return float(freq[usable][np.argmax(power[usable])])
 
 
-def _floor_prediction(time, y, f_f, xi_f):
-    """Floor acceleration (m/s^2) per unit mass ratio predicted from the measured ``u''``: ``-H_f(s) u''``."""
-    w = 2.0 * np.pi * f_f
-    _, out, _ = signal.lsim(([1.0, 0.0, 0.0], [1.0, 2.0 * xi_f * w, w * w]), y, time)
-    return -out
+def _options(base):
+    return dict(variation=base.variation, process_noise=base.process_noise, drift=base.drift)
 
 
-def _candidate_models(result, candidates):
-    """``(name, n_params, [models])``: each candidate's model(s) built on the base fit."""
+def with_regressor(result, *terms: Regressor) -> RecordModel:
+    """The base fit's model with more regressors (effects' known signals with unknown coefficients)."""
     base = result.model
-    options = dict(variation=base.variation, process_noise=base.process_noise, drift=base.drift)
-    f_h = result.f_h
-    out = []
-    for name in candidates:
-        if name == "harmonics":
-            template = None if base.phase_template is None else np.r_[base.phase_template, np.zeros(4)]
-            model = RecordModel(base.time, base.y, base.timing, base.n_harmonics + 2, regressors=base.regressors,
-                                phase_template=template, **options)
-            out.append((name, 6, [model], "blf_extra"))
-        elif name == "cubic_stiffness":
-            u = result.statespace_results.smoothed_state[0]
-            term = Regressor("beta", -(2.0 * np.pi * f_h) ** 2 * u**3, "1/m^2")
-            out.append((name, 1, [_with(base, term, options)], "beta"))
-        elif name == "floor_measured":
-            floor = getattr(result.record, "floor_acc", None)
-            if floor is None:
-                continue
-            term = Regressor("kappa", -np.asarray(floor, dtype=float), "-", observed=False)
-            out.append((name, 1, [_with(base, term, options)], "kappa"))
-        elif name == "floor_mode":
-            f_f = _innovation_line(result)
-            models = [_with(base, Regressor("mu", _floor_prediction(base.time, base.y, f_f, xi_f), "-",
-                                            observed=False), options) for xi_f in FLOOR_DAMPING_TRIALS]
-            for model, xi_f in zip(models, FLOOR_DAMPING_TRIALS):
-                model.floor_settings = {"f_f": f_f, "xi_f": xi_f}
-            out.append((name, 3, models, "mu"))
-    return out
+    return RecordModel(base.time, base.y, base.timing, base.n_harmonics, regressors=base.regressors + tuple(terms),
+                       phase_template=base.phase_template, **_options(base))
 
 
-def _with(base, term, options):
-    """The base model with one more regressor."""
-    return RecordModel(base.time, base.y, base.timing, base.n_harmonics, regressors=base.regressors + (term,),
-                       phase_template=base.phase_template, **options)
+def with_harmonics(result, count: int) -> RecordModel:
+    """The base fit's model with ``count`` more force harmonics (template coefficients and spreads)."""
+    base = result.model
+    template = None if base.phase_template is None else np.r_[base.phase_template, np.zeros(2 * count)]
+    return RecordModel(base.time, base.y, base.timing, base.n_harmonics + count, regressors=base.regressors,
+                       phase_template=template, **_options(base))
 
 
-def diagnose_person(result, candidates=CANDIDATES, alpha=0.01) -> PersonDiagnosis:
+def score_term_candidate(result, effect) -> RecordCandidate | None:
+    """The default record-level form of ``effect``: its score terms on the base fit's smoothed path.
+
+    Builds the state of ``SMDModel(effects=[effect])`` along the record from
+    the smoothed ``u``, ``u'`` and the fitted ``f_h``, ``xi_h`` (the
+    effect's parameters at 0), asks the effect for
+    :meth:`~smd_statespace.model.Effect.score_terms` and adds each as a
+    :class:`~smd_statespace.person.model.Regressor` (linearised in the
+    parameters about the base fit). None when the effect needs measured
+    signals or adds no term on this path.
+    """
+    if effect.requires:
+        return None
+    base = result.model
+    model = SMDModel(n_harmonics=base.n_harmonics, effects=[effect])
+    smoothed = result.statespace_results.smoothed_state
+    x = np.zeros((base.time.size, model.n_state))
+    x[:, U], x[:, U_DOT] = smoothed[0], smoothed[1]
+    x[:, F_H], x[:, XI_H] = result.f_h, result.xi_h
+    inputs = CycleInputs(f_b=float(np.median(base.timing.f_b)), time=base.time)
+    terms = effect.score_terms(model, x, base.time, inputs)
+    if not terms:
+        return None
+    units = {slot.name: slot.unit for slot in model.slots}
+    regressors = [Regressor(key.split(":")[-1], values, units.get(key.split(":")[-1], "-"))
+                  for key, values in terms.items()]
+    return RecordCandidate(len(regressors), [with_regressor(result, *regressors)], regressors[0].name)
+
+
+def diagnose_person(result, candidates=None, alpha=0.01) -> PersonDiagnosis:
     """Add each candidate effect to a record-level fit and test it by likelihood ratio.
 
     Parameters
     ----------
     result : PersonResult
         The base fit (:func:`~smd_statespace.person.fit.identify_person`).
-    candidates : sequence of str
-        Names from :data:`CANDIDATES`; ``floor_measured`` is skipped when the
-        record has no floor acceleration.
+    candidates : sequence of str or Effect, optional
+        Effects to try (names, ``NAME:key=value`` specs or objects). Default:
+        every registered effect not in the base fit as its class configures
+        itself for this record (:meth:`Effect.record_default
+        <smd_statespace.model.Effect.record_default>`: ``floor_mode`` only with
+        a floor accelerometer).
     alpha : float
         Family-wise significance level; each candidate is tested at
         ``alpha / len(candidates)``.
@@ -193,20 +225,27 @@ def diagnose_person(result, candidates=CANDIDATES, alpha=0.01) -> PersonDiagnosi
     -------
     PersonDiagnosis
     """
-    built = _candidate_models(result, candidates)
+    if candidates is None:
+        effects = [cls.record_default(result) for cls in EFFECTS.values()]
+    else:
+        effects = [make_effect(candidate) for candidate in candidates]
+    built = [(effect, effect.record_candidate(result)) for effect in effects if effect is not None]
+    built = [(effect, candidate) for effect, candidate in built if candidate is not None]
     level = alpha / max(len(built), 1)
     rows = []
-    for name, n_params, models, parameter in built:
-        fits = [(model, fit_model(model, _start(model, result.model, result.params))) for model in models]
-        model, fitted = max(fits, key=lambda pair: pair[1]["loglike"])
+    for effect, candidate in built:
+        fits = [(model, fit_model(model, _start(model, result.model, result.params))) for model in candidate.models]
+        best = max(range(len(fits)), key=lambda i: fits[i][1]["loglike"])
+        model, fitted = fits[best]
+        n_params = candidate.n_params
         lr = max(2.0 * (fitted["loglike"] - result.loglike), 0.0)
         out = model.filter(fitted["params"])
-        row = {"effect": name, "n_params": n_params, "loglike": fitted["loglike"], "lr": lr,
+        row = {"effect": effect.name, "n_params": n_params, "loglike": fitted["loglike"], "lr": lr,
                "lr_per_df": lr / n_params, "p_value": float(stats.chi2.sf(lr, n_params)),
                "delta_aic": 2 * n_params - lr,
                "noise_change_%": 100.0 * (np.sqrt(out["sigma2"]) / result.sigma - 1.0),
                "f_h_before": result.f_h, "f_h": float(fitted["params"][0]),
-               "xi_h_before": result.xi_h, "xi_h": float(fitted["params"][1])}
+               "xi_h_before": result.xi_h, "xi_h": float(fitted["params"][1]), "spec": effect.spec}
         # a refit that runs f_h or xi_h to a search bound has not found an effect: the effect's term
         # and the person's resonance together imitate the residual (measured: a cubic spring "explained"
         # hidden harmonics with f_h 6 Hz, xi_h 3)
@@ -214,17 +253,16 @@ def diagnose_person(result, candidates=CANDIDATES, alpha=0.01) -> PersonDiagnosi
         row["significant"] = bool(row["p_value"] < level) and not row["on_bound"]
         start = 2 + model.n_coefficients
         names = [r.name for r in model.regressors]
-        if parameter in names:
-            k = start + names.index(parameter)
+        if candidate.parameter in names:
+            k = start + names.index(candidate.parameter)
             row["estimate"] = float(out["delta"][k])
             row["estimate_sd"] = float(np.sqrt(out["delta_cov_unscaled"][k, k] * out["sigma2"]))
         else:  # the extra harmonics' template amplitudes (g)
             tau = out["delta"][2:2 + model.n_coefficients]
-            n = model.n_harmonics
-            row["estimate"] = float(np.hypot(tau[2 * n - 3], tau[2 * n - 2]))
+            n = result.model.n_harmonics + 1
+            row["estimate"] = float(np.hypot(tau[2 * n - 1], tau[2 * n]))
             row["estimate_sd"] = float("nan")
-        settings = getattr(model, "floor_settings", None)
-        if settings:
-            row.update(settings)
+        if candidate.settings:
+            row.update(candidate.settings[best])
         rows.append(row)
     return PersonDiagnosis(base=result, rows=rows, alpha=alpha)
