@@ -33,6 +33,7 @@ import sys
 from . import __version__
 from .commands import compare, crowd, demo, diagnose, hsi, identify, simulate, stats
 from .commands.common import PROG
+from .effects import load_effects_file, load_installed_effects
 from .errors import SMDInputError
 
 
@@ -91,6 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "(Wang, Chen & Nagayama, J. Sound Vib. 456, 2019).",
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    parser.add_argument("--effects", action="append", default=[], metavar="FILE.py",
+                        help="a Python file that registers physical effects (@register_effect), repeatable; "
+                             "every command then knows them by name")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for add, run in COMMANDS:
         add(subparsers).set_defaults(run=run)
@@ -111,6 +115,9 @@ def main(argv=None) -> int:
         names = ", ".join(choice for choice in parser._subparsers._group_actions[0].choices)
         return _fail(f"choose a command: {names} (see '{PROG} --help')")
     try:
+        load_installed_effects()
+        for path in args.effects:
+            load_effects_file(path)
         return args.run(args)
     except SMDInputError as exc:
         return _fail(exc)

@@ -61,7 +61,9 @@ from .errors import OptionError
 from .io import G
 from .model import c_h, k_h
 from .population import _population_columns
-from .simulate import GRF_PHASE_LAG, TRUNCATION_SD, _draw_cycles, acceleration_frf, default_phases
+from .model import SMDModel
+from .simulate import (GRF_PHASE_LAG, TRUNCATION_SD, _cycle_states, _draw_cycles, _simulation_effects, _System,
+                       acceleration_frf, default_phases)
 
 __all__ = [
     "CROWD_SETTINGS",
@@ -506,10 +508,30 @@ class Crowd:
         return plot_crowd(self, path, n_people)
 
 
-def _simulate_forces(indices, parameters, cycles, time, out):
-    """GRFs (N) of people ``indices`` into rows of ``out``: Eq. 2-3 solved exactly, ``CHUNK`` people at a time."""
+def _simulate_forces(indices, parameters, cycles, time, out, effects=()):
+    """GRFs (N) of people ``indices`` into rows of ``out``: Eq. 2-3 solved exactly, ``CHUNK`` people at a time.
+
+    With ``effects``, each person's model (Eq. 2 plus the effects' own
+    terms, prepared for that person's mass) is integrated instead, one
+    person at a time (:func:`~smd_statespace.simulate.integrate_response`'s
+    engine); an effect's extra force harmonics join the person's cycles
+    with the simulator's default phases and no cycle-to-cycle variation.
+    """
     from .hsi import batch_response, system_matrices
 
+    if effects:
+        person = SMDModel(n_harmonics=1)
+        for i in indices:
+            mass = float(parameters["mass"][i])
+            prepared = _simulation_effects(effects, mass, where="crowd")
+            harmonics = [effect.force_harmonics(person) for effect in prepared]
+            person_cycles = _with_extra_harmonics(cycles[i], [h for h in harmonics if h is not None],
+                                                  parameters, i)
+            system = _System(parameters["f_h"][i], parameters["xi_h"][i],
+                             [effect for effect, h in zip(prepared, harmonics) if h is None])
+            states = _cycle_states(system, person_cycles, time)
+            out[i] = mass * (G + states["u_ddot"].to_numpy())  # Eq. 3
+        return
     for start in range(0, len(indices), CHUNK):
         chunk = indices[start:start + CHUNK]
         mass = parameters["mass"][chunk]
@@ -518,6 +540,23 @@ def _simulate_forces(indices, parameters, cycles, time, out):
         b_vectors = np.stack([b for _, b in systems])
         _, rates, _ = batch_response(a_matrices, b_vectors, [cycles[i] for i in chunk], time)
         out[chunk] = mass[:, None] * (G + rates[:, :, 1])  # Eq. 3
+
+
+def _with_extra_harmonics(cycles, extra, parameters, i):
+    """A person's cycles with the extra force harmonics ``[(blf, phases), ...]`` of effects appended."""
+    if not extra:
+        return cycles
+    blf = np.concatenate([np.asarray(amplitudes, dtype=float) for amplitudes, _ in extra])
+    base = np.array([parameters[f"blf{k}"][i] for k in range(1, N_HARMONICS + 1)])
+    given = [phases for _, phases in extra]
+    default = default_phases(base, float(np.median(cycles["f_b"])), parameters["f_h"][i], parameters["xi_h"][i],
+                             blf)[1]
+    phases = default if all(p is None for p in given) else np.concatenate(
+        [default[:len(a)] if p is None else np.asarray(p, float) for (a, _), p in zip(extra, given)])
+    cycles = cycles.copy()
+    for k, (amplitude, phase) in enumerate(zip(blf, phases), start=N_HARMONICS + 1):
+        cycles[f"a{k}"], cycles[f"b{k}"] = amplitude * np.cos(phase), amplitude * np.sin(phase)
+    return cycles
 
 
 def _check_settings(duration, fs, fb_variation, coef_variation, phase_spread, f_b):
@@ -549,7 +588,7 @@ def _check_settings(duration, fs, fb_variation, coef_variation, phase_spread, f_
 
 
 def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=None, bounds=None, fb_variation=None,
-                   coef_variation=None, phase_spread=None) -> Crowd:
+                   coef_variation=None, phase_spread=None, effects=None) -> Crowd:
     """Simulate ``n`` people bouncing at ``f_b`` on a rigid floor: their GRFs and the total crowd force.
 
     Parameters
@@ -575,6 +614,15 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
         harmonics (0-1); defaults in :data:`CROWD_SETTINGS`.
     phase_spread : float
         Phase offsets uniform on ``[0, phase_spread)`` cycles (0-1, default 1).
+    effects : list of Effect or str, or dict, optional
+        Physical effects every person has, as for
+        :func:`~smd_statespace.simulate.simulate_bouncing` (any registered
+        effect; a ``floor_mode`` is a floor under each person alone, a floor
+        shared by the crowd is :mod:`smd_statespace.hsi`'s). Each person's
+        model is then integrated numerically (about 1-2 s per person for
+        30 s) instead of solved exactly; the contact check stays exact on
+        the simulated GRF, the quick steady-state pre-check is the rigid
+        floor's.
 
     Returns
     -------
@@ -604,6 +652,8 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
                           "the only ones Table 2 has fits for")
     root = _root(seed)
     fits = fit_table(table, f_b)
+    effects = () if effects is None else effects
+    checked = _simulation_effects(effects, 70.0, where="crowd")  # a bad effect fails before any person is drawn
     n_samples = int(np.floor(duration * fs + 1e-9)) + 1
     time = np.arange(n_samples) / fs
 
@@ -630,7 +680,7 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
             cycles[i], offsets[i] = _person_cycles(person_seeds(root, i, draw[i])[1], f_b, parameters["f_h"][i],
                                                    parameters["xi_h"][i], person_blf, duration, fb_variation,
                                                    coef_variation, phase_spread)
-        _simulate_forces(kept, parameters, cycles, time, forces)
+        _simulate_forces(kept, parameters, cycles, time, forces, effects)
         dipped = kept[forces[kept].min(axis=1) < 0.0]
         rejected["cycles"][dipped] += 1
         pending = np.sort(np.concatenate([pending[steady], dipped]))
@@ -665,7 +715,7 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
     settings.update(n=n, f_b=f_b, duration=duration, fs=fs, fb_variation=fb_variation,
                     coef_variation=coef_variation, phase_spread=phase_spread, seed=root.entropy, table=table_label,
                     redrawn=int(np.count_nonzero(draw)), rejected_steady=int(rejected["steady"].sum()),
-                    rejected_cycles=int(rejected["cycles"].sum()))
+                    rejected_cycles=int(rejected["cycles"].sum()), effects=[effect.name for effect in checked])
     return Crowd(people=people, forces=frame, settings=settings, cycles=cycles,
                  seconds=_time.perf_counter() - started)
 

@@ -755,11 +755,74 @@ EFFECTS = {effect.name: effect for effect in (Harmonics, CubicStiffness, FloorMo
 
 
 def register_effect(cls):
-    """Register an :class:`Effect` subclass under ``cls.name`` (usable as a decorator)."""
+    """Register an :class:`Effect` subclass under ``cls.name`` (usable as a decorator).
+
+    Every command then knows it by name: ``simulate --effect NAME:slot=value``,
+    ``identify``/``compare``/``crowd --effect NAME``, and ``diagnose`` tries
+    it as a candidate. On the command line, load the file that defines it
+    with ``smd-statespace --effects FILE.py COMMAND ...``, or ship it in a
+    package under the entry-point group ``smd_statespace.effects``
+    (:func:`load_installed_effects`).
+    """
     if not (isinstance(cls, type) and issubclass(cls, Effect)):
         raise OptionError(f"register_effect needs an Effect subclass, got {cls!r}")
+    if not isinstance(getattr(cls, "name", None), str) or not cls.name.isidentifier() or cls.name == "effect":
+        raise OptionError(f"register_effect: {cls.__name__} needs a class attribute name, a word such as "
+                          "'quadratic_damping'")
     EFFECTS[cls.name] = cls
     return cls
+
+
+def load_effects_file(path) -> list:
+    """Run the Python file ``path`` so that the effects it registers join :data:`EFFECTS`.
+
+    Returns the names it added. The file is imported as a module named after
+    it (its ``@register_effect`` classes register themselves).
+    """
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(path)
+    if not path.is_file() or path.suffix != ".py":
+        raise OptionError(f"--effects {path}: give an existing Python file (.py) that registers effects")
+    before = dict(EFFECTS)
+    module_name = f"smd_statespace_user_effects_{path.stem}"
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[module_name] = module
+    try:
+        spec.loader.exec_module(module)
+    except OptionError:
+        raise
+    except Exception as exc:  # the user's code: report where it failed, in one line
+        raise OptionError(f"--effects {path}: running it failed: {type(exc).__name__}: {exc}") from None
+    added = sorted(name for name, cls in EFFECTS.items() if before.get(name) is not cls)
+    if not added:
+        raise OptionError(f"--effects {path}: it registers no effect (decorate the class with @register_effect)")
+    return added
+
+
+def load_installed_effects() -> list:
+    """Register the effects that installed packages declare under the entry-point group ``smd_statespace.effects``.
+
+    Each entry point names an :class:`Effect` subclass, e.g. in a
+    ``setup.cfg``::
+
+        [options.entry_points]
+        smd_statespace.effects =
+            quadratic_damping = my_package.effects:QuadraticDamping
+
+    Returns the names added.
+    """
+    from importlib.metadata import entry_points
+
+    added = []
+    for point in entry_points(group="smd_statespace.effects"):
+        cls = point.load()
+        register_effect(cls)
+        added.append(cls.name)
+    return added
 
 
 def _parse_value(text):

@@ -2,6 +2,7 @@
 textbook Kalman filter. Test modules import these, never each other."""
 
 import numpy as np
+import pandas as pd
 
 from smd_statespace.estimators import CycleData
 from smd_statespace.io import G
@@ -108,3 +109,13 @@ def well_excited_cycle(seed=3, f_h=2.6, xi_h=0.25, samples=81, n_harmonics=4):
     x0 = truth_state(model, f_h=f_h, xi_h=xi_h, u0=0.06, v0=0.5, coefficients=coefficients)
     data, _ = synthesize(model, x0, samples=samples, seed=seed, r_std=np.array([1e-3, 1e-2, 0.2]))
     return model, data, x0
+
+
+def zero_force_cycles(duration, period=0.5, n=1):
+    """A cycles table (``t_start, t_end, f_b, a0, a1, b1, ...``) with no force, covering ``duration`` s."""
+    starts = np.arange(0.0, duration + period, period)
+    frame = {"t_start": starts, "t_end": starts + period, "f_b": 1 / period, "a0": 0.0}
+    for i in range(1, n + 1):
+        frame[f"a{i}"] = 0.0
+        frame[f"b{i}"] = 0.0
+    return pd.DataFrame(frame)

@@ -18,6 +18,7 @@ from scipy.stats import skewnorm
 from smd_statespace import article
 from smd_statespace.errors import MassError, OptionError
 from smd_statespace.io import G, read_record
+from helpers import zero_force_cycles
 from smd_statespace.simulate import (
     MASS_DISTRIBUTION,
     POPULATION_BOUNDS,
@@ -52,15 +53,6 @@ def harmonic_fit(time, signal, f_b, t_ref, n):
 def complex_coefficients(cycles, n):
     row = cycles.iloc[0]
     return np.array([row[f"a{i}"] - 1j * row[f"b{i}"] for i in range(1, n + 1)])
-
-
-def zero_force_cycles(duration, period=0.5, n=1):
-    starts = np.arange(0.0, duration + period, period)
-    frame = {"t_start": starts, "t_end": starts + period, "f_b": 1 / period, "a0": 0.0}
-    for i in range(1, n + 1):
-        frame[f"a{i}"] = 0.0
-        frame[f"b{i}"] = 0.0
-    return pd.DataFrame(frame)
 
 
 # ---------------------------------------------------------------------------

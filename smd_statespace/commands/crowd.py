@@ -44,6 +44,9 @@ def add_crowd(subparsers):
     parser.add_argument("--phase-spread", type=_nonnegative, default=1.0, metavar="FRAC",
                         help="phase offsets uniform over this fraction of a cycle: 1 unsynchronised (default), "
                              "0 all in step")
+    parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
+                        help="physical effect every person has, repeatable: any registered effect, as for "
+                             "'simulate --effect' (each person is then integrated numerically, about 1-2 s each)")
     return parser
 
 
@@ -62,7 +65,7 @@ def run_crowd(args) -> int:
     try:
         crowd = simulate_crowd(args.people, args.fb, args.duration, fs=args.fs, seed=args.seed, table=args.table,
                                fb_variation=args.fb_variation, coef_variation=args.coef_variation,
-                               phase_spread=args.phase_spread)
+                               phase_spread=args.phase_spread, effects=args.effect or None)
     except OptionError as exc:
         # The library names itself ("crowd: ..."); on the command line that is noise.
         raise OptionError(str(exc).replace("crowd: ", "", 1)) from None

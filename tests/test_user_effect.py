@@ -1,0 +1,133 @@
+"""A physical effect written by a user in one class, outside the package, known to every command.
+
+The effect is defined here only: a quadratic (velocity-squared) leg damper. The tests check that the
+simulator integrates its own term (against an independent ODE solution), that the command line loads it
+from a file, that the crowd and the per-cycle model use it, and that the record-level diagnosis ranks it
+first on a record simulated with it and the error falls when it is added.
+"""
+
+import json
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+from helpers import zero_force_cycles
+from smd_statespace.cli import main
+from smd_statespace.crowd import simulate_crowd
+from smd_statespace.effects import EFFECTS, make_effect, register_effect
+from smd_statespace.jacobians import check_jacobians
+from smd_statespace.model import U_DOT, Effect, SMDModel, Slot
+from smd_statespace.simulate import integrate_response, simulate_bouncing
+
+EFFECT_SOURCE = '''
+import numpy as np
+
+from smd_statespace.effects import register_effect
+from smd_statespace.model import U_DOT, Effect, Slot
+
+
+@register_effect
+class QuadraticDamping(Effect):
+    """Velocity-squared leg damping: adds -c_q r'|r'| to the COM acceleration, r' = u' - z' (c_q in 1/m)."""
+
+    name = "quadratic_damping"
+    simulation_defaults = {"c_q": 8.0}
+
+    def __init__(self, c_q_max=20.0):
+        self.c_q_max = float(c_q_max)
+
+    def slots(self, model):
+        return (Slot("c_q", "parameter", "1/m", 0.0, self.c_q_max, nominal=self.c_q_max / 4,
+                     description="quadratic damping coefficient", linear=False),)
+
+    def acceleration(self, model, x, t, inputs):
+        rate = x[..., U_DOT] - model.floor_motion(x, t, inputs)[1]
+        return -model.value(x, "c_q") * rate * np.abs(rate)
+'''
+
+
+@pytest.fixture
+def quadratic_damping():
+    """The user's effect, registered for one test and removed after it (other tests' candidates stay the same)."""
+    namespace = {}
+    exec(compile(EFFECT_SOURCE, "user_effect.py", "exec"), namespace)
+    yield namespace["QuadraticDamping"]
+    EFFECTS.pop("quadratic_damping", None)
+
+
+def test_the_simulator_integrates_the_effects_own_term(quadratic_damping):
+    f_h, c_q, amplitude = 2.0, 6.0, 0.04
+    omega = 2 * np.pi * f_h
+    time = np.arange(0, 4.0, 0.005)
+    states = integrate_response(zero_force_cycles(4.0), time, f_h=f_h, xi_h=0.0,
+                                effects=[f"quadratic_damping:c_q={c_q}"], initial_state=[amplitude, 0.0])
+
+    def free(_, x):  # the same physics written out here, independently of the effect class
+        return [x[1], -(omega**2) * x[0] - c_q * x[1] * abs(x[1])]
+
+    exact = integrate.solve_ivp(free, (0, time[-1]), [amplitude, 0.0], t_eval=time, method="DOP853", rtol=1e-11,
+                                atol=1e-13)
+    assert np.abs(states["u"] - exact.y[0]).max() < 1e-8 * amplitude
+    assert np.abs(states["u"].to_numpy()[-200:]).max() < 0.5 * amplitude  # the damper really takes energy
+
+
+def test_a_known_value_is_a_constant_and_the_jacobians_are_automatic(quadratic_damping):
+    effect = make_effect("quadratic_damping:c_q_max=10")
+    model = SMDModel(effects=[effect])
+    assert model.state_names[-1] == "c_q" and model.n_state == 14
+    assert check_jacobians(model)["ok"].all()
+    known = SMDModel(effects=[make_effect("quadratic_damping:c_q=5")])
+    assert "c_q" not in known.state_names and known.constants == {"c_q": 5.0}
+    with pytest.raises(Exception, match="c_qq"):
+        make_effect("quadratic_damping:c_qq=5")
+
+
+def test_the_command_line_loads_the_effect_from_a_file(tmp_path, capsys):
+    source = tmp_path / "my_effects.py"
+    source.write_text(EFFECT_SOURCE)
+    out = tmp_path / "rec.csv"
+    try:
+        status = main(["--effects", str(source), "simulate", "--out", str(out), "--mass", "70", "--fb", "2",
+                       "--fh", "2.5", "--xi", "0.3", "--duration", "8", "--seed", "1",
+                       "--effect", "quadratic_damping:c_q=7"])
+        assert status == 0, capsys.readouterr().err
+        truth = json.loads((tmp_path / "rec_truth.json").read_text())
+        assert truth["effects"] == {"quadratic_damping": {"c_q": 7.0}}
+        # identify with the effect (one pass is enough to see its column)
+        status = main(["--effects", str(source), "identify", str(out), "--mass", "70", "--estimator", "ekf",
+                       "--max-passes", "1", "--effect", "quadratic_damping", "--out", str(tmp_path / "id")])
+        assert status == 0, capsys.readouterr().err
+        assert "c_q" in (tmp_path / "id" / "results.csv").read_text().splitlines()[0]
+    finally:
+        EFFECTS.pop("quadratic_damping", None)
+    capsys.readouterr()
+    assert main(["--effects", str(tmp_path / "missing.py"), "simulate", "--out", str(out), "--mass", "70", "--fb",
+                 "2", "--fh", "2.5", "--xi", "0.3", "--duration", "8"]) == 2
+    assert "--effects" in capsys.readouterr().err and "quadratic_damping" not in EFFECTS
+
+
+def test_the_crowd_knows_the_effect(quadratic_damping):
+    exact = simulate_crowd(2, 2.0, duration=4.0, seed=3)
+    zero = simulate_crowd(2, 2.0, duration=4.0, seed=3, effects=["quadratic_damping:c_q=0"])
+    damped = simulate_crowd(2, 2.0, duration=4.0, seed=3, effects=["quadratic_damping:c_q=8"])
+    people = exact.forces.columns[1:-1]
+    assert np.abs(zero.forces[people] - exact.forces[people]).to_numpy().max() < 1e-5  # N, ODE vs exact solution
+    assert np.abs(damped.forces[people] - exact.forces[people]).to_numpy().max() > 5.0
+    assert damped.settings["effects"] == ["quadratic_damping"]
+
+
+@pytest.mark.slow
+def test_diagnose_ranks_the_users_effect_first_and_the_error_falls(quadratic_damping):
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.diagnose import diagnose_person
+
+    sim = simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=20, seed=3,
+                            effects=["quadratic_damping:c_q=8"])
+    base = identify_person(sim.record)
+    result = diagnose_person(base)
+    table = result.table()
+    print(table[["n_params", "lr", "p_value", "noise_change_%", "estimate", "estimate_sd"]])
+    assert result.missing[0] == "quadratic_damping"
+    row = table.loc["quadratic_damping"]
+    assert row["noise_change_%"] < 0 and row["estimate"] > 2 * row["estimate_sd"]
