@@ -19,17 +19,6 @@ from smd_statespace.person.statespace import RecordStateSpace
 from smd_statespace.simulate import simulate_bouncing
 
 
-@pytest.fixture(scope="module")
-def short_sim():
-    return simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=8, seed=1)
-
-
-@pytest.fixture(scope="module")
-def long_sim():
-    """A 40 s record with little noise; its true force-cycle boundaries are known."""
-    return simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=40, noise=0.002, seed=11)
-
-
 def true_timing(sim):
     cycles = sim.cycles
     return CycleTiming(np.append(cycles.t_start.values, cycles.t_end.values[-1]), "truth")
@@ -159,8 +148,8 @@ def test_a_smooth_fit_at_the_bouncing_frequency_does_not_determine_f_h(long_sim,
 
 
 @pytest.mark.slow
-def test_result_reports_the_person_with_intervals_and_tests(long_sim):
-    result = identify_person(long_sim.record)
+def test_result_reports_the_person_with_intervals_and_tests(long_sim, long_fit):
+    result = long_fit
     d = result.to_dict()
     for key in ("f_h", "f_h_sd", "xi_h", "xi_h_sd", "k_h", "c_h", "blf_1", "blf_4", "blf_1_spread", "noise_sd",
                 "log_likelihood", "n_cycles", "ljung_box_p", "jarque_bera_p", "offset"):
