@@ -3,7 +3,9 @@
 Two kinds of fenced blocks are executed, in page order, in one temporary working directory
 per page (so a later block sees the files an earlier one wrote):
 
-- ```` ```python ```` blocks: executed in one namespace per page;
+- ```` ```python ```` blocks: executed in one namespace per page; a block fenced
+  ```` ```python file=NAME.py ```` is also written to ``NAME.py`` in that directory first (a file
+  the page's commands use, e.g. ``--effects my_effects.py``);
 - ```` ```console ```` blocks: every line that starts with ``$ smd-statespace`` is run through
   :func:`smd_statespace.cli.main` and must exit 0 (other lines are shown output).
 
@@ -26,7 +28,7 @@ from smd_statespace.effects import EFFECTS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-FENCE = re.compile(r"^```(python|console)\n(.*?)^```", flags=re.S | re.M)
+FENCE = re.compile(r"^```(python|console)(?: file=(\S+))?\n(.*?)^```", flags=re.S | re.M)
 PAGES = sorted(
     [path for path in DOCS.glob("*.md") if FENCE.search(path.read_text(encoding="utf-8"))]
     + [ROOT / "README.md"]
@@ -34,9 +36,9 @@ PAGES = sorted(
 
 
 def blocks(page: Path):
-    """``(kind, code, line)`` of every executed block of ``page``."""
+    """``(kind, code, line, file)`` of every executed block of ``page`` (``file``: None or the name to write)."""
     text = page.read_text(encoding="utf-8")
-    return [(m.group(1), m.group(2), text[:m.start()].count("\n") + 2) for m in FENCE.finditer(text)]
+    return [(m.group(1), m.group(3), text[:m.start()].count("\n") + 2, m.group(2)) for m in FENCE.finditer(text)]
 
 
 def run_console(code: str, where: str):
@@ -55,8 +57,10 @@ def test_examples_run(page, tmp_path, monkeypatch):
     registered = dict(EFFECTS)
     namespace = {"__name__": f"docs_{page.stem}"}
     try:
-        for kind, code, line in blocks(page):
+        for kind, code, line, file in blocks(page):
             where = f"{page.name}:{line}"
+            if file:
+                Path(file).write_text(code, encoding="utf-8")
             if kind == "python":
                 exec(compile("\n" * (line - 1) + code, str(page), "exec"), namespace)
             else:
