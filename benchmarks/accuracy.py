@@ -22,11 +22,11 @@ the grid posteriors of a record's cycles pooled into one per person.
 Truth
 -----
 * People: ``f_b`` cycles through :data:`FB_LEVELS`; ``f_h``, ``xi_h``,
-  ``BLF1-3`` and the mass come from :func:`~smd_statespace.simulate.sample_population`
+  ``BLF1-3`` and the mass come from :func:`~smd_statespace.simulation.sample_population`
   (the article's Table 2) with ``f_h`` redrawn into the estimators' prior range
   and ``BLF`` redrawn below the largest coefficient of the prior box (see
   :func:`draw_people`); ``BLF4`` is the simulator's default.
-* Records: :func:`~smd_statespace.simulate.simulate_bouncing` with its default
+* Records: :func:`~smd_statespace.simulation.simulate_bouncing` with its default
   cycle-to-cycle variation and GRF noise of 1 % body weight.
 * ``f_h`` and ``xi_h`` are constant per record. ``BLF_i`` is per force cycle
   (the simulator's ``.cycles``); an identified cycle (GRF peak to GRF peak)
@@ -84,9 +84,9 @@ import smd_statespace  # noqa: E402
 from smd_statespace import article  # noqa: E402
 from smd_statespace.estimators import ESTIMATORS, cycle_data, get_estimator  # noqa: E402
 from smd_statespace.model import DISCRETISATIONS, SMDModel  # noqa: E402
-from smd_statespace.runner import DETERMINED_RATIO, CycleRunner  # noqa: E402
+from smd_statespace.identify.runner import DETERMINED_RATIO, CycleRunner  # noqa: E402
 from smd_statespace.signals import Cycle, preprocess  # noqa: E402
-from smd_statespace.simulate import DEFAULT_BLF, sample_population, simulate_bouncing  # noqa: E402
+from smd_statespace.simulation import DEFAULT_BLF, sample_population, simulate_bouncing  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -306,7 +306,7 @@ def identify(jobs, estimator: str, model: SMDModel, seed: int, bar, options=None
              results: dict | None = None):
     """Run one estimator over ``jobs`` (pairs ``(record_key, preprocessed)``); return the cycle rows.
 
-    Uses :class:`~smd_statespace.runner.CycleRunner` unchanged; skipped
+    Uses :class:`~smd_statespace.identify.runner.CycleRunner` unchanged; skipped
     (unselected) cycles are dropped; ``wall`` is the wall time of the whole
     estimator run. With ``results`` (a dict), every cycle's final
     :class:`~smd_statespace.estimators.FilterResult` is stored in it under

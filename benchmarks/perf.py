@@ -48,7 +48,7 @@ from smd_statespace.estimators.base import prepare
 from smd_statespace.io import G
 from smd_statespace.model import SMDModel
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 
 def the_cycle(model):

@@ -16,7 +16,7 @@ Truth
   ``BLF_i`` the simulator's default (0.25, 0.15, 0.05, 0.02) g times an
   independent uniform factor 0.7-1.3; force phases the simulator's default
   (a realistic GRF shape).
-* Records: :func:`~smd_statespace.simulate.simulate_bouncing`, 30 s at
+* Records: :func:`~smd_statespace.simulation.simulate_bouncing`, 30 s at
   100 Hz, GRF noise 1 % of body weight, the default cycle-to-cycle variation
   (``f_b`` 2 %, coefficients 10 %) with each generator of ``--generators``:
   ``jumps`` (the force's frequency and coefficients jump at the force-cycle
@@ -89,7 +89,7 @@ import smd_statespace  # noqa: E402
 from smd_statespace.person import fit as person_fit  # noqa: E402
 from smd_statespace.person import identify_person  # noqa: E402
 from smd_statespace.person.timing import TIMING_METHODS, CycleTiming  # noqa: E402
-from smd_statespace.simulate import DEFAULT_BLF, simulate_bouncing  # noqa: E402
+from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -41,7 +41,7 @@ from tqdm.auto import tqdm
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
 from smd_statespace.person.diagnose import diagnose_person
-from smd_statespace.simulate import DEFAULT_BLF, simulate_bouncing
+from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
 
 REPO = Path(__file__).resolve().parents[1]
 DURATION, FS, NOISE = 30.0, 100.0, 0.01

@@ -2,16 +2,16 @@
 
 How much does identification error widen or bias the population
 distributions? People are drawn from the published Table 2
-(:func:`~smd_statespace.simulate.sample_population`: independent
+(:func:`~smd_statespace.simulation.sample_population`: independent
 skew-normal marginals of Eq. 19, truncated at the simulator's physical
 bounds), each bounces for ``--duration`` seconds at a bouncing frequency
 drawn uniformly inside one of the article's six bands, the record is
-simulated (:func:`~smd_statespace.simulate.simulate_bouncing`, default
+simulated (:func:`~smd_statespace.simulation.simulate_bouncing`, default
 cycle-to-cycle variation, 1 % BW noise) and identified exactly as
 ``smd-statespace identify`` does (``preprocess``, then
-:class:`~smd_statespace.runner.CycleRunner` with the article's prior and
+:class:`~smd_statespace.identify.runner.CycleRunner` with the article's prior and
 repeated passes). The statistics of ``smd-statespace stats``
-(:func:`~smd_statespace.stats.population_stats`) are then fitted three times
+(:func:`~smd_statespace.population.statistics.population_stats`) are then fitted three times
 per band and parameter:
 
 ``drawn``
@@ -48,13 +48,13 @@ import pandas as pd
 from tqdm import tqdm
 
 from smd_statespace import article
-from smd_statespace.batch import atomic_write_csv
+from smd_statespace.identify.batch import atomic_write_csv
 from smd_statespace.errors import SMDInputError
 from smd_statespace.model import SMDModel
-from smd_statespace.runner import CycleRunner
+from smd_statespace.identify.runner import CycleRunner
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import DEFAULT_BLF, sample_population, simulate_bouncing
-from smd_statespace.stats import compare_table2, population_stats
+from smd_statespace.simulation import DEFAULT_BLF, sample_population, simulate_bouncing
+from smd_statespace.population.statistics import compare_table2, population_stats
 
 EDGE_MARGIN = 0.05
 """Bouncing frequencies are drawn this far (Hz) inside the band edges, so that a person's cycles

@@ -32,9 +32,9 @@ import numpy as np
 
 from smd_statespace.estimators import cycle_data, get_estimator
 from smd_statespace.model import SMDModel
-from smd_statespace.runner import CycleRunner
+from smd_statespace.identify.runner import CycleRunner
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 F_B = 2.2
 MARGIN = 2.0  # preprocess's edge margin (s) at each end

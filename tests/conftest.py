@@ -6,7 +6,7 @@ modules use them. Plain helpers (no fixtures) are in ``helpers.py``.
 
 import pytest
 
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 
 @pytest.fixture(scope="session")

@@ -6,11 +6,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from smd_statespace.applicability import NotBouncingError, check_bouncing
+from smd_statespace.diagnostics.applicability import NotBouncingError, check_bouncing
 from smd_statespace.cli import main
 from smd_statespace.io import G, make_record
 from smd_statespace.person import identify_person
-from smd_statespace.simulate import DEFAULT_BLF, simulate_bouncing
+from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
 
 FS, MASS = 100.0, 70.0
 WEIGHT = MASS * G

@@ -9,11 +9,11 @@ import time
 import pandas as pd
 import pytest
 
-from smd_statespace.batch import collect_records, read_manifest, record_key, run_batch
+from smd_statespace.identify.batch import collect_records, read_manifest, record_key, run_batch
 from smd_statespace.cli import main
 from smd_statespace.errors import OptionError, RecordError
 from smd_statespace.io import write_record
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 OPTIONS = dict(max_passes=2, seed=11)
 

@@ -14,10 +14,9 @@ import pytest
 
 import smd_statespace
 from smd_statespace.cli import main
-from smd_statespace.errors import OptionError
 from smd_statespace.io import read_record
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import sample_path, sample_truth_path
+from smd_statespace.simulation import sample_path, sample_truth_path
 
 SIMULATE = ["simulate", "--mass", "70", "--fb", "2.0", "--fh", "2.5", "--xi", "0.3", "--duration", "12",
             "--seed", "1"]

@@ -7,9 +7,9 @@ from scipy import stats
 
 from smd_statespace import OptionError, article
 from smd_statespace.cli import main
-from smd_statespace.crowd import (DEFAULT_DURATION, draw_people, fit_table, periodic_grf_minimum, person_seeds,
+from smd_statespace.simulation.crowd import (DEFAULT_DURATION, draw_people, fit_table, periodic_grf_minimum, person_seeds,
                                   simulate_crowd)
-from smd_statespace.simulate import MASS_DISTRIBUTION, POPULATION_BOUNDS, simulate_bouncing
+from smd_statespace.simulation import MASS_DISTRIBUTION, POPULATION_BOUNDS, simulate_bouncing
 
 
 def truncated_cdf(distribution, low, high):

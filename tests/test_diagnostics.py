@@ -15,9 +15,9 @@ from scipy import signal, stats
 from smd_statespace.diagnostics import ModelCheck, check_model, fit_percent
 from smd_statespace.errors import OptionError
 from smd_statespace.io import G, make_record
-from smd_statespace.runner import CycleRunner
+from smd_statespace.identify.runner import CycleRunner
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 SETTINGS = dict(mass=66.0, f_b=2.1, f_h=2.6, xi_h=0.3, duration=12.0, seed=5)
 

@@ -8,8 +8,8 @@ from smd_statespace.effects import EFFECTS, FloorMode, make_effect
 from smd_statespace.estimators import cycle_data
 from smd_statespace.io import G, make_record
 from smd_statespace.model import CycleInputs, SMDModel
-from smd_statespace.runner import CycleRunner
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.identify.runner import CycleRunner
+from smd_statespace.simulation import simulate_bouncing
 
 from helpers import finite_difference, random_states
 

@@ -6,10 +6,10 @@ import pytest
 
 from smd_statespace import OptionError, article
 from smd_statespace.cli import main
-from smd_statespace.hsi import (FloorModel, HSIStudy, coupled_frf, coupled_response, hsi_study, plot_floor,
-                                plot_parameters, pooled_least_squares, simulate_on_floor)
+from smd_statespace.simulation.floor import FloorModel, coupled_frf, coupled_response, simulate_on_floor
+from smd_statespace.studies.hsi import HSIStudy, hsi_study, plot_floor, plot_parameters, pooled_least_squares
 from smd_statespace.io import G
-from smd_statespace.simulate import integrate_response, simulate_bouncing
+from smd_statespace.simulation import integrate_response, simulate_bouncing
 
 PERSON = dict(mass=70.0, f_b=1.75, f_h=1.81, xi_h=0.33, blf=(0.241, 0.335, 0.082, 0.02))
 THREE_MODES = FloorModel(frequency=(3.48, 6.14, 9.0), damping=(0.02, 0.03, 0.05), modal_mass=(2000.0, 1500.0, 3000.0),
@@ -64,6 +64,17 @@ def test_one_mode_and_rigid_floor_match_the_ode_simulator():
     rigid = simulate_bouncing(**PERSON, duration=8, seed=4)
     exact = coupled_response(rigid.cycles, rigid.states["time"], 70.0, 1.81, 0.33)
     assert "z" not in exact
+    # one floor type: a floor written as an effect is the same floor in the exact solver, and back
+    spec = "floor_mode:frequency=5.2,damping=0.01,modal_mass=3000"
+    floor = FloorModel.from_effect(spec, 70.0)
+    assert (floor.frequency, floor.damping, floor.modal_mass) == ((5.2,), (0.01,), (3000.0,))
+    assert FloorModel.from_effect("floor_mode", 70.0) == FloorModel(*(getattr(FloorModel.table3([1]), key) for key in
+                                                                        ("frequency", "damping", "modal_mass")),
+                                                                      name="floor_mode 3.48 Hz")
+    assert floor.as_effect(70.0).values == {"f_f": 5.2, "xi_f": 0.01, "mass_ratio": 70.0 / 3000.0}
+    coupled = simulate_bouncing(**PERSON, duration=6, seed=5, effects=[spec], noise=0.0)
+    replay, states = simulate_on_floor(simulate_bouncing(**PERSON, duration=6, seed=5, noise=0.0), spec)
+    assert np.max(np.abs(states["z_ddot"] - coupled.states["z_ddot"])) < 1e-6 * np.max(np.abs(states["z_ddot"]))
     assert np.max(np.abs(exact["u_ddot"] - rigid.states["u_ddot"])) < 1e-7 * np.max(np.abs(rigid.states["u_ddot"]))
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from smd_statespace.effects import make_effect
 from smd_statespace.errors import OptionError
-from smd_statespace.jacobians import check_jacobians, check_linearity, numeric_jacobian
+from smd_statespace.model.jacobians import check_jacobians, check_linearity, numeric_jacobian
 from smd_statespace.model import U, U_DOT, CycleInputs, Effect, Slot, SMDModel
 
 

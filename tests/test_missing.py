@@ -6,9 +6,9 @@ import pytest
 
 from smd_statespace.cli import main
 from smd_statespace.io import make_record
-from smd_statespace.missing import diagnose
+from smd_statespace.diagnostics.missing import diagnose
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 
 def record(seed, f_b, f_h, xi_h, effects=None, duration=12.0):
@@ -43,7 +43,7 @@ def check_found(result, name):
 
 # A cubic spring leaves harmonics above n f_b only where the COM moves far: low f_b, strong nonlinearity
 # (below about f_b 1.8 Hz with beta 1000 1/m^2; at the simulator's default 400 1/m^2 and 2 Hz the force
-# absorbs it, see smd_statespace.missing).
+# absorbs it, see smd_statespace.diagnostics.missing).
 @pytest.mark.slow
 @pytest.mark.parametrize("seed,f_b,f_h,beta", [(1, 1.6, 1.92, 1500.0), (12, 1.5, 1.8, 1200.0)])
 def test_hidden_cubic_stiffness_is_found(seed, f_b, f_h, beta):

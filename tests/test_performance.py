@@ -163,7 +163,7 @@ def test_branch_free_systematic_index_equals_searchsorted(seed):
 @pytest.fixture(scope="module")
 def record():
     from smd_statespace.signals import preprocess
-    from smd_statespace.simulate import simulate_bouncing
+    from smd_statespace.simulation import simulate_bouncing
 
     return preprocess(simulate_bouncing(mass=64.0, f_b=2.4, f_h=2.6, xi_h=0.35, duration=7.0, seed=21).record)
 
@@ -193,7 +193,7 @@ def test_identify_jobs_two_equals_jobs_one(tmp_path):
 def test_run_many_streams_records_and_matches_single_runs(record, tmp_path):
     import pandas as pd
 
-    from smd_statespace.runner import CycleRunner
+    from smd_statespace.identify.runner import CycleRunner
 
     options = dict(estimator="pf", n_particles=200, max_passes=2, progress=False, seed=5)
     runner = CycleRunner(keep_results=False, **options)
@@ -215,7 +215,7 @@ def test_dask_cluster_executor_gives_the_serial_table(record):
     distributed = pytest.importorskip("distributed")
     import pandas as pd
 
-    from smd_statespace.runner import CycleRunner
+    from smd_statespace.identify.runner import CycleRunner
 
     options = dict(estimator="pf", n_particles=200, max_passes=2, progress=False, seed=5)
     serial = CycleRunner(**options).run(record)

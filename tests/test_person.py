@@ -16,7 +16,7 @@ from smd_statespace.person.fit import fit_model, information
 from smd_statespace.person.model import expm2
 from smd_statespace.person.results import PersonResult
 from smd_statespace.person.statespace import RecordStateSpace
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 
 def true_timing(sim):

@@ -16,9 +16,9 @@ from smd_statespace.errors import OptionError, SMDInputError
 from smd_statespace.estimators import get_estimator
 from smd_statespace.io import G, make_record, read_record
 from smd_statespace.model import SMDModel
-from smd_statespace.runner import CycleRunner
+from smd_statespace.identify.runner import CycleRunner
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 QUICK = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 
@@ -122,7 +122,7 @@ def test_a_diverging_cycle_fails_alone(record, monkeypatch, error):
 
 
 def test_a_non_finite_estimate_is_a_failure_not_a_nan_in_the_table(record, monkeypatch):
-    import smd_statespace.runner as runner
+    import smd_statespace.identify.runner as runner
 
     summarise = runner.summarise
 

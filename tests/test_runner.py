@@ -9,10 +9,10 @@ import pytest
 from smd_statespace.errors import OptionError
 from smd_statespace.estimators import Estimator, EstimatorFailure, FilterResult, GaussianStart
 from smd_statespace.model import SMDModel
-from smd_statespace.plausibility import MAX_BLF, PRIOR_MARGIN, implausible_reasons
-from smd_statespace.runner import DETERMINED_RATIO, CycleRunner, converged
+from smd_statespace.identify.plausibility import MAX_BLF, PRIOR_MARGIN, implausible_reasons
+from smd_statespace.identify.runner import DETERMINED_RATIO, CycleRunner, converged
 from smd_statespace.signals import preprocess
-from smd_statespace.simulate import simulate_bouncing
+from smd_statespace.simulation import simulate_bouncing
 
 
 @pytest.fixture(scope="module")
@@ -169,7 +169,7 @@ class ImpossibleEstimator(Estimator):
 
 
 def test_impossible_cycles_are_flagged_never_determined_and_left_out_of_the_summary(record):
-    from smd_statespace.commands.identify import implausible_warning, run_summary, summary_table
+    from smd_statespace.cli.identify import implausible_warning, run_summary, summary_table
 
     cycles = [c.index for c in record.valid_cycles]
     model = SMDModel()
@@ -202,7 +202,7 @@ def test_impossible_cycles_are_flagged_never_determined_and_left_out_of_the_summ
     for reason in ("xi_h < 0: 1", "f_h on prior bound: 1", "f_h outside prior: 1", "a1 on prior bound: 1"):
         assert reason in warning
     assert "4 implausible" in run_summary(table, 1.0)
-    from smd_statespace.plots import plot_parameters
+    from smd_statespace.plotting.cycles import plot_parameters
 
     f_h_axes = plot_parameters(table).axes[0]
     crosses = [c for c in f_h_axes.containers if c.get_label() == "implausible"]
@@ -250,7 +250,7 @@ def test_identify_warns_about_impossible_cycles_of_a_record_with_extra_harmonics
 
 def test_comparison_figure_draws_a_simulations_truth_on_every_panel_and_takes_a_title():
     """A simulation's truth (``blf`` as a list) gives dashed truth lines on the BLF panels too."""
-    from smd_statespace.plots import plot_comparison
+    from smd_statespace.plotting.cycles import plot_comparison
 
     table = pd.DataFrame({"status": ["ok"] * 3, "t_start": [0.0, 0.5, 1.0], "t_end": [0.5, 1.0, 1.5],
                           "f_h": [2.4, 2.5, 2.6], "xi_h": [0.3] * 3, "blf_1": [0.2] * 3, "blf_2": [0.1] * 3})

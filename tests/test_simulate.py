@@ -1,4 +1,4 @@
-"""Tests of the forward simulator (smd_statespace.simulate) and the article constants.
+"""Tests of the forward simulator (smd_statespace.simulation) and the article constants.
 
 The physics is checked against closed forms that the simulator does not use:
 the frequency response of Eq. 2, the free decay of a damped oscillator, the
@@ -19,7 +19,7 @@ from smd_statespace import article
 from smd_statespace.errors import MassError, OptionError
 from smd_statespace.io import G, read_record
 from helpers import zero_force_cycles
-from smd_statespace.simulate import (
+from smd_statespace.simulation import (
     MASS_DISTRIBUTION,
     POPULATION_BOUNDS,
     SAMPLE_SETTINGS,
@@ -656,7 +656,7 @@ def test_smooth_variation_with_effects_keeps_the_other_random_numbers():
 
 
 def test_smooth_record_starts_without_a_transient(monkeypatch):
-    from smd_statespace import simulate as module
+    from smd_statespace.simulation import bouncing as module
 
     settings = dict(f_h=2.5, xi_h=0.1, duration=3.0, seed=12, noise=0.0, **SMOOTH)
     started = simulate_bouncing(**settings)

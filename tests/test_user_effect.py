@@ -14,11 +14,11 @@ from scipy import integrate
 
 from helpers import zero_force_cycles
 from smd_statespace.cli import main
-from smd_statespace.crowd import simulate_crowd
-from smd_statespace.effects import EFFECTS, make_effect, register_effect
-from smd_statespace.jacobians import check_jacobians
-from smd_statespace.model import U_DOT, Effect, SMDModel, Slot
-from smd_statespace.simulate import integrate_response, simulate_bouncing
+from smd_statespace.simulation.crowd import simulate_crowd
+from smd_statespace.effects import EFFECTS, make_effect
+from smd_statespace.model.jacobians import check_jacobians
+from smd_statespace.model import SMDModel
+from smd_statespace.simulation import integrate_response, simulate_bouncing
 
 EFFECT_SOURCE = '''
 import numpy as np

@@ -42,7 +42,7 @@ PACKAGE = "smd_statespace"
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 """The repository's docs folder (this script lives in ``tools/``, beside it)."""
 
-EXCLUDED_MODULES = ("smd_statespace.__main__", "smd_statespace.commands")
+EXCLUDED_MODULES = ("smd_statespace.__main__", "smd_statespace.cli")
 """Modules left out of the API reference (the commands are documented in ``docs/cli.md``)."""
 
 API_HEADER = """# API reference

@@ -31,14 +31,14 @@ def verify_linear(model: SMDModel, inputs) -> dict:
 
     A wrong declaration by an effect raises
     :class:`~smd_statespace.errors.OptionError`
-    (:func:`~smd_statespace.jacobians.check_linearity`); a base slot made
+    (:func:`~smd_statespace.model.jacobians.check_linearity`); a base slot made
     non-linear by an effect (``u`` under a cubic spring) gives a warning: the
     conditional Kalman filter then linearises, like an EKF, and its posterior
     is approximate. Returns the failures.
     """
     if id(model) in _VERIFIED:
         return {}
-    from ..jacobians import check_linearity
+    from ..model.jacobians import check_linearity
 
     failures = check_linearity(model, inputs, t=inputs.t0 + 0.1)
     _VERIFIED.add(id(model))

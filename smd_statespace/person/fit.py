@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, stats
 
-from ..applicability import check_bouncing
+from ..diagnostics.applicability import check_bouncing
 from ..errors import CycleError, SMDInputError
 from ..io import G, Record
 from .model import VARIATIONS, Regressor, RecordModel
@@ -401,7 +401,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         random walk with one estimated variance per harmonic group).
     check : bool
         True (default): refuse a record that is not one person bouncing in
-        contact with the plate (:func:`~smd_statespace.applicability.check_bouncing`);
+        contact with the plate (:func:`~smd_statespace.diagnostics.applicability.check_bouncing`);
         False: identify anyway, its findings become warnings.
 
     Returns

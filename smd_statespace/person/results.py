@@ -76,7 +76,7 @@ class PersonResult:
     n_evaluations : int
         Likelihood evaluations of the search.
     record_warnings : list of str
-        What the checks of :func:`~smd_statespace.applicability.check_bouncing`
+        What the checks of :func:`~smd_statespace.diagnostics.applicability.check_bouncing`
         found in the record before the fit (first in :attr:`warnings`).
     """
 

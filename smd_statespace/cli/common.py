@@ -1,0 +1,217 @@
+"""Helpers shared by the command-line subcommands: argument types, effect specs, loading records."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+from pathlib import Path
+
+from ..errors import OptionError
+from ..io import truth_values  # noqa: F401 - the commands import it from here
+
+PROG = "smd-statespace"
+
+
+def _one_line(text) -> str:
+    """Collapse a message onto one line."""
+    return " ".join(str(text).split())
+
+
+def _fail(message) -> int:
+    print(f"{PROG}: error: {_one_line(message)}", file=sys.stderr)
+    return 2
+
+
+def _number(text: str, accept, requirement: str) -> float:
+    """A finite number for which ``accept(value)`` holds, or an argparse type error naming ``requirement``."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(value) and accept(value)):
+        raise argparse.ArgumentTypeError(f"must be {requirement}, got {text!r}")
+    return value
+
+
+def _positive(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    return _number(text, lambda value: value > 0, "a positive number")
+
+
+def _nonnegative(text: str) -> float:
+    """argparse type: a finite number >= 0."""
+    return _number(text, lambda value: value >= 0, "zero or a positive number")
+
+
+def _whole(text: str, minimum: int, requirement: str) -> int:
+    """A whole number >= ``minimum``, or an argparse type error naming ``requirement``."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be {requirement}, got {text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"must be {requirement}, got {text!r}")
+    return value
+
+
+def _seed(text: str) -> int:
+    """argparse type: a non-negative integer seed."""
+    return _whole(text, 0, "a non-negative whole number")
+
+
+def _numbers(text: str) -> tuple[float, ...]:
+    """argparse type: comma-separated numbers, e.g. ``0.25,0.15,0.05,0.02``."""
+    try:
+        return tuple(float(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be comma-separated numbers, got {text!r}") from None
+
+
+
+
+def demo_out_dir(out) -> Path:
+    """Check the demo's output directory before any work, so a bad ``--out`` fails fast.
+
+    The directory is created only when the figure is written (:func:`demo_figure`).
+    """
+    out_dir = Path(out)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise OptionError(f"--out {out_dir}: exists and is not a directory")
+    return out_dir
+
+
+
+def load_sample():
+    """The shipped sample record and its truth: ``(Record, dict)``.
+
+    The record's ``source`` is shortened to the file name for titles; the
+    mass comes from ``sample_truth.json``.
+    """
+    from ..io import read_record
+    from ..simulation.bouncing import sample_path, sample_truth_path
+
+    truth = json.loads(sample_truth_path().read_text(encoding="utf-8"))
+    record = read_record(sample_path(), truth["mass"])
+    return dataclasses.replace(record, source=sample_path().name), truth
+
+
+
+def load_record(path, mass):
+    """A user's record and, if ``<stem>_truth.json`` lies beside it (``simulate`` writes one), its truth."""
+    from ..io import read_record
+
+    if mass is None:
+        raise OptionError(f"--record {path}: give the body mass with --mass KG")
+    record = read_record(path, mass)
+    beside = Path(path).with_name(f"{Path(path).stem}_truth.json")
+    try:
+        truth = json.loads(beside.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        truth = None
+    return record, truth
+
+
+def _count(text: str) -> int:
+    """argparse type: a whole number >= 1."""
+    return _whole(text, 1, "a whole number >= 1")
+
+
+def add_record_arguments(parser):
+    """``REC.csv --mass KG``: the record to identify."""
+    parser.add_argument("record", metavar="REC.csv", help="record with columns time,force[,floor_acc]")
+    parser.add_argument("--mass", required=True, type=float, metavar="KG", help="body mass M_h (kg)")
+
+
+def add_check_argument(parser):
+    """``--ignore-checks``: identify a record that the bouncing checks refuse."""
+    parser.add_argument("--ignore-checks", action="store_true",
+                        help="identify even a record that is not bouncing (contact lost, clipped, not rhythmic, "
+                             "walking); the checks' findings are printed as warnings")
+
+
+def checked(record, args) -> list:
+    """Check that ``record`` is bouncing (:func:`~smd_statespace.diagnostics.applicability.check_bouncing`); print warnings.
+
+    Raises :class:`~smd_statespace.diagnostics.applicability.NotBouncingError` (exit 2)
+    for a refusal unless ``--ignore-checks``; returns the warnings.
+    """
+    import sys
+
+    from ..diagnostics.applicability import check_bouncing
+
+    warnings = check_bouncing(record).raise_if_refused(override=getattr(args, "ignore_checks", False))
+    for text in warnings:
+        print(f"warning: {text}", file=sys.stderr)
+    return warnings
+
+
+def add_model_arguments(parser):
+    """Options that build the :class:`~smd_statespace.model.SMDModel`."""
+    parser.add_argument("--harmonics", type=_count, default=4, metavar="N",
+                        help="Fourier harmonics of the biomechanical force (default 4, as the article)")
+    parser.add_argument("--discretisation", choices=("rk4", "euler"), default="rk4",
+                        help="transition: rk4 (default) or euler (the article's Eq. 11-12)")
+    parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
+                        help="physical effect added to the model, repeatable (e.g. harmonics:count=2, cubic_stiffness)")
+
+
+def add_run_arguments(parser):
+    """Options of the cycle runner shared by ``identify`` and ``compare``."""
+    parser.add_argument("--particles", type=_count, metavar="N",
+                        help="particles of pf (default 5000, as the article) or rbpf (default 300)")
+    parser.add_argument("--max-passes", type=_count, default=8, metavar="N",
+                        help="largest number of repeated passes per cycle (default 8)")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default 0)")
+    parser.add_argument("--out", default="smd_output", metavar="DIR", help="output directory (default ./smd_output)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_check_argument(parser)
+
+
+def build_model(args):
+    """The model the options describe."""
+    from ..effects import make_effect
+    from ..model import SMDModel
+
+    effects = [make_effect(spec) for spec in args.effect]
+    return SMDModel(n_harmonics=args.harmonics, discretisation=args.discretisation, effects=effects)
+
+
+def estimator_options(name: str, args) -> dict:
+    """Estimator keyword options from the command line (only those the estimator takes)."""
+    if args.particles is not None and name in ("pf", "rbpf"):
+        return {"n_particles": args.particles}
+    return {}
+
+
+def prepare_record(args):
+    """Read, check and preprocess ``args.record``; returns ``(Record, Preprocessed)``."""
+    from ..io import read_record
+    from ..signals import preprocess
+
+    record = read_record(args.record, args.mass)
+    checked(record, args)
+    return record, preprocess(record)
+
+
+def out_dir(path) -> Path:
+    """Create (if needed) and return the output directory, failing clearly when it cannot be one."""
+    directory = Path(path)
+    if directory.exists() and not directory.is_dir():
+        raise OptionError(f"--out {directory}: exists and is not a directory")
+    directory.mkdir(parents=True, exist_ok=True)
+    return directory
+
+
+def load_truth(path):
+    """A truth JSON (as ``simulate`` writes) or ``None``."""
+    if path is None:
+        return None
+    try:
+        return json.loads(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise OptionError(f"--truth {path}: cannot read ({exc.strerror or exc})") from None
+    except ValueError:
+        raise OptionError(f"--truth {path}: not a JSON file") from None

@@ -1,0 +1,274 @@
+"""``smd-statespace identify``: every cycle of a record, one estimator, the article's repeated passes."""
+
+from __future__ import annotations
+
+import json
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+
+from .. import __version__
+from ..estimators import ESTIMATORS
+from ..errors import OptionError
+from ..identify.runner import DEFAULT_ESTIMATOR
+from .common import (PROG, _count, add_model_arguments, add_run_arguments, build_model, estimator_options, load_truth,
+                     out_dir, prepare_record, truth_values)
+
+
+SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
+
+
+def add_identify(subparsers):
+    """Declare ``smd-statespace identify``."""
+    parser = subparsers.add_parser(
+        "identify",
+        help="identify the SMD model cycle by cycle",
+        description=("Split the record into bouncing cycles (GRF peak to peak) and identify f_h, xi_h and the "
+                     "force coefficients of every cycle with repeated passes (Wang et al. 2019, Section 3.2); "
+                     "write DIR/results.csv, DIR/run.json and figures. Given a folder, a glob or --manifest, "
+                     "identify every record, writing each finished one to DIR/parts/ (see --resume); exit "
+                     "status 1 when some records failed (each is named on stderr), 0 when none did."),
+    )
+    parser.add_argument("record", metavar="REC", nargs="?",
+                        help="a record CSV (time,force[,floor_acc]), a folder of them, or a quoted glob "
+                             "('data/*.csv'); may be omitted with --manifest")
+    parser.add_argument("--mass", type=float, metavar="KG",
+                        help="body mass M_h (kg); with many records, the mass of those the manifest does not list")
+    parser.add_argument("--manifest", metavar="FILE",
+                        help="CSV with columns file,mass: one body mass per record (files relative to it)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue a killed batch run in --out: finished records are kept, not recomputed")
+    parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default=None,
+                        help="record (default for one record: one f_h, xi_h for the whole record, noise levels by "
+                             "maximum likelihood; writes DIR/person.json) or a per-cycle estimator: pf (the "
+                             f"article's particle filter), rbpf, ukf, ekf or grid (default for a batch: "
+                             f"{DEFAULT_ESTIMATOR})")
+    parser.add_argument("--variation", choices=("auto", "independent", "smooth", "both", "random_walk"),
+                        default="auto",
+                        help="record estimator: how the force coefficients vary: independent (they jump at every "
+                             "cycle start), smooth (they drift continuously), both, random_walk, or auto (default: "
+                             "fits independent and smooth and keeps the lower AIC)")
+    parser.add_argument("--timing", choices=("model", "template", "peaks"), default="model",
+                        help="record estimator: force-cycle starts placed by the model's own phase errors (default), "
+                             "aligned on the mean cycle (template), or at GRF peaks (the article's cycles)")
+    parser.add_argument("--intervals", choices=("calibrated", "wald", "profile"), default="calibrated",
+                        help="record estimator: 90 %% intervals of f_h, xi_h from the standard errors widened by "
+                             "factors measured on simulated records (calibrated, default), from the standard errors "
+                             "alone (wald: too narrow) or from the profile likelihood (slower)")
+    add_model_arguments(parser)
+    add_run_arguments(parser)
+    parser.add_argument("--jobs", type=_count, default=1, metavar="N", help="parallel processes (default 1)")
+    parser.add_argument("--cycle", type=int, metavar="K",
+                        help="cycle whose convergence over passes is drawn (default: the middle valid cycle)")
+    parser.add_argument("--truth", metavar="JSON", help="truth file of a synthetic record, drawn in the figures")
+    return parser
+
+
+def identify(args, model, preprocessed, estimator: str):
+    """Run the cycle runner as the options say; returns ``(runner, table, seconds)``."""
+    from ..identify.runner import CycleRunner
+
+    options = dict(estimator=estimator, max_passes=args.max_passes, seed=args.seed, progress=not args.quiet,
+                   **estimator_options(estimator, args))
+    started = time.perf_counter()
+    if getattr(args, "jobs", 1) > 1:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            runner = CycleRunner(model, executor=pool, **options)
+            table = runner.run(preprocessed)
+    else:
+        runner = CycleRunner(model, **options)
+        table = runner.run(preprocessed)
+    return runner, table, time.perf_counter() - started
+
+
+def plausible_cycles(table: pd.DataFrame) -> pd.DataFrame:
+    """The ``ok`` cycles whose estimates are possible (not flagged ``implausible``)."""
+    from ..identify.plausibility import flagged
+
+    ok = table["status"] == "ok" if "status" in table else pd.Series(False, index=table.index)
+    return table[ok.to_numpy() & ~flagged(table)]
+
+
+def summary_table(table: pd.DataFrame, truth: dict | None = None) -> pd.DataFrame:
+    """Median, interquartile range and share of determining cycles of each reported parameter.
+
+    Over the plausible ``ok`` cycles only: cycles flagged ``implausible`` (see
+    :mod:`smd_statespace.identify.plausibility`) are left out, :func:`implausible_warning` says how many.
+    Empty (no rows) when no cycle is left.
+    """
+    ok = plausible_cycles(table)
+    rows = []
+    for name in SUMMARY_PARAMETERS:
+        if name not in ok:
+            continue
+        values = ok[name]
+        row = {"parameter": name, "median": values.median(), "q25": values.quantile(0.25),
+               "q75": values.quantile(0.75), "median_sd": ok[f"{name}_sd"].median() if f"{name}_sd" in ok else np.nan}
+        flag = f"{name}_determined"
+        row["determined_%"] = 100.0 * ok[flag].mean() if flag in ok else np.nan
+        if truth and name in truth:
+            row["truth"] = truth[name]
+        rows.append(row)
+    if not rows or ok.empty:
+        return pd.DataFrame(columns=["median", "q25", "q75", "median_sd", "determined_%"],
+                            index=pd.Index([], name="parameter"))
+    return pd.DataFrame(rows).set_index("parameter")
+
+
+def implausible_warning(table: pd.DataFrame) -> str:
+    """A ``warning:`` line counting the cycles flagged ``implausible`` and why; ``""`` when there are none."""
+    from ..identify.plausibility import implausible_ok
+
+    ok, bad, counts = implausible_ok(table)
+    if not bad.any():
+        return ""
+    why = ", ".join(f"{reason}: {n}" for reason, n in counts.items())
+    return (f"warning: {int(bad.sum())} of {int(ok.sum())} identified cycles gave estimates that cannot be true "
+            f"({why}); they are marked implausible and undetermined in results.csv and left out of the summary")
+
+
+def run_summary(table: pd.DataFrame, seconds: float) -> str:
+    """One line: cycles identified (implausible among them), converged, failed, skipped, and time."""
+    from ..identify.plausibility import flagged
+
+    counts = table["status"].value_counts()
+    ok = table[table["status"] == "ok"]
+    implausible = int(flagged(ok).sum())
+    return (f"{counts.get('ok', 0)} cycles identified ({int(ok['converged'].sum())} converged within the pass limit, "
+            f"mean {ok['passes'].mean():.1f} passes, {implausible} implausible), {counts.get('failed', 0)} failed, "
+            f"{counts.get('skipped', 0)} skipped near the record ends; {seconds:.1f} s "
+            f"({seconds / max(len(ok), 1):.2f} s per cycle)")
+
+
+def write_outputs(directory, runner, table, args, estimator, truth=None) -> list:
+    """results.csv, run.json (version, options, seed) and the figures; returns the paths written."""
+    from ..plotting.cycles import plot_convergence, plot_parameters
+
+    results = directory / "results.csv"
+    table.to_csv(results, index=False)
+    sidecar = directory / "run.json"
+    sidecar.write_text(json.dumps({
+        "version": __version__, "command": "identify", "record": str(args.record), "mass": args.mass,
+        "estimator": estimator, "options": estimator_options(estimator, args), "harmonics": args.harmonics,
+        "discretisation": args.discretisation, "effects": list(args.effect), "max_passes": args.max_passes,
+        "seed": args.seed,
+    }, indent=2))
+    written = [results, sidecar]
+    ok = table[table["status"] == "ok"]
+    if len(ok):
+        written.append(directory / "parameters.png")
+        plot_parameters(table, written[-1], truth=truth)
+        cycles = [c for c in ok["cycle"] if runner.history_.get(c)]
+        cycle = args.cycle if args.cycle in cycles else (cycles[len(cycles) // 2] if cycles else None)
+        if cycle is not None:
+            written.append(directory / "convergence.png")
+            plot_convergence(runner.history_[cycle], cycle, tolerance=runner.tolerance, path=written[-1])
+    return written
+
+
+def is_batch(args) -> bool:
+    """Whether the options ask for many records (a folder, a glob, a manifest or --resume)."""
+    import glob
+
+    from pathlib import Path
+
+    record = args.record
+    return (args.manifest is not None or args.resume or record is None or Path(record).is_dir()
+            or (glob.has_magic(record) and not Path(record).exists()))
+
+
+def _refuse_effects(args):
+    """The record estimator takes no ``--effect`` yet: one line (after an unknown or malformed effect is named)."""
+    if args.effect:
+        build_model(args)
+        raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
+                          "(--estimator ekf) to identify with an effect")
+
+
+def run_batch_identify(args) -> int:
+    """Identify many records (see :mod:`smd_statespace.identify.batch`); 1 when some failed, else 0."""
+    import sys
+
+    from ..identify.batch import collect_records, run_batch
+    from ..plotting.cycles import plot_parameters
+
+    if args.truth is not None:
+        raise OptionError("--truth applies to one record, not to a batch")
+    directory = out_dir(args.out)
+    model = build_model(args)
+    if args.estimator == "record":
+        _refuse_effects(args)
+    records = collect_records(args.record, args.mass, args.manifest)
+    options = dict(max_passes=args.max_passes, seed=args.seed, **estimator_options(args.estimator, args))
+    started = time.perf_counter()
+    summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
+                        progress=not args.quiet, check=not args.ignore_checks)
+    written = [summary.results, directory / "run.json"]
+    if (summary.table["status"] == "ok").any():
+        written.append(directory / "parameters.png")
+        plot_parameters(summary.table, written[-1], against="f_b")
+    print(f"{summary.line()}; {time.perf_counter() - started:.1f} s")
+    warning = implausible_warning(summary.table)
+    if warning:
+        print(warning)
+    for reason in summary.failures.values():
+        print(f"{PROG}: error: {reason}", file=sys.stderr)
+    print("wrote " + ", ".join(str(path) for path in written) + f" and {len(records)} parts in {directory / 'parts'}")
+    return 1 if summary.failed_records else 0
+
+
+def run_person(args) -> int:
+    """``identify --estimator record``: the person from the whole record; person.json, results.csv, figures."""
+    from ..io import read_record
+    from ..person import identify_person
+    from ..person.output import write_person
+
+    _refuse_effects(args)
+    directory = out_dir(args.out)
+    record = read_record(args.record, args.mass)
+    started = time.perf_counter()
+    result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
+                             intervals=args.intervals, check=not args.ignore_checks)
+    seconds = time.perf_counter() - started
+    print(f"{record.source}: record-level model ({seconds:.1f} s)")
+    print(result.summary())
+    options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
+               "harmonics": args.harmonics}
+    written = write_person(directory, result, options, truth=truth_values(load_truth(args.truth)))
+    print("wrote " + ", ".join(str(path) for path in written))
+    return 0
+
+
+def run_identify(args) -> int:
+    """Run ``smd-statespace identify``."""
+    if is_batch(args):
+        args.estimator = args.estimator or DEFAULT_ESTIMATOR
+        return run_batch_identify(args)
+    if args.mass is None:
+        raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
+    args.estimator = args.estimator or "record"
+    if args.estimator == "record":
+        return run_person(args)
+    directory = out_dir(args.out)
+    model = build_model(args)
+    truth = truth_values(load_truth(args.truth))
+    record, preprocessed = prepare_record(args)
+    runner, table, seconds = identify(args, model, preprocessed, args.estimator)
+    written = write_outputs(directory, runner, table, args, args.estimator, truth)
+    print(f"{record.source}: {args.estimator} on {model}")
+    print(run_summary(table, seconds))
+    warning = implausible_warning(table)
+    if warning:
+        print(warning)
+    summary = summary_table(table, truth)
+    if summary.empty:
+        print("no plausible identified cycle to summarise")
+    else:
+        with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 120):
+            print(summary.to_string())
+        print("'determined_%': plausible cycles whose posterior sd is under a quarter of the prior sd; "
+              "the others do not pin the parameter down.")
+    print("wrote " + ", ".join(str(path) for path in written))
+    return 0

@@ -1,1 +1,0 @@
-"""One module per ``smd-statespace`` subcommand; :mod:`smd_statespace.cli` dispatches."""

@@ -1,0 +1,23 @@
+"""Does the model fit this record, and if not, what is missing? Does the model apply at all?
+
+======================= ======================================================
+module                  what it holds
+======================= ======================================================
+:mod:`.check`           :class:`ModelCheck` (:func:`check_model`): free
+                        simulation against the measurement, residual tests,
+                        spectrum, phase profile, correlations, figures
+:mod:`.missing`         :func:`diagnose`: refit with every candidate effect
+                        and rank them (per-cycle identification)
+:mod:`.applicability`   :func:`check_bouncing`: is the record bouncing at all
+                        (refusals and warnings in words)
+======================= ======================================================
+
+The record-level diagnosis is :mod:`smd_statespace.person.diagnose`.
+"""
+
+from .applicability import BouncingCheck, Finding, NotBouncingError, check_bouncing
+from .check import INITIAL_STATES, ModelCheck, check_model, fit_percent
+from .missing import Candidate, Diagnosis, default_candidates, diagnose
+
+__all__ = ["ModelCheck", "check_model", "fit_percent", "INITIAL_STATES", "Candidate", "Diagnosis",
+           "default_candidates", "diagnose", "BouncingCheck", "Finding", "NotBouncingError", "check_bouncing"]

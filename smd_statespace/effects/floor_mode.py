@@ -1,0 +1,519 @@
+"""The ``floor_mode`` effect: the person bounces on a vibrating floor (human-structure interaction, Section 6)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+from .. import article
+from ..errors import OptionError
+from ..model.core import F_H, TWO_PI, XI_H, Slot
+from ..model.effect import Effect, _slot_count
+from .options import nonnegative, positive, positive_range, spec_value
+
+__all__ = ["FloorMode"]
+
+
+class FloorMode(Effect):
+    """The person bounces on a vibrating floor (human-structure interaction, Section 6).
+
+    The leg spring and damper act on the COM motion relative to the floor
+    displacement ``z`` (m, upward)::
+
+        u'' = -omega_h^2 (u - z) - 2 xi_h omega_h (u' - z') + F_bio / M_h
+
+    so the effect adds ``omega_h^2 z + 2 xi_h omega_h z'`` to the acceleration
+    of Eq. 10. ``u''`` stays the absolute COM acceleration, which the GRF
+    measures through Eq. 3. Where ``z`` comes from depends on ``source``:
+
+    ``"measured"``
+        The record has a ``floor_acc`` column; its high-passed, integrated
+        velocity and displacement (:func:`smd_statespace.signals.preprocess`)
+        are exogenous inputs (``requires = ("floor_disp", "floor_vel")``). No
+        slots are added.
+    ``"modal"``
+        No floor measurement: the floor is one modal oscillator whose state
+        and parameters are estimated with the person's::
+
+            z'' = -omega_f^2 z - 2 xi_f omega_f z' - mass_ratio u''
+
+        i.e. ``m_f z'' + c_f z' + k_f z = -M_h u''`` divided by the modal mass
+        ``m_f = M_h / mass_ratio``: the floor is driven by the dynamic GRF.
+        Slots ``z`` (m), ``z_dot`` (m/s), then the parameters ``f_f`` (Hz),
+        ``xi_f`` (-) and ``mass_ratio`` (-), all three non-linear.
+
+    The default source is ``"modal"`` when any option of the modal floor is
+    given, else ``"measured"``.
+
+    A simulation (:func:`~smd_statespace.simulation.simulate_bouncing`,
+    ``simulate --effect floor_mode:...``) integrates the modal floor with
+    the given ``frequency``, ``damping`` and ``mass_ratio`` as the truth
+    (defaults: mode 1 of the article's plate, Table 3: 3.48 Hz, 0.0037, and
+    ``M_h / modal_mass`` with ``modal_mass`` 8583 kg), writes the floor
+    acceleration as the record's ``floor_acc`` column (white noise of
+    ``noise`` times its RMS), and adds ``ambient`` floor vibration from other
+    sources (see :func:`~smd_statespace.simulation.ambient_floor_excitation`).
+
+    The simulated record starts in the coupled (person + floor) periodic
+    steady state of the first cycle's force: with ``fb_variation=0`` and
+    ``coef_variation=0`` the floor amplitude is constant from ``t = 0``.
+    With cycle-to-cycle variation it is not, because the default floor mode
+    is lightly damped (half-power bandwidth ``2 xi_f f_f`` = 0.026 Hz, decay
+    time ``1 / (xi_f w_f)`` = 12 s) and a force harmonic near it (e.g. the
+    2nd at ``f_b`` = 1.75 Hz) moves across the resonance as ``f_b`` varies:
+    the start is the steady state of the first cycle's frequency alone
+    (often off resonance: at a constant ``f_b`` of 1.72, 1.75 and 1.78 Hz
+    the floor amplitude is 0.55, 0.95 and 0.33 m/s^2), and the floor then
+    takes about its decay time to settle to the response to the varying
+    force, which itself wanders (beats) as the cycle frequencies come and
+    go. At ``f_b`` 1.75 Hz, ``f_h`` 1.8 Hz, ``xi_h`` 0.33, 70 kg and the
+    default variations, the amplitude over the first 5 s averages 0.58
+    m/s^2 (SD 0.24 over 30 seeds) against 0.94 m/s^2 (SD 0.18) over the
+    last 5 s of 30 s records. Drop the first ~15 s, or set
+    ``fb_variation=0``, where a stationary floor response matters. With
+    ``variation="smooth"`` the integration starts a run-in of up to 60 s
+    (about 5 decay times) before the record, so the floor has settled by
+    ``t = 0``.
+
+    Whether the GRF shows ``ambient`` floor vibration depends on its
+    frequency, not on periodicity: below about ``n f_b`` a cycle's Fourier
+    force absorbs any smooth floor motion (measured: 0.2 m/s^2 at 3.48 Hz
+    left nothing in the residual); above it the floor reaches the GRF
+    through the leg's transmissibility (about 0.15 at 9 Hz), so about
+    1 m/s^2 is needed to stand out of 1 % BW noise.
+
+    =============== ================ =========================================
+    symbol          slot / option    meaning (unit)
+    =============== ================ =========================================
+    ``z``           ``"z"``          floor displacement at the person (m)
+    ``z'``          ``"z_dot"``      floor velocity (m/s)
+    ``f_f``         ``"f_f"``        floor modal frequency (Hz)
+    ``xi_f``        ``"xi_f"``       floor modal damping ratio (-)
+    ``M_h / m_f``   ``"mass_ratio"`` person mass over floor modal mass (-)
+    =============== ================ =========================================
+
+    Parameters
+    ----------
+    source : {"measured", "modal"}, optional
+        Where the floor motion comes from (see above).
+        :meth:`for_record` picks it from the record.
+    frequency : float, optional
+        ``"modal"``: the floor frequency (Hz). Estimated mode: a seed, e.g. a
+        peak of the residual spectrum; the prior of ``f_f`` is then uniform
+        on ``frequency * (1 -+ frequency_spread)``. Known mode (with
+        ``damping``) and simulation: the value.
+    frequency_spread : float, optional
+        ``"modal"`` only: relative half-width of that prior (default 0.15).
+    frequency_range : (float, float), optional
+        ``"modal"`` only: the prior range of ``f_f`` (Hz) given directly;
+        default 2-20 Hz when no ``frequency`` is given.
+    damping_range : (float, float), optional
+        ``"modal"`` only: prior range of ``xi_f`` (default 0.001-0.05).
+    mass_ratio_range : (float, float), optional
+        ``"modal"`` only: prior range of ``M_h / m_f`` (default 0.001-0.05;
+        one 70 kg person on the article's plate, 8583 kg: 0.008).
+    damping, mass_ratio : float, optional
+        ``"modal"``: a *known* mode. With ``frequency`` and ``damping``
+        (and ``mass_ratio``, default 0.008: 70 kg on mode 1 of the article's
+        plate) given, ``f_f``, ``xi_f`` and ``M_h / m_f`` are constants, as
+        from a modal test of the floor (the article's Table 3), and only the
+        floor's motion ``z``, ``z_dot`` is estimated. Fewer values per cycle
+        than an estimated mode: a floor mode is one frequency for the whole
+        record. In a simulation: the true values.
+    displacement, velocity : float, optional
+        ``"modal"`` only: nominal magnitudes of ``z`` (m, default 1e-3) and
+        ``z'`` (m/s, default 1e-2): the prior spread of the unobserved floor
+        state and, times ``process_noise``, its process noise per step. They
+        are fixed, not scaled by the person's data, because the floor moves
+        one or two orders of magnitude less than the COM.
+    modal_mass : float, optional
+        Simulation only: the floor's modal mass (kg, default 8583, Table 3)
+        when ``mass_ratio`` is not given; the simulated person's mass over it
+        is the mass ratio. (Identification reads ``mass_ratio``.)
+    noise : float, optional
+        Simulation only: floor-acceleration noise as a fraction of its RMS
+        (default: the simulation's GRF noise fraction).
+    ambient : float, optional
+        Simulation only: RMS floor acceleration (m/s^2) from other sources
+        (default 0).
+
+    Attributes
+    ----------
+    requires : tuple of str
+        Exogenous signals needed: ``("floor_disp", "floor_vel")`` when
+        measured, none when modal.
+    requires_columns : tuple of str
+        Record columns those signals come from: ``("floor_acc",)`` when measured.
+    slot_names : tuple of str
+        Names of the slots the ``"modal"`` source estimates, in state order
+        (``z``, ``z_dot`` only for a known mode).
+    known : bool
+        Whether the modal floor's ``f_f``, ``xi_f`` and mass ratio are given constants.
+
+    Examples
+    --------
+    >>> FloorMode()
+    FloorMode(source='measured')
+    >>> FloorMode(frequency=3.48).slot_names
+    ('z', 'z_dot', 'f_f', 'xi_f', 'mass_ratio')
+    >>> FloorMode("modal", frequency=3.48, damping=0.0037).slot_names
+    ('z', 'z_dot')
+    """
+
+    name = "floor_mode"
+    SOURCES = ("measured", "modal")
+    MODAL_DEFAULTS = {
+        "frequency_spread": 0.15,
+        "frequency_range": (2.0, 20.0),
+        "damping_range": (0.001, 0.05),
+        "mass_ratio_range": (0.001, 0.05),
+        "displacement": 1e-3,
+        "velocity": 1e-2,
+    }
+    SIMULATION_ONLY = ("modal_mass", "noise", "ambient")
+    KNOWN_MASS_RATIO = 70.0 / article.TABLE3[0].modal_mass
+    """Default ``M_h / m_f`` of a known mode: a 70 kg person on mode 1 of the article's plate (0.008)."""
+    ALL_SLOTS = ("z", "z_dot", "f_f", "xi_f", "mass_ratio")
+    known = False
+
+    def __init__(self, source=None, *, frequency=None, frequency_spread=None, frequency_range=None,
+                 damping_range=None, mass_ratio_range=None, displacement=None, velocity=None, damping=None,
+                 mass_ratio=None, modal_mass=None, noise=None, ambient=None, **unknown):
+        where = "floor_mode"
+        if unknown:
+            valid = ["source", "frequency", "damping", "mass_ratio"] + list(self.MODAL_DEFAULTS) + list(
+                self.SIMULATION_ONLY)
+            raise OptionError(
+                f"effect {where!r}: unknown option {', '.join(map(repr, unknown))}; valid: {', '.join(valid)}"
+            )
+        modal = {"frequency": frequency, "frequency_spread": frequency_spread, "frequency_range": frequency_range,
+                 "damping_range": damping_range, "mass_ratio_range": mass_ratio_range,
+                 "displacement": displacement, "velocity": velocity, "damping": damping, "mass_ratio": mass_ratio}
+        given = [key for key, value in modal.items() if value is not None]
+        if source is None:
+            source = "modal" if given else "measured"
+        if source not in self.SOURCES:
+            raise OptionError(
+                f"{where}: source {source!r} is unknown; choose 'measured' (the record has a floor_acc column) "
+                "or 'modal' (estimate one floor mode)"
+            )
+        self.source = source
+        self.modal_mass = None if modal_mass is None else positive(modal_mass, "modal_mass (kg)", where)
+        self.noise = None if noise is None else nonnegative(noise, "noise", where)
+        self.ambient = 0.0 if ambient is None else nonnegative(ambient, "ambient (m/s^2)", where)
+        self.simulation_given = {key: value for key, value in
+                                 (("modal_mass", modal_mass), ("noise", noise), ("ambient", ambient))
+                                 if value is not None}
+        self._excitation = None
+        self.slot_names = self.ALL_SLOTS
+        if source == "measured":
+            if given:
+                raise OptionError(
+                    f"{where}: option {given[0]!r} applies to source='modal' only; the measured floor has no "
+                    "parameters to estimate"
+                )
+            self.requires = ("floor_disp", "floor_vel")
+            self.requires_columns = ("floor_acc",)
+            self.given = {}
+            self.slot_names = ()
+            return
+        self.requires = ()
+        self.requires_columns = ()
+        self.given = {key: modal[key] for key in given}
+        if frequency is not None and frequency_range is not None:
+            raise OptionError(f"{where}: give frequency (a seed) or frequency_range, not both")
+        if frequency is None and frequency_spread is not None:
+            raise OptionError(f"{where}: frequency_spread needs a seed frequency")
+        defaults = self.MODAL_DEFAULTS
+        if damping is not None or mass_ratio is not None:
+            self._set_known(frequency, damping, mass_ratio, given, where)
+        if frequency is not None:
+            frequency = positive(frequency, "frequency (Hz)", where)
+            spread = positive(defaults["frequency_spread"] if frequency_spread is None else frequency_spread,
+                               "frequency_spread", where)
+            if spread >= 1.0:
+                raise OptionError(f"{where}: frequency_spread must be a fraction below 1, got {spread!r}")
+            frequency_range = (frequency * (1.0 - spread), frequency * (1.0 + spread))
+        self.frequency = frequency
+        self.frequency_range = positive_range(frequency_range or defaults["frequency_range"], "frequency_range", where)
+        self.damping_range = positive_range(damping_range or defaults["damping_range"], "damping_range", where)
+        self.mass_ratio_range = positive_range(mass_ratio_range or defaults["mass_ratio_range"],
+                                                "mass_ratio_range", where)
+        self.displacement = positive(defaults["displacement"] if displacement is None else displacement,
+                                      "displacement (m)", where)
+        self.velocity = positive(defaults["velocity"] if velocity is None else velocity, "velocity (m/s)", where)
+
+    def _set_known(self, frequency, damping, mass_ratio, given, where):
+        """Make this a known mode (constants ``f_f``, ``xi_f``, ``M_h / m_f``); check the options agree."""
+        if frequency is None or damping is None:
+            raise OptionError(f"{where}: a known mode needs both frequency (Hz) and damping (ratio); "
+                              f"got {', '.join(given)}")
+        clash = [key for key in ("frequency_spread", "frequency_range", "damping_range", "mass_ratio_range")
+                 if key in given]
+        if clash:
+            raise OptionError(f"{where}: {clash[0]} is a prior range of an estimated mode; a known mode "
+                              "(frequency, damping, mass_ratio given) has none")
+        damping = nonnegative(damping, "damping (ratio)", where)
+        if damping >= 1.0:
+            raise OptionError(f"{where}: damping must be a ratio below 1, got {damping!r}")
+        self.known = True
+        self.slot_names = ("z", "z_dot")
+        self._values = {"f_f": float(frequency), "xi_f": damping,
+                        "mass_ratio": positive(self.KNOWN_MASS_RATIO if mass_ratio is None else mass_ratio,
+                                                "mass_ratio", where)}
+
+    @classmethod
+    def for_record(cls, record, **options) -> "FloorMode":
+        """The measured floor when ``record`` has a floor acceleration, else the estimated mode.
+
+        ``record`` is a :class:`~smd_statespace.io.Record` or a
+        :class:`~smd_statespace.signals.Preprocessed` (anything with a
+        ``floor_acc`` attribute); ``options`` are the ``"modal"`` options and
+        are ignored when the floor is measured.
+        """
+        if getattr(record, "floor_acc", None) is not None:
+            return cls("measured")
+        return cls("modal", **options)
+
+    CANDIDATE_DAMPING = 0.01
+    """Damping ratio of the modal floor candidate seeded from the residual spectrum (floors: about 0.3-3 %)."""
+
+    @classmethod
+    def candidate(cls, check):
+        """The measured floor, or a known mode at the residual's strongest unlocked line (or None).
+
+        A floor excited by anything but this person moves at its own
+        frequency with no fixed phase to the bouncing cycle. The residual's
+        phase-locked part (:meth:`~smd_statespace.diagnostics.ModelCheck.phase_locked`:
+        missing harmonics, a nonlinearity) is removed first, so that such a
+        line is found even next to a multiple of ``f_b``; a peak is taken
+        only where at least half of the residual's power is unlocked. Weak
+        lines at ``(k + 1/2) f_b`` come from cycle-to-cycle variation of the
+        force: one is taken only when it is stronger than every harmonic
+        line of the residual. The line's frequency, read off the record,
+        counts as one fitted parameter (:attr:`record_parameters`).
+        """
+        if check.preprocessed.floor_acc is not None:
+            return cls("measured")
+        freq, psd, whole = check.residual_spectrum()
+        unlocked = check.residual - check.phase_locked()
+        _, psd_unlocked, peaks = check.residual_spectrum(values=unlocked)
+        bins = np.clip(np.searchsorted(freq, peaks["frequency"]), 0, freq.size - 1)
+        mostly_unlocked = psd_unlocked[bins] >= 0.5 * psd[bins]
+        half = (peaks["f_over_fb"] % 1.0 - 0.5).abs() < 0.1
+        harmonic_power = whole.loc[whole["label"] != "non-harmonic", "power"].max()
+        dominant = peaks["power"] > (0.0 if np.isnan(harmonic_power) else harmonic_power)
+        other = peaks[mostly_unlocked & (~half | dominant)]
+        if other.empty:
+            return None
+        frequency = float(other["frequency"].iloc[0])  # peaks are sorted strongest first
+        # A floor mode is one frequency for the whole record: a known mode at the line, not a per-cycle estimate.
+        effect = cls("modal", frequency=round(frequency, 3), damping=cls.CANDIDATE_DAMPING)
+        effect.record_parameters = 1
+        return effect
+
+    @classmethod
+    def diagnosis_notes(cls, base, judged) -> list:
+        """What the residual cannot say about a measured floor motion (see :mod:`smd_statespace.diagnostics.missing`).
+
+        The floor's coupling is the measured floor's own acceleration term
+        (:meth:`~smd_statespace.diagnostics.ModelCheck.effect_terms`) times
+        the body mass; the note says how large it is, how much of it a
+        cycle's force absorbs and how ``f_h``, ``xi_h`` move with the floor
+        modelled.
+        """
+        pre = base.preprocessed
+        if pre.floor_acc is None or any(effect.name == cls.name for effect in base.model.effects):
+            return []
+        terms = base.effect_terms(cls("measured"))
+        if not terms:
+            return []
+        coupling = pre.mass * next(iter(terms.values()))[base.sample_index]
+        size = float(np.sqrt(np.mean(coupling**2)))
+        left = float(np.sqrt(np.mean(base.remove_absorbable(coupling) ** 2)))
+        absorbed = 1.0 - left / size
+        note = (f"floor_mode: the measured floor moves; its coupling M_h (w_h^2 z + 2 xi_h w_h z') is "
+                f"{100 * size / base.weight:.2f} % BW RMS, {100 * absorbed:.0f} % of it absorbed by the per-cycle "
+                "force")
+        if absorbed >= 0.9:
+            note += f" (it lies below n f_b = {base.model.n_harmonics * base.f_b:.1f} Hz), so the residual cannot test it"
+        with_floor = next((c.check for c in judged if c.name == cls.name), None)
+        if with_floor is not None:
+            medians = [(check.table.loc[check.table["status"] == "ok", ["f_h", "xi_h"]].median()) for check in
+                       (base, with_floor)]
+            note += (f"; modelling the floor moves the median f_h {medians[0]['f_h']:.2f} -> {medians[1]['f_h']:.2f} "
+                     f"Hz and xi_h {medians[0]['xi_h']:.2f} -> {medians[1]['xi_h']:.2f} (Section 6, Table 4)")
+        return [note]
+
+    RECORD_DAMPING_TRIALS = (0.005, 0.02)
+    """Floor damping ratios tried by the record-level form of the floor without an accelerometer."""
+
+    @classmethod
+    def record_default(cls, result):
+        """The measured floor when the record has a floor acceleration; else None (the modal floor only when asked)."""
+        return cls("measured") if getattr(result.record, "floor_acc", None) is not None else None
+
+    def record_candidate(self, result):
+        """Record level: ``-kappa z''`` with the measured ``z''``, or the floor predicted from the GRF.
+
+        Measured: the leg acts on the motion relative to the floor, so the
+        floor acceleration moves the relative state but is not part of
+        ``GRF / M_h`` (``kappa`` should be 1; 1 parameter). Modal: ``z'' =
+        -mu H_f(s) u''`` from the measured ``u''``, ``H_f = s^2 / (s^2 + 2
+        xi_f w_f s + w_f^2)``, ``f_f`` at the strongest unexplained line of
+        the innovations (the given ``frequency`` if any), ``xi_f`` the better
+        of :data:`RECORD_DAMPING_TRIALS` (3 parameters: ``f_f``, ``xi_f``, ``mu``).
+        """
+        from ..person.diagnose import RecordCandidate, innovation_line, with_regressor
+        from ..person.model import Regressor
+
+        if not self.modal:
+            floor = getattr(result.record, "floor_acc", None)
+            if floor is None:
+                return None
+            term = Regressor("kappa", -np.asarray(floor, dtype=float), "-", observed=False)
+            return RecordCandidate(1, [with_regressor(result, term)], "kappa")
+        model = result.model
+        f_f = self.frequency or innovation_line(result)
+        trials = (self.values["xi_f"],) if self.known else self.RECORD_DAMPING_TRIALS
+        models = [with_regressor(result, Regressor("mu", -_floor_response(model.time, model.y, f_f, xi_f), "-",
+                                                   observed=False)) for xi_f in trials]
+        return RecordCandidate(3, models, "mu", [{"f_f": f_f, "xi_f": xi_f} for xi_f in trials])
+
+    @property
+    def modal(self) -> bool:
+        """Whether the floor mode is estimated (``source="modal"``)."""
+        return self.source == "modal"
+
+    def slots(self, model):
+        if not self.modal:
+            return ()
+        f_lo, f_hi = self.frequency_range
+        d_lo, d_hi = self.damping_range
+        m_lo, m_hi = self.mass_ratio_range
+        return (
+            Slot("z", "dynamic", "m", nominal=self.displacement, description="floor displacement at the person"),
+            Slot("z_dot", "dynamic", "m/s", nominal=self.velocity, description="floor velocity at the person"),
+            Slot("f_f", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
+                 description="floor modal frequency", linear=False),
+            Slot("xi_f", "parameter", "-", d_lo, d_hi, nominal=0.5 * (d_lo + d_hi),
+                 description="floor modal damping ratio", linear=False),
+            Slot("mass_ratio", "parameter", "-", m_lo, m_hi, nominal=0.5 * (m_lo + m_hi),
+                 description="person mass over floor modal mass", linear=False),
+        )
+
+    def floor_motion(self, model, x, t, inputs):
+        """Floor displacement ``z`` (m) and velocity ``z'`` (m/s) seen by state(s) ``x`` at ``t``."""
+        if self.modal:
+            return x[..., model.index("z")], x[..., model.index("z_dot")]
+        return inputs.signal("floor_disp", t), inputs.signal("floor_vel", t)
+
+    def acceleration(self, model, x, t, inputs):
+        omega = TWO_PI * x[..., F_H]
+        z, z_dot = self.floor_motion(model, x, t, inputs)
+        return omega**2 * z + 2.0 * x[..., XI_H] * omega * z_dot  # Section 6: spring and damper on u - z
+
+    def acceleration_jacobian(self, model, x, t, inputs):
+        omega = TWO_PI * x[..., F_H]
+        xi = x[..., XI_H]
+        z, z_dot = self.floor_motion(model, x, t, inputs)
+        jac = np.zeros(x.shape)
+        jac[..., F_H] = TWO_PI * (2.0 * omega * z + 2.0 * xi * z_dot)
+        jac[..., XI_H] = 2.0 * omega * z_dot
+        if self.modal:
+            jac[..., model.index("z")] = omega**2
+            jac[..., model.index("z_dot")] = 2.0 * xi * omega
+        return jac
+
+    def slot_rates(self, model, x, t, inputs, acc):
+        width = _slot_count(model, self)
+        rates = np.zeros(x.shape[:-1] + (width,))
+        if not width:
+            return rates
+        z, z_dot = x[..., model.index("z")], x[..., model.index("z_dot")]
+        f_f, xi_f, mu = (model.value(x, name) for name in ("f_f", "xi_f", "mass_ratio"))
+        omega_f = TWO_PI * f_f
+        rates[..., 0] = z_dot
+        rates[..., 1] = -(omega_f**2) * z - 2.0 * xi_f * omega_f * z_dot - mu * acc
+        if self._excitation is not None:  # a simulation's ambient floor vibration
+            rates[..., 1] += self._excitation.scalar(t) if np.ndim(t) == 0 else self._excitation(t)
+        return rates
+
+    def slot_rates_jacobian(self, model, x, t, inputs, acc, acc_jacobian):
+        width = _slot_count(model, self)
+        jac = np.zeros(x.shape[:-1] + (width, x.shape[-1]))
+        if not width:
+            return jac
+        i_z, i_v = model.index("z"), model.index("z_dot")
+        z, z_dot = x[..., i_z], x[..., i_v]
+        f_f, xi_f, mu = (model.value(x, name) for name in ("f_f", "xi_f", "mass_ratio"))
+        omega_f = TWO_PI * f_f
+        jac[..., 0, i_v] = 1.0
+        row = -np.asarray(mu)[..., None] * acc_jacobian
+        row[..., i_z] += -(omega_f**2)
+        row[..., i_v] += -2.0 * xi_f * omega_f
+        derivatives = {"f_f": -TWO_PI * (2.0 * omega_f * z + 2.0 * xi_f * z_dot), "xi_f": -2.0 * omega_f * z_dot,
+                       "mass_ratio": -acc}
+        for name, derivative in derivatives.items():
+            if name in model.state_names:
+                row[..., model.index(name)] += derivative
+        jac[..., 1, :] = row
+        return jac
+
+    # -- forward simulation ---------------------------------------------------
+
+    def simulation_values(self, mass) -> dict:
+        """True ``f_f`` (Hz), ``xi_f`` and ``mass_ratio`` of a simulated floor for a person of ``mass`` (kg)."""
+        plate = article.TABLE3[0]
+        values = self.values
+        ratio = values.get("mass_ratio") if "mass_ratio" in self.given else None
+        if ratio is None:
+            ratio = mass / (self.modal_mass or plate.modal_mass)
+        return {"f_f": values.get("f_f", self.frequency if self.modal and self.frequency else plate.frequency),
+                "xi_f": values.get("xi_f", plate.damping), "mass_ratio": float(ratio)}
+
+    def for_simulation(self, model, mass):
+        values = self.simulation_values(mass)
+        twin = FloorMode("modal", frequency=values["f_f"], damping=values["xi_f"], mass_ratio=values["mass_ratio"],
+                         **self.simulation_given)
+        twin.simulated_mass = float(mass)
+        return twin
+
+    def draw_simulation_inputs(self, rng, duration):
+        from ..simulation.bouncing import ambient_floor_excitation, ambient_line_count
+
+        f_f, xi_f = self.values["f_f"], self.values["xi_f"]
+        phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(f_f, duration))
+        self._excitation = ambient_floor_excitation(self.ambient, f_f, xi_f, duration, phases)
+
+    def measured_signals(self, states, normals, noise):
+        z_ddot = states["z_ddot"].to_numpy()
+        level = noise if self.noise is None else self.noise
+        return {"floor_acc": z_ddot + level * float(np.sqrt(np.mean(z_ddot**2))) * normals}
+
+    def simulation_truth(self):
+        values = self.values
+        truth = {"frequency": values["f_f"], "damping": values["xi_f"], "mass_ratio": values["mass_ratio"],
+                 "noise": self.noise, "ambient": self.ambient}
+        if hasattr(self, "simulated_mass"):
+            truth["modal_mass"] = self.simulated_mass / values["mass_ratio"]
+        return truth
+
+    @property
+    def spec(self) -> str:
+        given = {**self.given, **self.simulation_given}
+        if not given:
+            return self.name if not self.modal else f"{self.name}:source=modal"
+        options = ",".join(f"{key}={spec_value(value)}" for key, value in given.items())
+        return f"{self.name}:source={self.source},{options}"
+
+    def __repr__(self):
+        options = "".join(f", {key}={value!r}" for key, value in {**self.given, **self.simulation_given}.items())
+        return f"FloorMode(source={self.source!r}{options})"
+
+
+def _floor_response(time, acc, f_f, xi_f):
+    """``H_f(s) acc``: a floor mode's acceleration per unit mass ratio under the GRF of COM acceleration ``acc``."""
+    w = 2.0 * np.pi * f_f
+    _, out, _ = signal.lsim(([1.0, 0.0, 0.0], [1.0, 2.0 * xi_f * w, w * w]), acc, time)
+    return out

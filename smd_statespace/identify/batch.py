@@ -1,0 +1,361 @@
+"""Identify many records in one run that loses nothing: a folder, a glob or a manifest, resumable.
+
+A lab identifies hundreds of records overnight (the article: 173 records,
+6800 cycles). :func:`run_batch` identifies them one record at a time and
+writes each finished record to ``OUT/parts/`` at once, atomically (a
+temporary file renamed into place, so a kill leaves either the whole part or
+none of it). ``resume=True`` continues a killed run: records whose part
+exists are not identified again, and the final ``OUT/results.csv`` is the
+parts joined in the run's record order, identical to an uninterrupted run.
+
+Nothing is lost to one bad record: a record that cannot be read or
+segmented, or whose identification fails numerically, gets one row with
+``status`` "failed" and the reason, and the batch goes on
+(:class:`BatchSummary` counts them). Cycles whose estimates cannot be true
+keep ``status`` "ok" but are flagged ``implausible`` with the reason (see
+:mod:`smd_statespace.identify.plausibility`); the summary counts them too.
+
+With ``estimator="record"`` every record gives one row, the person from the
+whole record (:func:`~smd_statespace.person.identify_person`; deterministic),
+with the flags ``implausible`` and ``model_adequate`` that ``stats`` reads.
+
+Reproducible: every cycle's random stream is derived from the seed, the
+record's name (:func:`record_key`) and the cycle's index, never from the
+order in which records or cycles happen to run, so the results do not depend
+on ``jobs`` or on where a run was interrupted.
+
+Layout of ``OUT``::
+
+    run.json          version, options, seed and the records (a resumed run must match it)
+    parts/NAME.csv    one finished record each (all its cycles, a ``record`` column first)
+    results.csv       every record's cycles, in the run's record order (written at the end)
+"""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import json
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from .. import __version__
+from ..errors import OptionError, RecordError, SMDInputError
+from ..io import check_mass
+from .plausibility import implausible_ok
+from .runner import DEFAULT_ESTIMATOR
+
+RECORD_ESTIMATOR = "record"
+"""The estimator name of the record-level model (:func:`~smd_statespace.person.identify_person`):
+one row per record (the person) instead of one per cycle."""
+
+__all__ = ["BatchRecord", "BatchSummary", "collect_records", "read_manifest", "record_key", "run_batch",
+           "atomic_write_csv"]
+
+MANIFEST_COLUMNS = ("file", "mass")
+"""Columns of a manifest: the record's CSV (relative to the manifest's folder, or absolute) and its body mass (kg)."""
+
+
+@dataclass(frozen=True)
+class BatchRecord:
+    """One record of a batch: its file, body mass (kg), name in the results and seed key."""
+
+    path: Path
+    mass: float
+    name: str
+
+    @property
+    def key(self) -> int:
+        """Seed key of the record, see :func:`record_key`."""
+        return record_key(self.name)
+
+    @property
+    def part(self) -> str:
+        """File name of the record's part: its name made safe, plus the key so that names cannot collide."""
+        safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in self.name.removesuffix(".csv"))
+        return f"{safe}-{self.key:08x}.csv"
+
+
+@dataclass
+class BatchSummary:
+    """What a batch run did: records identified now, taken from an earlier run, failed; cycles by status.
+
+    ``failures`` maps each record that could not be identified at all to the reason; ``table`` is
+    what ``results`` holds (every record's cycles, in the run's record order); ``implausible``
+    counts the ``ok`` cycles flagged implausible, ``implausible_reasons`` how often each reason
+    was given.
+    """
+
+    records: int
+    identified: int
+    resumed: int
+    failures: dict = field(default_factory=dict)
+    cycles: dict = field(default_factory=dict)
+    results: Path | None = None
+    table: pd.DataFrame | None = None
+    implausible: int = 0
+    implausible_reasons: dict = field(default_factory=dict)
+
+    @property
+    def failed_records(self) -> list:
+        """Names of the records that could not be identified at all, sorted."""
+        return sorted(self.failures)
+
+    def line(self) -> str:
+        """One line for the terminal."""
+        counts = ", ".join(f"{n} {status}" + (f" ({self.implausible} of them implausible)"
+                                               if status == "ok" and self.implausible else "")
+                           for status, n in sorted(self.cycles.items()))
+        unit = "cycles" if self.table is None or "cycle" in self.table else "rows (one person per record)"
+        return (f"{self.records} records: {self.identified} identified now, {self.resumed} taken from the earlier "
+                f"run, {len(self.failed_records)} failed; {unit}: {counts or 'none'}")
+
+
+def record_key(name: str) -> int:
+    """A stable 32-bit key of a record's name (SHA-256), part of every cycle's seed.
+
+    It depends on the name alone, so a record gets the same random numbers
+    whatever else is in the batch, its position, or the number of jobs.
+    """
+    return int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:4], "big")
+
+
+def read_manifest(path) -> list[BatchRecord]:
+    """Records and body masses from a manifest CSV with columns ``file,mass``.
+
+    ``file`` is relative to the manifest's folder (or absolute). Errors name
+    the manifest, the row and what is valid.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise RecordError(f"--manifest {path}: no such file")
+    try:
+        table = pd.read_csv(path, dtype=str, keep_default_na=False)
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise RecordError(
+            f"--manifest {path}: not a readable CSV with columns file,mass ({type(exc).__name__})") from None
+    table.columns = [str(c).strip() for c in table.columns]
+    missing = [c for c in MANIFEST_COLUMNS if c not in table.columns]
+    if missing:
+        raise RecordError(f"--manifest {path}: missing column {missing[0]!r}; the header is "
+                          f"{','.join(table.columns)!r}, expected file,mass")
+    if table.empty:
+        raise RecordError(f"--manifest {path}: no records listed under the header file,mass")
+    records, seen = [], set()
+    for row, (name, mass) in enumerate(zip(table["file"], table["mass"]), start=2):
+        name = name.strip()
+        if not name:
+            raise RecordError(f"--manifest {path}: row {row} has an empty file name")
+        if name in seen:
+            raise RecordError(f"--manifest {path}: row {row} lists {name!r} a second time")
+        seen.add(name)
+        try:
+            value = float(mass)
+        except ValueError:
+            raise RecordError(
+                f"--manifest {path}: row {row} ({name}) has mass {mass!r}; expected a number of kg") from None
+        records.append(BatchRecord(path.parent / name, check_mass(value, f"--manifest {path} row {row} ({name})"),
+                                   name))
+    return records
+
+
+def collect_records(source, mass=None, manifest=None) -> list[BatchRecord]:
+    """The records of a batch, in a fixed order.
+
+    Parameters
+    ----------
+    source : str or path, optional
+        A folder (every ``*.csv`` in it, sorted by name, except the
+        manifest), a glob pattern (``"data/*/rec*.csv"``) or one file. May be
+        None with a manifest, which then lists the records.
+    mass : float, optional
+        Body mass (kg) of every record; needed unless a manifest gives them.
+    manifest : path, optional
+        CSV ``file,mass``: per-record masses (and, without ``source``, the records).
+
+    Returns
+    -------
+    list of BatchRecord
+    """
+    listed = read_manifest(manifest) if manifest is not None else None
+    if source is None:
+        if listed is None:
+            raise OptionError("give records (a file, folder or glob) or --manifest FILE with columns file,mass")
+        return listed
+    text = str(source)
+    if Path(text).is_dir():
+        paths = sorted(p for p in Path(text).glob("*.csv")
+                       if manifest is None or p.resolve() != Path(manifest).resolve())
+        base = Path(text)
+        where = f"folder {text}"
+    else:
+        paths = sorted(Path(p) for p in glob.glob(text))
+        base = None
+        where = f"pattern {text!r}" if glob.has_magic(text) else text
+    if not paths:
+        raise RecordError(f"{where}: no record files (*.csv) found")
+    names = [str(p.relative_to(base)) if base is not None else str(p) for p in paths]
+    if listed is None:
+        if mass is None:
+            raise OptionError("--mass KG (the same for every record) or --manifest FILE (file,mass per record) "
+                              "is needed")
+        value = check_mass(mass)
+        return [BatchRecord(p, value, n) for p, n in zip(paths, names)]
+    by_file = {r.path.resolve(): r for r in listed}
+    records = []
+    for p, n in zip(paths, names):
+        entry = by_file.get(p.resolve())
+        if entry is None:
+            if mass is None:
+                raise RecordError(f"--manifest {manifest}: no mass for {n}; add a row '{n},KG' or give --mass")
+            records.append(BatchRecord(p, check_mass(mass), n))
+        else:
+            records.append(BatchRecord(p, entry.mass, n))
+    return records
+
+
+def atomic_write_csv(table: pd.DataFrame, path) -> None:
+    """Write ``table`` to ``path`` through a temporary file and a rename: all of it or nothing."""
+    path = Path(path)
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    table.to_csv(temporary, index=False)
+    with open(temporary, "rb+") as handle:
+        os.fsync(handle.fileno())
+    os.replace(temporary, path)
+
+
+def identify_record(record: BatchRecord, model, estimator, runner_options: dict, check=True) -> pd.DataFrame:
+    """Identify every cycle of one record; a record that fails gives one "failed" row with the reason.
+
+    With ``estimator="record"`` the record gives one row: the person
+    (:meth:`~smd_statespace.person.results.PersonResult.table_row`). With
+    ``check`` a record that is not bouncing
+    (:func:`~smd_statespace.diagnostics.applicability.check_bouncing`) fails with the reason.
+    """
+    from ..diagnostics.applicability import check_bouncing
+    from ..io import read_record
+    from .runner import CycleRunner
+    from ..signals import preprocess
+
+    try:
+        measured = read_record(record.path, record.mass)
+        if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row
+            from ..person import identify_person
+
+            person = identify_person(measured, n_harmonics=model.n_harmonics, check=check)
+            table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
+        else:
+            runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
+            check_bouncing(measured).raise_if_refused(override=not check)
+            table = runner.run(preprocess(measured), record_key=record.key)
+    except SMDInputError as exc:
+        table = pd.DataFrame([{"status": "failed", "reason": " ".join(str(exc).split())}])
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:  # numerical failure outside a filter: contained
+        table = pd.DataFrame([{"status": "failed", "reason": f"{type(exc).__name__}: {exc}"}])
+    table.insert(0, "record", record.name)
+    table.insert(1, "mass", record.mass)
+    return table
+
+
+def _settings(records, model, estimator, runner_options) -> dict:
+    return {"version": __version__, "command": "identify", "model": repr(model), "estimator": str(estimator),
+            "options": {k: v for k, v in sorted(runner_options.items())},
+            "records": [{"name": r.name, "mass": r.mass} for r in records]}
+
+
+def _check_settings(sidecar: Path, settings: dict, resume: bool, parts: Path):
+    earlier = json.loads(sidecar.read_text(encoding="utf-8")) if sidecar.exists() else None
+    if not resume:
+        if any(parts.glob("*.csv")):
+            raise OptionError(f"--out {sidecar.parent}: holds a previous batch run; add --resume to continue it "
+                              "or choose another --out")
+        return
+    if earlier is None:
+        raise OptionError(f"--resume: {sidecar} not found; there is no run in {sidecar.parent} to continue")
+    for key in ("model", "estimator", "options", "records"):
+        if earlier.get(key) != settings.get(key):
+            raise OptionError(f"--resume: the {key} differ from the run in {sidecar.parent} "
+                              f"({sidecar.name}); resume with the same records and options, or choose another --out")
+
+
+def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_options=None, jobs: int = 1,
+              resume: bool = False, progress: bool = True, check: bool = True) -> BatchSummary:
+    """Identify every record, writing each finished one at once; see the module docstring.
+
+    Parameters
+    ----------
+    records : list of BatchRecord
+        From :func:`collect_records`.
+    out : path
+        Output folder (created).
+    model : SMDModel, optional
+        Default ``SMDModel()``.
+    estimator : str
+        Estimator name (default :data:`~smd_statespace.identify.runner.DEFAULT_ESTIMATOR`).
+    runner_options : dict, optional
+        :class:`~smd_statespace.identify.runner.CycleRunner` options (``max_passes``,
+        ``seed``, ``n_particles``, ...).
+    jobs : int
+        Records identified in parallel processes (results do not depend on it).
+    resume : bool
+        Continue the run in ``out``: keep its finished records.
+    progress : bool
+        Show a progress bar over records.
+    check : bool
+        Refuse records that are not bouncing (each fails with its reason; the others go on).
+
+    Returns
+    -------
+    BatchSummary
+    """
+    from ..model import SMDModel
+
+    model = SMDModel() if model is None else model
+    runner_options = dict(runner_options or {})
+    out = Path(out)
+    parts = out / "parts"
+    parts.mkdir(parents=True, exist_ok=True)
+    sidecar = out / "run.json"
+    settings = json.loads(json.dumps(_settings(records, model, estimator, runner_options)))  # as stored
+    _check_settings(sidecar, settings, resume, parts)
+    if not resume:
+        temporary = sidecar.with_name(".run.json.tmp")
+        temporary.write_text(json.dumps(settings, indent=2), encoding="utf-8")
+        os.replace(temporary, sidecar)
+    for stale in parts.glob(".*.tmp"):  # a part being written when the run was killed
+        stale.unlink()
+    pending = [r for r in records if not (parts / r.part).exists()]
+    bar = tqdm(total=len(records), initial=len(records) - len(pending), desc=f"identify ({estimator})",
+               unit="record", disable=not progress)
+    try:
+        if jobs > 1 and len(pending) > 1:
+            with ProcessPoolExecutor(max_workers=jobs) as pool:
+                futures = {pool.submit(identify_record, r, model, estimator, runner_options, check): r
+                           for r in pending}
+                for future in as_completed(futures):
+                    atomic_write_csv(future.result(), parts / futures[future].part)
+                    bar.update()
+        else:
+            for record in pending:
+                atomic_write_csv(identify_record(record, model, estimator, runner_options, check),
+                                 parts / record.part)
+                bar.update()
+    finally:
+        bar.close()
+    table = pd.concat([pd.read_csv(parts / r.part, keep_default_na=False, na_values=[""]) for r in records],
+                      ignore_index=True)
+    results = out / "results.csv"
+    atomic_write_csv(table, results)
+    cycle = table["cycle"] if "cycle" in table else pd.Series(np.nan, index=table.index)
+    failed = table[(table["status"] == "failed") & cycle.isna()]  # a record's one row: it was not identified
+    _, bad, reasons = implausible_ok(table)
+    return BatchSummary(records=len(records), identified=len(pending), resumed=len(records) - len(pending),
+                        failures=dict(zip(failed["record"], failed["reason"])),
+                        cycles=table["status"].value_counts().to_dict(), results=results, table=table,
+                        implausible=int(bad.sum()), implausible_reasons=reasons)

@@ -1,0 +1,767 @@
+"""The augmented-state spring-mass-damper (SMD) model of a bouncing person (Eq. 1-18).
+
+A bouncing person is one mass ``M_h`` (kg) at the centre of mass (COM), a leg
+spring ``K_h`` and damper ``C_h``, excited by an internal biomechanical force
+``F_bio`` (Eq. 1). Divided by the mass (Eq. 2)::
+
+    u'' + 2 xi_h omega_h u' + omega_h**2 u = F_bio / M_h,     omega_h = 2 pi f_h
+
+and the force is a Fourier series at the bouncing frequency ``f_b`` (Eq. 4),
+read in units of g::
+
+    F_bio / M_h = g [a0 + sum_i a_i cos(2 pi i f_b t) + b_i sin(2 pi i f_b t)]
+
+Symbols used in code and docs (SI units throughout):
+
+============ ============= ====================================================
+symbol       attribute     meaning (unit)
+============ ============= ====================================================
+``u``        ``"u"``       COM displacement from static equilibrium (m)
+``u'``       ``"u_dot"``   COM velocity (m/s)
+``u''``      ``"u_ddot"``  COM acceleration (m/s^2), observed through Eq. 3
+``f_h``      ``"f_h"``     natural frequency of the SMD (Hz)
+``xi_h``     ``"xi_h"``    damping ratio of the SMD (-)
+``a0``       ``"a0"``      mean biomechanical force (g)
+``a_i, b_i`` ``"a1"...``   cosine / sine Fourier coefficients (g)
+``f_b``      ``f_b``       bouncing frequency of the cycle (Hz), an input
+``BLF_i``    ``blf``       biomechanical load factor sqrt(a_i^2 + b_i^2) (g), Eq. 5
+``K_h``      ``k_h``       leg stiffness M_h (2 pi f_h)^2 (N/m), Eq. 17
+``C_h``      ``c_h``       leg damping 2 xi_h M_h 2 pi f_h (N s/m), Eq. 18
+============ ============= ====================================================
+
+The augmented state (Eq. 7) stacks motion and parameters::
+
+    X = [u, u', f_h, xi_h, a0, a1, b1, ..., an, bn]
+
+Its rate (Eq. 8-10) has one non-trivial row, the acceleration; parameters are
+random walks (zero rate plus process noise, Eq. 6). :meth:`SMDModel.transition`
+discretises it with forward Euler (Eq. 11-12, ``discretisation="euler"``, as in
+the article) or with classical Runge-Kutta (``"rk4"``, the default: Euler
+amplifies an undamped 4 Hz oscillation by 3 % per 100 Hz step). The
+observation (Eq. 13-16) is ``[u, u', u'']`` or, with ``observation="acc"``,
+the acceleration alone.
+
+Extending the model
+-------------------
+A physical :class:`Effect` (a vibrating floor, extra harmonics, a cubic
+spring, ...) adds slots to the state and terms to the acceleration row, with
+their Jacobians. ``model.with_effects(effect, ...)`` returns a new model with a
+longer state; estimators only ever call the methods below, so they work with
+any combination of effects unchanged.
+
+Every function is vectorised over leading axes: ``x`` may be one state of
+shape ``(n_state,)`` or a particle cloud of shape ``(n_particles, n_state)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..errors import OptionError
+from ..io import G
+from .effect import Effect
+
+TWO_PI = 2.0 * np.pi
+
+# Positions of the base slots, which always open the state vector (Eq. 7).
+U, U_DOT, F_H, XI_H = 0, 1, 2, 3
+
+DISCRETISATIONS = ("euler", "rk4")
+"""Names accepted by ``SMDModel(discretisation=...)``."""
+
+OBSERVATIONS = {"full": ("u", "u_dot", "u_ddot"), "acc": ("u_ddot",)}
+"""Observation options: channel names observed by each (Eq. 14-16)."""
+
+
+# ---------------------------------------------------------------------------
+# Derived quantities (Eq. 5, 17, 18)
+# ---------------------------------------------------------------------------
+
+
+def k_h(f_h, mass):
+    """Leg stiffness ``K_h = M_h (2 pi f_h)^2`` in N/m (Eq. 17).
+
+    Parameters
+    ----------
+    f_h : float or ndarray
+        SMD natural frequency (Hz).
+    mass : float or ndarray
+        Body mass ``M_h`` (kg).
+    """
+    return np.asarray(mass) * (TWO_PI * np.asarray(f_h)) ** 2
+
+
+def c_h(xi_h, f_h, mass):
+    """Leg damping ``C_h = 2 xi_h M_h (2 pi f_h)`` in N s/m (Eq. 18).
+
+    Parameters
+    ----------
+    xi_h : float or ndarray
+        SMD damping ratio (-).
+    f_h : float or ndarray
+        SMD natural frequency (Hz).
+    mass : float or ndarray
+        Body mass ``M_h`` (kg).
+    """
+    return 2.0 * np.asarray(xi_h) * np.asarray(mass) * TWO_PI * np.asarray(f_h)
+
+
+def blf(a, b):
+    """Biomechanical load factor ``BLF_i = sqrt(a_i^2 + b_i^2)`` in g (Eq. 5)."""
+    return np.hypot(a, b)
+
+
+# ---------------------------------------------------------------------------
+# Building blocks
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Slot:
+    """One entry of the augmented state.
+
+    Parameters
+    ----------
+    name : str
+        Name used by :meth:`SMDModel.index` (e.g. ``"f_h"``).
+    kind : {"dynamic", "parameter"}
+        Dynamic slots (``u``, ``u_dot``, a floor displacement, ...) evolve by
+        the model's rate; parameters are random walks.
+    unit : str
+        SI unit, for tables and plots.
+    low, high : float, optional
+        Uniform prior range of a parameter.
+    nominal : float, optional
+        Nominal magnitude; the default process noise of the slot is
+        ``process_noise * nominal`` per step. For dynamic slots that are
+        scaled by the data, leave ``None`` and set ``scale``.
+    scale : str, optional
+        For dynamic slots: the data channel (``"u"`` or ``"u_dot"``) whose RMS
+        is the slot's nominal magnitude and prior spread.
+    description : str
+        One line for documentation and reports.
+    linear : bool
+        Whether the rate and observation are linear in this slot once the
+        non-linear slots are fixed (``f_h`` and ``xi_h`` are not linear; ``u``,
+        ``u_dot`` and the Fourier coefficients are). Rao-Blackwellised
+        estimators sample the non-linear slots and Kalman-filter the rest.
+    """
+
+    name: str
+    kind: str
+    unit: str
+    low: float | None = None
+    high: float | None = None
+    nominal: float | None = None
+    scale: str | None = None
+    description: str = ""
+    linear: bool = True
+
+    def __post_init__(self):
+        if self.kind not in ("dynamic", "parameter"):
+            raise OptionError(f"slot {self.name!r}: kind must be 'dynamic' or 'parameter', got {self.kind!r}")
+        if self.kind == "parameter" and (self.low is None or self.high is None or not self.low < self.high):
+            raise OptionError(f"slot {self.name!r}: a parameter needs a prior range low < high")
+        if self.nominal is None and self.scale is None:
+            raise OptionError(f"slot {self.name!r}: give a nominal magnitude or a data channel to scale by")
+
+
+@dataclass(frozen=True)
+class CycleInputs:
+    """Known inputs of one cycle: what the model needs besides the state.
+
+    Parameters
+    ----------
+    f_b : float
+        Bouncing frequency of the cycle (Hz); sets the Fourier basis (Eq. 4).
+    t0 : float
+        Cycle start (s). The Fourier basis is referred to it,
+        ``cos(2 pi i f_b (t - t0))``, so coefficients of different cycles
+        share a phase origin (the GRF peak that starts the cycle).
+    time : ndarray, optional
+        Sample times (s) of the exogenous signals.
+    signals : mapping of str to ndarray, optional
+        Exogenous signals sampled at ``time`` (e.g. a measured floor
+        displacement ``"floor_disp"``), linearly interpolated between samples.
+    """
+
+    f_b: float
+    t0: float = 0.0
+    time: np.ndarray | None = None
+    signals: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def signal(self, name: str, t):
+        """Exogenous signal ``name`` at time(s) ``t``."""
+        if name not in self.signals:
+            raise OptionError(
+                f"input signal {name!r} is not available; this cycle has {sorted(self.signals) or 'none'}"
+            )
+        return np.interp(t, self.time, self.signals[name])
+
+    def phase(self, t):
+        """Bouncing phase ``2 pi f_b (t - t0)`` (rad)."""
+        return TWO_PI * self.f_b * (np.asarray(t, dtype=float) - self.t0)
+
+
+ONE_WORD_PER_DOUBLE = (np.random.SFC64, np.random.PCG64, np.random.PCG64DXSM, np.random.Philox)
+"""Bit generators whose ``random()`` uses exactly one ``random_raw`` word per number (not MT19937: two)."""
+
+
+@dataclass(frozen=True)
+class Prior:
+    """Independent prior of every state slot.
+
+    Parameters slots are uniform on ``[low, high]``; dynamic slots are normal
+    with ``mean`` and ``std``. ``kinds[i]`` says which.
+    """
+
+    names: tuple[str, ...]
+    kinds: tuple[str, ...]
+    first: np.ndarray
+    second: np.ndarray
+
+    @property
+    def mean(self) -> np.ndarray:
+        """Prior mean of every slot."""
+        uniform = np.array([kind == "uniform" for kind in self.kinds])
+        return np.where(uniform, 0.5 * (self.first + self.second), self.first)
+
+    @property
+    def std(self) -> np.ndarray:
+        """Prior standard deviation of every slot (the yardstick for identifiability)."""
+        uniform = np.array([kind == "uniform" for kind in self.kinds])
+        return np.where(uniform, (self.second - self.first) / np.sqrt(12.0), self.second)
+
+    @property
+    def cov(self) -> np.ndarray:
+        """Diagonal prior covariance."""
+        return np.diag(self.std**2)
+
+    def sample(self, rng: np.random.Generator, size: int, columns=None) -> np.ndarray:
+        """Draw ``size`` states, shape ``(size, n_state)``.
+
+        ``columns`` (a boolean mask over the slots, or slot indices in
+        increasing order) returns only those slots, and leaves ``rng`` exactly where the
+        full draw would: the uniform slots' numbers are skipped, not computed,
+        when none of them is asked for (a restart needs only the two motion
+        slots). The uniform slots draw first, then the normal ones.
+        """
+        uniform = np.array([kind == "uniform" for kind in self.kinds])
+        normal = ~uniform
+        wanted = np.ones(len(self.names), dtype=bool)
+        if columns is not None:
+            wanted[:] = False
+            wanted[columns] = True  # a boolean mask or slot indices
+        draws = np.empty((size, len(self.names)))
+        n_uniform = int(uniform.sum())
+        if (wanted & uniform).any() or not isinstance(rng.bit_generator, ONE_WORD_PER_DOUBLE):
+            # low + (high - low) * U and mean + std * Z, in place: what rng.uniform and rng.normal compute
+            # element by element (the same numbers), without their slow per-element parameter broadcasting.
+            values = rng.random((size, n_uniform))
+            values *= self.second[uniform] - self.first[uniform]
+            values += self.first[uniform]
+            draws[:, uniform] = values
+        else:
+            rng.bit_generator.random_raw(size * n_uniform)  # the words rng.random would have used
+        values = rng.standard_normal((size, int(normal.sum())))
+        values *= self.second[normal]
+        values += self.first[normal]
+        draws[:, normal] = values
+        return draws if columns is None else draws[:, wanted]
+
+
+# ---------------------------------------------------------------------------
+# The model
+# ---------------------------------------------------------------------------
+
+
+class SMDModel:
+    """Augmented-state SMD model (Eq. 7-16), shared by every estimator.
+
+    Parameters
+    ----------
+    n_harmonics : int
+        Number ``n`` of Fourier harmonics of the biomechanical force (Eq. 4);
+        the article uses 4.
+    effects : sequence of Effect
+        Physical effects that extend the model (see :class:`Effect`).
+    discretisation : {"rk4", "euler"}
+        ``"euler"``: ``X_k = X_{k-1} + A(X_{k-1}, t) X_{k-1} dt`` (Eq. 11-12),
+        as in the article. ``"rk4"``: classical fourth-order Runge-Kutta.
+    substeps : int
+        Integration steps per sample interval.
+    observation : {"full", "acc"}
+        ``"full"`` observes ``[u, u', u'']`` (Eq. 14-16); ``"acc"`` only ``u''``.
+    f_h_range : (float, float)
+        Uniform prior of ``f_h`` (Hz); the article's 1-4 Hz.
+    xi_h_range : (float, float)
+        Uniform prior of ``xi_h``; the article's 0-1.
+    coefficient_range : (float, float)
+        Uniform prior of every ``a_i``, ``b_i`` (g). The article prints 0-0.4;
+        since cosine and sine coefficients take either sign, the default is
+        the symmetric -0.4-0.4.
+    a0_range : (float, float), optional
+        Prior of ``a0`` (g); defaults to ``coefficient_range``.
+    process_noise : float
+        Process-noise standard deviation per step as a fraction of each
+        slot's nominal magnitude (the article: about 1 %).
+    observation_noise : float
+        Observation-noise standard deviation as a fraction of each observed
+        channel's RMS (the article: 10 %).
+    """
+
+    def __init__(
+        self,
+        n_harmonics: int = 4,
+        effects: Sequence[Effect] = (),
+        discretisation: str = "rk4",
+        substeps: int = 1,
+        observation: str = "full",
+        f_h_range=(1.0, 4.0),
+        xi_h_range=(0.0, 1.0),
+        coefficient_range=(-0.4, 0.4),
+        a0_range=None,
+        process_noise: float = 0.01,
+        observation_noise: float = 0.10,
+    ):
+        if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) or n_harmonics < 1:
+            raise OptionError(f"n_harmonics must be a whole number >= 1, got {n_harmonics!r}")
+        if discretisation not in DISCRETISATIONS:
+            raise OptionError(f"discretisation {discretisation!r} is unknown; choose one of {', '.join(DISCRETISATIONS)}")
+        if observation not in OBSERVATIONS:
+            raise OptionError(f"observation {observation!r} is unknown; choose one of {', '.join(OBSERVATIONS)}")
+        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+            raise OptionError(f"substeps must be a whole number >= 1, got {substeps!r}")
+        for label, value in (("process_noise", process_noise), ("observation_noise", observation_noise)):
+            if not np.isfinite(value) or value <= 0:
+                raise OptionError(f"{label} must be a positive fraction, got {value!r}")
+        self.options = dict(
+            n_harmonics=int(n_harmonics),
+            discretisation=discretisation,
+            substeps=int(substeps),
+            observation=observation,
+            f_h_range=tuple(map(float, _check_range("f_h_range", f_h_range, 0.0))),
+            xi_h_range=tuple(map(float, _check_range("xi_h_range", xi_h_range, 0.0))),
+            coefficient_range=tuple(map(float, _check_range("coefficient_range", coefficient_range, None))),
+            a0_range=None if a0_range is None else tuple(map(float, _check_range("a0_range", a0_range, None))),
+            process_noise=float(process_noise),
+            observation_noise=float(observation_noise),
+        )
+        self.n_harmonics = int(n_harmonics)
+        self.discretisation = discretisation
+        self.substeps = int(substeps)
+        self.observation = observation
+        self.process_noise = float(process_noise)
+        self.observation_noise = float(observation_noise)
+        self.effects = tuple(effects)
+        for effect in self.effects:
+            if not isinstance(effect, Effect):
+                raise OptionError(f"effects must be Effect objects, got {effect!r}")
+
+        names = [effect.name for effect in self.effects]
+        for name in names:
+            if names.count(name) > 1:
+                raise OptionError(f"effect {name!r} is given twice; give each effect once")
+        base = self._base_slots()
+        effect_slots = []
+        self.constants = {}
+        for effect in self.effects:
+            declared = tuple(effect.slots(self))
+            known = effect.values
+            parameters = {slot.name for slot in declared if slot.kind == "parameter"}
+            unknown = [name for name in known if name not in parameters]
+            if unknown:
+                raise OptionError(
+                    f"effect {effect.name!r} has no parameter slot {unknown[0]!r} to give a value; "
+                    f"its parameters: {', '.join(sorted(parameters)) or 'none'}"
+                )
+            self.constants.update(known)
+            effect_slots.append(tuple(slot for slot in declared if slot.name not in known))
+        self.slots = base + tuple(slot for group in effect_slots for slot in group)
+        self.state_names = tuple(slot.name for slot in self.slots)
+        seen = set()
+        for name in self.state_names:
+            if name in seen:
+                owners = [e.name for e, group in zip(self.effects, effect_slots) if name in [s.name for s in group]]
+                raise OptionError(
+                    f"state slot {name!r} is declared twice (by {', '.join(owners) or 'the base model'}); "
+                    "an effect combination must not duplicate a state"
+                )
+            seen.add(name)
+        self._index = {name: i for i, name in enumerate(self.state_names)}
+        self.n_state = len(self.slots)
+        self.channels = OBSERVATIONS[observation]
+        self.n_obs = len(self.channels)
+        self.requires = tuple(sorted({name for effect in self.effects for name in effect.requires}))
+        # Offsets of the effects' own slots in the state vector.
+        self._effect_slices = []
+        start = len(base)
+        for group in effect_slots:
+            self._effect_slices.append(slice(start, start + len(group)))
+            start += len(group)
+
+    # -- layout -------------------------------------------------------------
+
+    def _base_slots(self) -> tuple[Slot, ...]:
+        opts = self.options
+        coef_lo, coef_hi = opts["coefficient_range"]
+        a0_lo, a0_hi = opts["a0_range"] or opts["coefficient_range"]
+        coef_nominal = max(abs(coef_lo), abs(coef_hi)) / 2.0
+        f_lo, f_hi = opts["f_h_range"]
+        x_lo, x_hi = opts["xi_h_range"]
+        slots = [
+            Slot("u", "dynamic", "m", scale="u", description="COM displacement from static equilibrium"),
+            Slot("u_dot", "dynamic", "m/s", scale="u_dot", description="COM velocity"),
+            Slot("f_h", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
+                 description="SMD natural frequency", linear=False),
+            Slot("xi_h", "parameter", "-", x_lo, x_hi, nominal=0.5 * (x_lo + x_hi),
+                 description="SMD damping ratio", linear=False),
+            Slot("a0", "parameter", "g", a0_lo, a0_hi, nominal=max(abs(a0_lo), abs(a0_hi)) / 2.0,
+                 description="mean biomechanical force"),
+        ]
+        for i in range(1, self.n_harmonics + 1):
+            slots.append(Slot(f"a{i}", "parameter", "g", coef_lo, coef_hi, nominal=coef_nominal,
+                              description=f"cosine coefficient of harmonic {i}"))
+            slots.append(Slot(f"b{i}", "parameter", "g", coef_lo, coef_hi, nominal=coef_nominal,
+                              description=f"sine coefficient of harmonic {i}"))
+        return tuple(slots)
+
+    def index(self, name: str) -> int:
+        """Position of slot ``name`` in the state vector."""
+        try:
+            return self._index[name]
+        except KeyError:
+            raise OptionError(f"no state slot {name!r}; the model has {', '.join(self.state_names)}") from None
+
+    def value(self, x, name: str):
+        """Slot ``name`` of state(s) ``x``, or its known constant when an effect was given one.
+
+        Returns an array of shape ``x.shape[:-1]`` (a float for a constant,
+        which broadcasts the same way).
+        """
+        if name in self._index:
+            return np.asarray(x)[..., self._index[name]]
+        if name in self.constants:
+            return self.constants[name]
+        raise OptionError(f"no state slot or known value {name!r}; the model has {', '.join(self.state_names)}")
+
+    def floor_motion(self, x, t, inputs: CycleInputs):
+        """Floor displacement ``z`` (m) and velocity ``z'`` (m/s) under the person: the first effect's that has one, else 0.
+
+        The leg acts on the COM motion relative to the floor (Section 6), so
+        every effect with a leg term (a cubic spring, a user's nonlinear
+        damper) reads ``u - z`` through this.
+        """
+        for effect in self.effects:
+            if hasattr(effect, "floor_motion"):
+                return effect.floor_motion(self, x, t, inputs)
+        return 0.0, 0.0
+
+    def effect_slice(self, effect: Effect) -> slice:
+        """Positions of ``effect``'s own slots in the state vector."""
+        for candidate, where in zip(self.effects, self._effect_slices):
+            if candidate is effect:
+                return where
+        raise OptionError(f"effect {effect.name!r} is not part of this model")
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Names of the random-walk parameter slots."""
+        return tuple(slot.name for slot in self.slots if slot.kind == "parameter")
+
+    @property
+    def nonlinear_names(self) -> tuple[str, ...]:
+        """Slots in which the model is not linear (``f_h``, ``xi_h`` and effects' such parameters)."""
+        return tuple(slot.name for slot in self.slots if not slot.linear)
+
+    @property
+    def coefficient_names(self) -> tuple[str, ...]:
+        """Names of the base Fourier coefficients ``a0, a1, b1, ..., an, bn``."""
+        return ("a0",) + tuple(f"{c}{i}" for i in range(1, self.n_harmonics + 1) for c in "ab")
+
+    def with_effects(self, *effects: Effect) -> "SMDModel":
+        """A new model with ``effects`` added to this one's (state grows; nothing else changes)."""
+        return SMDModel(effects=self.effects + tuple(effects), **self.options)
+
+    def __repr__(self):
+        extra = f", effects=[{', '.join(e.name for e in self.effects)}]" if self.effects else ""
+        return (
+            f"SMDModel(n_harmonics={self.n_harmonics}, discretisation={self.discretisation!r}, "
+            f"observation={self.observation!r}, n_state={self.n_state}{extra})"
+        )
+
+    # -- physics ------------------------------------------------------------
+
+    def harmonic_orders(self) -> np.ndarray:
+        """Force harmonic orders of the model (Eq. 4): ``1..n`` plus those of any ``orders``-bearing effect."""
+        orders = set(range(1, int(self.n_harmonics) + 1))
+        for effect in self.effects:
+            if hasattr(effect, "orders"):
+                orders.update(int(k) for k in np.atleast_1d(effect.orders(self)))
+        return np.array(sorted(orders), dtype=int)
+
+    def fourier_basis(self, t, inputs: CycleInputs, harmonics: Sequence[int] | None = None):
+        """Regressors ``[1, cos(theta), sin(theta), ..., cos(n theta), sin(n theta)]`` of Eq. 4.
+
+        ``theta = 2 pi f_b (t - t0)``. Returns shape ``np.shape(t) + (1 + 2n,)``
+        for the base harmonics, or ``(2 len(harmonics),)`` columns (no constant)
+        when ``harmonics`` is given.
+        """
+        theta = np.asarray(inputs.phase(t))[..., None]
+        if harmonics is None:
+            orders = np.arange(1, self.n_harmonics + 1)
+            lead = [np.ones(theta.shape)]
+        else:
+            orders = np.asarray(harmonics)
+            lead = []
+        cos, sin = np.cos(orders * theta), np.sin(orders * theta)
+        pairs = np.stack([cos, sin], axis=-1).reshape(theta.shape[:-1] + (2 * len(orders),))
+        return np.concatenate(lead + [pairs], axis=-1)
+
+    def force(self, x, t, inputs: CycleInputs):
+        """Biomechanical force per unit mass ``F_bio / M_h`` (m/s^2), Eq. 4."""
+        x = np.asarray(x, dtype=float)
+        start = self._index["a0"]
+        coefficients = x[..., start:start + 1 + 2 * self.n_harmonics]
+        return G * np.sum(coefficients * self.fourier_basis(t, inputs), axis=-1)
+
+    def acceleration(self, x, t, inputs: CycleInputs):
+        """COM acceleration ``u''`` (m/s^2): the acceleration row of Eq. 10 plus effects.
+
+        ``u'' = -omega_h^2 u - 2 xi_h omega_h u' + F_bio / M_h``
+        """
+        x = np.asarray(x, dtype=float)
+        u, v = x[..., U], x[..., U_DOT]
+        omega = TWO_PI * x[..., F_H]
+        xi = x[..., XI_H]
+        acc = -omega**2 * u - 2.0 * xi * omega * v + self.force(x, t, inputs)  # Eq. 2, Eq. 10
+        for effect in self.effects:
+            acc = acc + effect.acceleration(self, x, t, inputs)
+        return acc
+
+    def acceleration_jacobian(self, x, t, inputs: CycleInputs):
+        """Derivative of :meth:`acceleration` with respect to the state, shape ``x.shape``."""
+        x = np.asarray(x, dtype=float)
+        u, v = x[..., U], x[..., U_DOT]
+        omega = TWO_PI * x[..., F_H]
+        xi = x[..., XI_H]
+        jac = np.zeros(x.shape)
+        jac[..., U] = -omega**2
+        jac[..., U_DOT] = -2.0 * xi * omega
+        jac[..., F_H] = TWO_PI * (-2.0 * omega * u - 2.0 * xi * v)
+        jac[..., XI_H] = -2.0 * omega * v
+        start = self._index["a0"]
+        jac[..., start:start + 1 + 2 * self.n_harmonics] = G * self.fourier_basis(t, inputs)
+        for effect in self.effects:
+            jac = jac + effect.acceleration_jacobian(self, x, t, inputs)
+        return jac
+
+    def rate(self, x, t, inputs: CycleInputs):
+        """Continuous-time rate ``dX/dt = A(X, t) X`` (Eq. 8-10), shape ``x.shape``.
+
+        Rows: ``du/dt = u'``; ``du'/dt = u''`` (:meth:`acceleration`);
+        parameter rows zero; effects' dynamic slots by their own rates.
+        """
+        x = np.asarray(x, dtype=float)
+        acc = self.acceleration(x, t, inputs)
+        rate = np.zeros(x.shape)
+        rate[..., U] = x[..., U_DOT]
+        rate[..., U_DOT] = acc
+        for effect, where in zip(self.effects, self._effect_slices):
+            if where.stop > where.start:
+                rate[..., where] = effect.slot_rates(self, x, t, inputs, acc)
+        return rate
+
+    def rate_jacobian(self, x, t, inputs: CycleInputs):
+        """Derivative of :meth:`rate`, shape ``x.shape + (n_state,)``."""
+        x = np.asarray(x, dtype=float)
+        acc = self.acceleration(x, t, inputs)
+        acc_jac = self.acceleration_jacobian(x, t, inputs)
+        jac = np.zeros(x.shape + (self.n_state,))
+        jac[..., U, U_DOT] = 1.0
+        jac[..., U_DOT, :] = acc_jac
+        for effect, where in zip(self.effects, self._effect_slices):
+            if where.stop > where.start:
+                jac[..., where, :] = effect.slot_rates_jacobian(self, x, t, inputs, acc, acc_jac)
+        return jac
+
+    def transition(self, x, t, dt, inputs: CycleInputs):
+        """State at ``t + dt`` from state ``x`` at ``t`` without process noise (Eq. 11-12).
+
+        Parameters
+        ----------
+        x : ndarray, shape (..., n_state)
+        t : float
+            Time (s) of ``x``.
+        dt : float
+            Step (s); 1 / sampling frequency in the article.
+        inputs : CycleInputs
+        """
+        x = np.asarray(x, dtype=float)
+        h = dt / self.substeps
+        for step in range(self.substeps):
+            x = self._step(x, t + step * h, h, inputs)
+        return x
+
+    def _step(self, x, t, h, inputs):
+        if self.discretisation == "euler":
+            return x + h * self.rate(x, t, inputs)  # Eq. 11-12: A_d = I + A dt
+        k1 = self.rate(x, t, inputs)
+        k2 = self.rate(x + 0.5 * h * k1, t + 0.5 * h, inputs)
+        k3 = self.rate(x + 0.5 * h * k2, t + 0.5 * h, inputs)
+        k4 = self.rate(x + h * k3, t + h, inputs)
+        return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+    def transition_jacobian(self, x, t, dt, inputs: CycleInputs):
+        """Derivative of :meth:`transition` with respect to ``x``, shape ``x.shape + (n_state,)``.
+
+        Exact for the chosen discretisation (chain rule through the stages),
+        so it is the ``A_d`` of Eq. 12 for Euler.
+        """
+        x = np.asarray(x, dtype=float)
+        eye = np.broadcast_to(np.eye(self.n_state), x.shape + (self.n_state,))
+        jac = eye.copy()
+        h = dt / self.substeps
+        for step in range(self.substeps):
+            x, step_jac = self._step_jacobian(x, t + step * h, h, inputs, eye)
+            jac = step_jac @ jac
+        return jac
+
+    def _step_jacobian(self, x, t, h, inputs, eye):
+        if self.discretisation == "euler":
+            return x + h * self.rate(x, t, inputs), eye + h * self.rate_jacobian(x, t, inputs)
+        stages = []
+        increment, increment_jac = 0.0, 0.0
+        for c, weight in ((0.0, 1.0), (0.5, 2.0), (0.5, 2.0), (1.0, 1.0)):
+            if stages:
+                k_prev, dk_prev = stages[-1]
+                point = x + c * h * k_prev
+                point_jac = eye + c * h * dk_prev
+            else:
+                point, point_jac = x, eye
+            k = self.rate(point, t + c * h, inputs)
+            dk = self.rate_jacobian(point, t + c * h, inputs) @ point_jac
+            stages.append((k, dk))
+            increment = increment + weight * k
+            increment_jac = increment_jac + weight * dk
+        return x + (h / 6.0) * increment, eye + (h / 6.0) * increment_jac
+
+    def observe(self, x, t, inputs: CycleInputs):
+        """Noise-free observation ``Y = C_d X`` (Eq. 13-16), shape ``x.shape[:-1] + (n_obs,)``.
+
+        Channels are :attr:`channels`: ``("u", "u_dot", "u_ddot")`` or ``("u_ddot",)``.
+        """
+        x = np.asarray(x, dtype=float)
+        acc = self.acceleration(x, t, inputs)
+        if self.observation == "acc":
+            return acc[..., None]
+        return np.stack([x[..., U], x[..., U_DOT], acc], axis=-1)
+
+    def observation_jacobian(self, x, t, inputs: CycleInputs):
+        """Derivative of :meth:`observe`, shape ``x.shape[:-1] + (n_obs, n_state)``."""
+        x = np.asarray(x, dtype=float)
+        acc_jac = self.acceleration_jacobian(x, t, inputs)
+        if self.observation == "acc":
+            return acc_jac[..., None, :]
+        jac = np.zeros(x.shape[:-1] + (3, self.n_state))
+        jac[..., 0, U] = 1.0
+        jac[..., 1, U_DOT] = 1.0
+        jac[..., 2, :] = acc_jac
+        return jac
+
+    # -- noise and prior ----------------------------------------------------
+
+    def data_scale(self, y, inputs: CycleInputs) -> dict:
+        """RMS magnitude of ``u``, ``u_dot`` and ``u_ddot`` in a cycle's observations.
+
+        With ``observation="acc"`` the displacement and velocity scales are
+        inferred from the acceleration RMS at the bouncing frequency.
+        """
+        y = np.atleast_2d(np.asarray(y, dtype=float))
+        rms = np.sqrt(np.mean(y**2, axis=0))
+        scale = dict(zip(self.channels, rms))
+        if self.observation == "acc":
+            omega_b = TWO_PI * inputs.f_b
+            scale["u_dot"] = scale["u_ddot"] / omega_b
+            scale["u"] = scale["u_ddot"] / omega_b**2
+        floor = 1e-12
+        return {name: max(float(value), floor) for name, value in scale.items()}
+
+    def nominal(self, scale: Mapping[str, float]) -> np.ndarray:
+        """Nominal magnitude of every slot (dynamic slots from ``scale``)."""
+        return np.array([slot.nominal if slot.scale is None else scale[slot.scale] for slot in self.slots])
+
+    def process_noise_std(self, scale: Mapping[str, float]) -> np.ndarray:
+        """Per-step process-noise standard deviation of every slot (Eq. 6), shape ``(n_state,)``.
+
+        ``process_noise`` (default 1 %) times each slot's nominal magnitude.
+        """
+        return self.process_noise * self.nominal(scale)
+
+    def observation_noise_std(self, scale: Mapping[str, float]) -> np.ndarray:
+        """Observation-noise standard deviation per channel (Eq. 13), shape ``(n_obs,)``.
+
+        ``observation_noise`` (default 10 %) times each channel's RMS.
+        """
+        return self.observation_noise * np.array([scale[name] for name in self.channels])
+
+    def prior(self, y0, scale: Mapping[str, float]) -> Prior:
+        """Prior of the state at a cycle's first sample.
+
+        Parameters are uniform on their ranges (the article's initial ranges).
+        Dynamic slots observed in ``y0`` (the first observation) are normal
+        around it with the observation-noise spread; unobserved ones are
+        normal around zero with their data scale as spread.
+        """
+        y0 = np.atleast_1d(np.asarray(y0, dtype=float))
+        observed = dict(zip(self.channels, y0))
+        noise = dict(zip(self.channels, self.observation_noise_std(scale)))
+        kinds, first, second = [], [], []
+        for slot in self.slots:
+            if slot.kind == "parameter":
+                kinds.append("uniform")
+                first.append(slot.low)
+                second.append(slot.high)
+            elif slot.name in observed:
+                kinds.append("normal")
+                first.append(observed[slot.name])
+                second.append(noise[slot.name])
+            else:
+                kinds.append("normal")
+                first.append(0.0)
+                second.append(slot.nominal if slot.scale is None else scale[slot.scale])
+        return Prior(self.state_names, tuple(kinds), np.array(first), np.array(second))
+
+    # -- derived quantities -------------------------------------------------
+
+    def derived(self, x, mass: float) -> dict:
+        """``K_h`` (Eq. 17), ``C_h`` (Eq. 18) and ``BLF_i`` (Eq. 5) from state(s) ``x``.
+
+        Returns a dict of arrays with keys ``k_h`` (N/m), ``c_h`` (N s/m) and
+        ``blf_1 ... blf_n`` (g), each of shape ``x.shape[:-1]``.
+        """
+        x = np.asarray(x, dtype=float)
+        f, xi = x[..., self.index("f_h")], x[..., self.index("xi_h")]
+        out = {"k_h": k_h(f, mass), "c_h": c_h(xi, f, mass)}
+        for i in range(1, self.n_harmonics + 1):
+            out[f"blf_{i}"] = blf(x[..., self.index(f"a{i}")], x[..., self.index(f"b{i}")])
+        return out
+
+
+def _width(where: slice) -> int:
+    return where.stop - where.start
+
+
+def _check_range(label, value, minimum):
+    try:
+        low, high = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{label} must be a pair (low, high), got {value!r}") from None
+    if not (np.isfinite(low) and np.isfinite(high) and low < high):
+        raise OptionError(f"{label} must satisfy low < high, got {value!r}")
+    if minimum is not None and low < minimum:
+        raise OptionError(f"{label} must not go below {minimum:g}, got {value!r}")
+    return low, high

@@ -1,0 +1,300 @@
+"""The base class of physical effects: one object per effect, used by estimation, simulation and diagnosis.
+
+Write a subclass (see docs/effects.md), register it with
+:func:`smd_statespace.effects.register_effect`, and every estimator, the
+simulator, the diagnosis and every command know it.
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import TYPE_CHECKING, Mapping
+
+import numpy as np
+
+from ..errors import OptionError
+
+if TYPE_CHECKING:  # annotations only
+    from .core import CycleInputs, SMDModel, Slot
+
+__all__ = ["Effect"]
+
+
+class Effect:
+    """A physical effect that extends the SMD model, defined once for every use.
+
+    Subclasses declare extra state slots and add terms to the COM
+    acceleration (the only non-trivial row of Eq. 10). Effects with dynamic
+    slots of their own (a floor displacement, ...) also give those slots'
+    rates. Every method receives the full state ``x`` of shape
+    ``(..., n_state)`` and the ``model``; read a slot with
+    ``model.value(x, name)`` (which also serves a parameter given a known
+    value) or ``x[..., model.index(name)]``; returned arrays keep the
+    leading axes.
+
+    The same two terms serve every use of the effect:
+
+    - estimation: every estimator (per cycle and record level) runs the
+      model's rate, with Jacobians by central differences unless the
+      effect gives analytic ones (:func:`~smd_statespace.model.jacobians.check_jacobians`
+      compares them);
+    - forward simulation: :func:`~smd_statespace.simulation.simulate_bouncing`
+      and :func:`~smd_statespace.simulation.integrate_response` integrate the
+      same acceleration and slot rates with the parameters at known values
+      (:meth:`with_values`, :attr:`simulation_defaults`,
+      :meth:`for_simulation`), so ``simulate --effect NAME:slot=value``
+      works for every registered effect;
+    - diagnosis: :meth:`candidate` configures the effect for a record and
+      :meth:`score_terms` gives the terms a missing effect would add to the
+      acceleration (derivatives of :meth:`acceleration` in its parameters),
+      which ``diagnose`` correlates with the residual and the record-level
+      diagnosis fits.
+
+    A parameter slot given a value (``NAME:slot=value`` on the command line,
+    :meth:`with_values` in code) is a known constant: it leaves the
+    estimated state, and the simulator uses it as the truth.
+
+    Attributes
+    ----------
+    name : str
+        Registry name (``--effect NAME``).
+    requires : tuple of str
+        Exogenous signals the effect needs from :class:`CycleInputs`.
+    record_parameters : int
+        Values read off the whole record to configure the effect before any
+        cycle is identified (e.g. a floor frequency taken from the residual
+        spectrum); the missing-effect test counts them as fitted parameters.
+    """
+
+    name = "effect"
+    requires: tuple[str, ...] = ()
+    record_parameters: int = 0
+    simulation_defaults: Mapping[str, float] = {}
+    """Typical true values of the effect's parameter slots (by slot name), used by the simulator when not given."""
+
+    @property
+    def values(self) -> dict:
+        """Known values of the effect's parameter slots (slot name to value, SI units); default none."""
+        return dict(self.__dict__.get("_values", {}))
+
+    @property
+    def constants(self) -> dict:
+        """Fixed physical values the effect was given (name to value, SI units): its :attr:`values`."""
+        return self.values
+
+    def with_values(self, **values) -> "Effect":
+        """A copy of this effect with parameter slots fixed at known values (SI units).
+
+        The model drops those slots from the estimated state and reads the
+        constants instead (:meth:`SMDModel.value`); the simulator takes them
+        as the truth. Names are checked against :meth:`slots` when a model is
+        built.
+
+        Examples
+        --------
+        >>> from smd_statespace.effects import CubicStiffness
+        >>> CubicStiffness().with_values(beta_3=400.0).values
+        {'beta_3': 400.0}
+        """
+        twin = copy.copy(self)
+        merged = self.values
+        for key, value in values.items():
+            try:
+                merged[key] = float(value)
+            except (TypeError, ValueError):
+                raise OptionError(f"effect {self.name!r}: value of {key!r} must be a number, got {value!r}") from None
+            if not np.isfinite(merged[key]):
+                raise OptionError(f"effect {self.name!r}: value of {key!r} must be finite, got {value!r}")
+        twin._values = merged
+        return twin
+
+    def for_simulation(self, model: "SMDModel", mass: float) -> "Effect":
+        """This effect ready for forward simulation: every parameter slot at a known value.
+
+        Default: the given :attr:`values`, then :attr:`simulation_defaults`;
+        a parameter with neither is an error naming it. ``model`` is the
+        simulated person's model (base options set), ``mass`` the body mass
+        (kg). Override to translate physical options (a floor's modal mass)
+        into slot values.
+        """
+        if self.requires:
+            raise OptionError(
+                f"effect {self.name!r} needs measured signals ({', '.join(self.requires)}); it cannot be simulated"
+            )
+        values = {**self.simulation_defaults, **self.values}
+        missing = [slot.name for slot in self.slots(model) if slot.kind == "parameter" and slot.name not in values]
+        if missing:
+            raise OptionError(
+                f"effect {self.name!r}: give the true value of {', '.join(missing)} to simulate it, "
+                f"e.g. {self.name}:{missing[0]}=VALUE"
+            )
+        return self.with_values(**values)
+
+    def draw_simulation_inputs(self, rng: np.random.Generator, duration: float) -> None:
+        """Draw what a simulation of this effect needs at random (default: nothing).
+
+        Called on the object :meth:`for_simulation` returned, after the
+        person's own random numbers, so the effect leaves those unchanged.
+        """
+
+    def force_harmonics(self, model: "SMDModel"):
+        """Extra force harmonics the simulator adds to the force of Eq. 4, or None (default).
+
+        Returns ``(blf, phases)``: amplitudes (g) and phases (rad, or None for
+        the simulator's default shape) of orders ``n+1, n+2, ...``.
+        """
+        return None
+
+    def measured_signals(self, states, normals, noise: float) -> dict:
+        """Record columns a simulation of this effect adds (default: none).
+
+        ``states`` is the simulator's states table (columns ``u, u_dot,
+        u_ddot``, every dynamic slot and its rate), ``normals`` standard
+        normal numbers (one per sample) for measurement noise, ``noise`` the
+        simulation's noise fraction.
+        """
+        return {}
+
+    def simulation_truth(self) -> dict:
+        """What a simulation with this effect records as its truth (default: the :attr:`values`)."""
+        return self.values
+
+    @classmethod
+    def candidate(cls, check) -> "Effect | None":
+        """This effect configured as a candidate for a record, or None to leave it out.
+
+        ``check`` is the :class:`~smd_statespace.diagnostics.ModelCheck` of
+        the model without it. Default: the effect with its default options.
+        """
+        return cls()
+
+    @classmethod
+    def diagnosis_notes(cls, base, judged) -> list:
+        """Plain-word notes for :func:`~smd_statespace.diagnostics.missing.diagnose` when this effect is not found (default none).
+
+        ``base`` is the base model's :class:`~smd_statespace.diagnostics.ModelCheck`,
+        ``judged`` the candidates' refits.
+        """
+        return []
+
+    @classmethod
+    def record_default(cls, result) -> "Effect | None":
+        """This effect as a default candidate of the record-level diagnosis, or None to leave it out.
+
+        ``result`` is the base :class:`~smd_statespace.person.results.PersonResult`.
+        Default: the effect with its default options.
+        """
+        return cls()
+
+    def record_candidate(self, result):
+        """How this effect enters the record-level model of ``result``'s record.
+
+        Returns a :class:`~smd_statespace.person.diagnose.RecordCandidate`
+        (extended model(s), number of parameters) or None to skip. Default:
+        the effect's :meth:`score_terms` on the base fit's smoothed path as
+        regressors (:func:`~smd_statespace.person.diagnose.score_term_candidate`).
+        """
+        from ..person.diagnose import score_term_candidate
+
+        return score_term_candidate(result, self)
+
+    def score_terms(self, model: "SMDModel", x, t, inputs: CycleInputs) -> dict:
+        """The terms this effect would add to ``u''``, one per unknown coefficient (m/s^2 per unit).
+
+        The derivative of :meth:`acceleration` in each of the effect's
+        parameter slots at ``x`` (the score direction of the
+        missing-effect test), or, for an effect with no parameter slots
+        (a measured input), its acceleration itself. ``x`` has the
+        effect's parameters at their null values (usually 0); terms that
+        vanish everywhere (an effect whose term needs its own dynamic state)
+        are left out.
+
+        Returns
+        -------
+        dict of str to ndarray, each of shape ``x.shape[:-1]``
+        """
+        from .jacobians import expand_time, numeric_jacobian
+
+        x = np.asarray(x, dtype=float)
+        where = model.effect_slice(self)
+        names = [slot.name for slot in model.slots[where] if slot.kind == "parameter"]
+        if not names:
+            term = self.acceleration(model, x, t, inputs)
+            return {self.name: term} if np.any(term != 0) else {}
+        jac = numeric_jacobian(lambda z: self.acceleration(model, z, expand_time(t), inputs), x)
+        out = {}
+        for name in names:
+            term = jac[..., model.index(name)]
+            if np.any(term != 0):
+                out[f"{self.name}:{name}"] = term
+        return out
+
+    @property
+    def spec(self) -> str:
+        """The ``--effect`` text that builds this effect again (``NAME[:key=value,...]``)."""
+        return self.name
+
+    def slots(self, model: "SMDModel") -> tuple[Slot, ...]:
+        """State slots the effect adds (default: none).
+
+        ``model`` is the model being built; its base options (such as
+        ``n_harmonics``) are set, its state layout is not yet.
+        """
+        return ()
+
+    def acceleration(self, model: "SMDModel", x, t, inputs: CycleInputs):
+        """Extra COM acceleration (m/s^2), shape ``x.shape[:-1]``."""
+        return np.zeros(x.shape[:-1])
+
+    def acceleration_jacobian(self, model: "SMDModel", x, t, inputs: CycleInputs):
+        """Derivative of :meth:`acceleration` with respect to ``x``, shape ``x.shape``.
+
+        Default: central differences of :meth:`acceleration` itself
+        (:func:`~smd_statespace.model.jacobians.numeric_jacobian`), so an effect
+        that gives only its acceleration is right in every estimator. An
+        analytic override is faster; :func:`~smd_statespace.model.jacobians.check_jacobians`
+        compares the two.
+        """
+        from .jacobians import expand_time, numeric_jacobian
+
+        moment = expand_time(t)
+        return numeric_jacobian(lambda z: self.acceleration(model, z, moment, inputs), x)
+
+    def slot_rates(self, model: "SMDModel", x, t, inputs: CycleInputs, acc):
+        """Rates of the effect's own slots, shape ``x.shape[:-1] + (len(slots),)``.
+
+        ``acc`` is the total COM acceleration. The default (all zeros) makes
+        every slot a random-walk parameter.
+        """
+        return np.zeros(x.shape[:-1] + (_slot_count(model, self),))
+
+    def slot_rates_jacobian(self, model: "SMDModel", x, t, inputs: CycleInputs, acc, acc_jacobian):
+        """Derivative of :meth:`slot_rates`, shape ``x.shape[:-1] + (len(slots), n_state)``.
+
+        ``acc_jacobian`` is the derivative of the total acceleration. Default:
+        central differences of :meth:`slot_rates` in ``x`` at fixed ``acc``,
+        plus their derivative in ``acc`` times ``acc_jacobian`` (the chain rule).
+        """
+        from .jacobians import JACOBIAN_STEP, expand_time, numeric_jacobian
+
+        x = np.asarray(x, dtype=float)
+        width = _slot_count(model, self)
+        if width == 0:
+            return np.zeros(x.shape[:-1] + (0, x.shape[-1]))
+        acc = np.asarray(acc, dtype=float)
+        moment = expand_time(t)
+        held = acc[..., None] if acc.ndim else acc
+        in_x = numeric_jacobian(lambda z: self.slot_rates(model, z, moment, inputs, held), x)
+        step = JACOBIAN_STEP * np.maximum(1.0, np.abs(acc))
+        in_acc = (self.slot_rates(model, x, t, inputs, acc + step)
+                  - self.slot_rates(model, x, t, inputs, acc - step)) / (2.0 * np.asarray(step)[..., None])
+        return in_x + in_acc[..., :, None] * np.asarray(acc_jacobian)[..., None, :]
+
+    def __repr__(self):
+        return f"{type(self).__name__}()"
+
+
+def _slot_count(model, effect) -> int:
+    """Number of state slots ``effect`` has in ``model`` (its known parameters left out)."""
+    where = model.effect_slice(effect)
+    return where.stop - where.start
