@@ -656,7 +656,7 @@ def test_smooth_variation_with_effects_keeps_the_other_random_numbers():
 
 
 def test_smooth_record_starts_without_a_transient(monkeypatch):
-    from smd_statespace.simulation import bouncing as module
+    from smd_statespace.simulation import variation as module
 
     settings = dict(f_h=2.5, xi_h=0.1, duration=3.0, seed=12, noise=0.0, **SMOOTH)
     started = simulate_bouncing(**settings)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import OptionError, SMDInputError
-from ..simulation.bouncing import VARIATIONS
+from ..simulation import VARIATIONS
 from .common import _nonnegative, _numbers, _positive, _seed
 
 

@@ -480,7 +480,7 @@ class FloorMode(Effect):
         return twin
 
     def draw_simulation_inputs(self, rng, duration):
-        from ..simulation.bouncing import ambient_floor_excitation, ambient_line_count
+        from ..simulation.dynamics import ambient_floor_excitation, ambient_line_count
 
         f_f, xi_f = self.values["f_f"], self.values["xi_f"]
         phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(f_f, duration))

@@ -3,9 +3,12 @@
 =================== ==========================================================
 module              what it holds
 =================== ==========================================================
-:mod:`.bouncing`    :func:`simulate_bouncing` (Eq. 2-4, cycle-to-cycle
-                    variation, any registered effect), :func:`integrate_response`
-                    and the shipped sample
+:mod:`.bouncing`    :func:`simulate_bouncing`: the record (Eq. 2-4, GRF
+                    plus noise, any registered effect), its truth, the
+                    shipped sample
+:mod:`.dynamics`    the equations of motion with the effects' own terms and
+                    their integration, :func:`integrate_response`
+:mod:`.variation`   cycle-to-cycle variation of the force: jumps or smooth
 :mod:`.population`  :func:`sample_population`: people drawn from Table 2
 :mod:`.crowd`       :func:`~.crowd.simulate_crowd`: many people bouncing together
 :mod:`.floor`       :class:`~.floor.FloorModel` and the exact coupled
@@ -13,12 +16,13 @@ module              what it holds
 =================== ==========================================================
 """
 
-from .bouncing import (DEFAULT_BLF, GRF_PHASE_LAG, SAMPLE_SETTINGS, SMOOTH_CORRELATION_CYCLES, VARIATIONS,
-                       SyntheticRecord, acceleration_frf, ambient_floor_excitation, ambient_line_count, default_phases,
-                       integrate_response, sample_path, sample_truth_path, simulate_bouncing, write_sample)
+from .bouncing import (DEFAULT_BLF, GRF_PHASE_LAG, SAMPLE_SETTINGS, SyntheticRecord, default_phases, sample_path,
+                       sample_truth_path, simulate_bouncing, write_sample)
+from .dynamics import acceleration_frf, ambient_floor_excitation, ambient_line_count, integrate_response
 from .population import MASS_DISTRIBUTION, POPULATION_BOUNDS, sample_population
 
 __all__ = ["VARIATIONS", "SMOOTH_CORRELATION_CYCLES", "DEFAULT_BLF", "GRF_PHASE_LAG", "POPULATION_BOUNDS",
            "MASS_DISTRIBUTION", "SAMPLE_SETTINGS", "SyntheticRecord", "simulate_bouncing", "integrate_response",
            "default_phases", "acceleration_frf", "ambient_floor_excitation", "ambient_line_count", "sample_population",
            "write_sample", "sample_path", "sample_truth_path"]
+from .variation import SMOOTH_CORRELATION_CYCLES, VARIATIONS

@@ -62,8 +62,9 @@ from ..io import G
 from ..model import c_h, k_h
 from .population import _population_columns
 from ..model import SMDModel
-from .bouncing import (GRF_PHASE_LAG, TRUNCATION_SD, _cycle_states, _draw_cycles, _simulation_effects, _System,
-                       acceleration_frf, default_phases)
+from .bouncing import GRF_PHASE_LAG, default_phases
+from .dynamics import _cycle_states, _simulation_effects, _System, acceleration_frf
+from .variation import TRUNCATION_SD, _draw_cycles
 
 __all__ = [
     "CROWD_SETTINGS",

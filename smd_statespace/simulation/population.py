@@ -68,7 +68,8 @@ def _draw_bounded(distribution, n, low, high, rng):
 
 def _population_columns(n, f_b, seed, table=None, bounds=None):
     """The draws of :func:`sample_population` as arrays: ``f_b, f_h, xi_h, blf1..3, mass``."""
-    from .bouncing import _number, _resolve_seed  # the simulator's argument checks and seed policy
+    from .bouncing import _resolve_seed  # the simulator's seed policy
+    from .dynamics import _number  # and its argument checks
 
     where = "sample_population"
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
