@@ -11,7 +11,7 @@ cycle-to-cycle variation, 1 % BW noise) and identified exactly as
 ``smd-statespace identify`` does (``preprocess``, then
 :class:`~smd_statespace.identify.runner.CycleRunner` with the article's prior and
 repeated passes). The statistics of ``smd-statespace stats``
-(:func:`~smd_statespace.population.statistics.population_stats`) are then fitted three times
+(:func:`~smd_statespace.population.population_stats`) are then fitted three times
 per band and parameter:
 
 ``drawn``
@@ -54,7 +54,7 @@ from smd_statespace.model import SMDModel
 from smd_statespace.identify.runner import CycleRunner
 from smd_statespace.signals import preprocess
 from smd_statespace.simulation import DEFAULT_BLF, sample_population, simulate_bouncing
-from smd_statespace.population.statistics import compare_table2, population_stats
+from smd_statespace.population import compare_table2, population_stats
 
 EDGE_MARGIN = 0.05
 """Bouncing frequencies are drawn this far (Hz) inside the band edges, so that a person's cycles

@@ -11,7 +11,7 @@ from smd_statespace import article
 from smd_statespace.cli import main
 from smd_statespace.errors import OptionError, RecordError
 from smd_statespace.simulation import sample_population
-from smd_statespace.population.statistics import (A_MAX, ADEQUATE_COLUMN, PARAMETERS, Bands, bootstrap_skewnorm, fit_skewnorm,
+from smd_statespace.population import (A_MAX, ADEQUATE_COLUMN, PARAMETERS, Bands, bootstrap_skewnorm, fit_skewnorm,
                                   fit_trend, parse_parameters, population_stats, read_results)
 
 # sample_population redraws values outside physical bounds (truncation); these wide bounds switch that

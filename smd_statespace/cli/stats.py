@@ -19,7 +19,7 @@ def _bootstrap(text: str) -> int:
 
 def add_stats(subparsers):
     """Declare ``smd-statespace stats``."""
-    from ..population.statistics import MIN_CYCLES, N_BOOTSTRAP
+    from ..population import MIN_CYCLES, N_BOOTSTRAP
 
     parser = subparsers.add_parser(
         "stats",
@@ -62,7 +62,7 @@ def add_stats(subparsers):
 
 def run_stats(args) -> int:
     """Run ``smd-statespace stats``."""
-    from ..population.statistics import PARAMETERS, Bands, parse_parameters, population_stats
+    from ..population import PARAMETERS, Bands, parse_parameters, population_stats
 
     bands = Bands.parse(args.bands, option="--bands")
     parameters = None if args.parameters is None else parse_parameters(args.parameters, option="--parameters")

@@ -1,6 +1,6 @@
 """Figures of population statistics (Section 5), like the article's Fig. 6-8.
 
-Every function takes a :class:`smd_statespace.population.statistics.PopulationStats`, builds a
+Every function takes a :class:`smd_statespace.population.PopulationStats`, builds a
 :class:`matplotlib.figure.Figure` without pyplot's global state (as
 :mod:`smd_statespace.plotting.cycles`), saves it when given a ``path`` and returns it.
 """
@@ -16,7 +16,7 @@ from matplotlib.ticker import MaxNLocator
 
 from .. import article
 from .cycles import PARAMETER_LABELS
-from ..population.statistics import PARAMETERS, TrendResult
+from ..population import PARAMETERS, TrendResult
 
 MAX_POINTS = 1500
 """Most cycles drawn as dots per panel of :func:`plot_trends` (an even subsample beyond that)."""
