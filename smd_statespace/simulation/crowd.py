@@ -249,6 +249,15 @@ def _check_count(n, name="n"):
     return int(n)
 
 
+def _band_fits(table, f_b):
+    """The skew-normal fits of the band holding ``f_b``; an error in words outside the article's bands."""
+    if article.band_of(f_b) is None:
+        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
+        raise OptionError(f"crowd: f_b = {f_b!r} Hz is outside the article's bands ({edges} Hz), "
+                          "the only ones Table 2 has fits for")
+    return fit_table(table, f_b)
+
+
 def draw_people(n, f_b, seed=None, table=None, bounds=None) -> pd.DataFrame:
     """Draw ``n`` people bouncing at ``f_b``: the crowd's parameters, without simulating forces.
 
@@ -275,12 +284,7 @@ def draw_people(n, f_b, seed=None, table=None, bounds=None) -> pd.DataFrame:
         ``blf1, blf2, blf3`` (g), ``mass`` (kg), ``K_h`` (N/m), ``C_h`` (N s/m).
     """
     n = _check_count(n)
-    if article.band_of(f_b) is None:
-        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
-        raise OptionError(f"crowd: f_b = {f_b!r} Hz is outside the article's bands ({edges} Hz), "
-                          "the only ones Table 2 has fits for")
-    root = _root(seed)
-    fits = fit_table(table, f_b)
+    root, fits = _root(seed), _band_fits(table, f_b)
     people = pd.DataFrame(_draw_parameters(root, np.arange(n), np.zeros(n, dtype=int), f_b, fits, bounds))
     people.insert(0, "person", np.arange(n))
     return people
@@ -647,12 +651,7 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
             settings[key] = value
     duration, fs, fb_variation, coef_variation, phase_spread, f_b = _check_settings(
         duration, settings["fs"], settings["fb_variation"], settings["coef_variation"], settings["phase_spread"], f_b)
-    if article.band_of(f_b) is None:
-        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
-        raise OptionError(f"crowd: f_b = {f_b!r} Hz is outside the article's bands ({edges} Hz), "
-                          "the only ones Table 2 has fits for")
-    root = _root(seed)
-    fits = fit_table(table, f_b)
+    root, fits = _root(seed), _band_fits(table, f_b)
     effects = () if effects is None else effects
     checked = _simulation_effects(effects, 70.0, where="crowd")  # a bad effect fails before any person is drawn
     n_samples = int(np.floor(duration * fs + 1e-9)) + 1

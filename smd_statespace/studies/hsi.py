@@ -9,53 +9,10 @@ compares the person's identified parameters with those on a rigid floor
 parameters do *not* change, identifies them with and without the floor motion,
 and says how much of the article's shift such a person reproduces.
 
-The coupled model
------------------
-A person (Eq. 2, the spring and damper acting on the COM motion relative to
-the floor, as the ``floor_mode`` effect of :mod:`smd_statespace.simulation`) on
-``r`` floor modes with modal coordinates ``q_k`` (m), natural frequencies
-``f_k``, damping ratios ``xi_k``, modal masses ``m_k`` and mode-shape
-ordinates ``phi_k`` at the person::
-
-    z   = sum_k phi_k q_k                                   (floor under the person)
-    u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + g F(t)     (Eq. 2 relative to the floor)
-    q_k'' + 2 xi_k w_k q_k' + w_k^2 q_k = -(M_h phi_k / m_k) u''
-
-``F(t)`` is the biomechanical force of Eq. 4 in units of g; the floor is
-driven by the dynamic GRF ``-M_h u''`` (the static weight only sets the
-static deflection). The state is ``x = [u, u', q_1, q_1', ..., q_r, q_r']``;
-with one mode and ``phi = 1`` it is exactly the ``floor_mode`` system of
-:func:`smd_statespace.simulation.integrate_response` (tested), and with no mode
-it is the rigid floor.
-
-Mode-shape assumption at mid-span
----------------------------------
-Table 3 gives modal masses but not mode shapes. :meth:`FloorModel.table3`
-takes ``phi_k = 1`` for every mode, i.e. reads the modal masses as
-driving-point modal masses at mid-span (as :class:`smd_statespace.article.PlateMode`
-does). For mode 1 that is consistent with the numbers: 8583 kg is 0.52 of the
-plate's 16.5 t, close to the ``M/2`` of a one-way simply supported slab whose
-first mode is normalised to 1 at mid-span. For the higher modes it is an
-upper bound: mode 2 (2587 kg, close to the ``M/6`` of a torsion mode
-normalised at a corner) probably has a nodal line through mid-span. The
-study measures whether it matters (:func:`hsi_study` runs mode 1 alone and
-all six modes): modes 2-6 lie between and above the force harmonics, and the
-leg transmits little above ``f_h``, so they change the floor acceleration at
-mid-span but barely the GRF.
-
-Integration
------------
-The model is linear and the force is a sum of harmonics whose coefficients
-jump at cycle boundaries, so the response is computed exactly rather than by
-an ODE solver: within cycle ``j`` the state is the periodic (particular)
-response to that cycle's harmonics plus a free (homogeneous) response
-``exp(A tau) d_j`` that carries the state continuously across the boundary,
-evaluated in the eigenbasis of ``A`` (:func:`coupled_response`). It is
-vectorised over samples and over a batch of people
-(:func:`batch_response`, used by the crowd generator of
-:mod:`smd_statespace.simulation.crowd`). By default the start is the periodic steady
-state of the first cycle's force, as in
-:func:`~smd_statespace.simulation.integrate_response`.
+The person on the floor is simulated exactly by :mod:`smd_statespace.simulation.floor`
+(the coupled model, the mode-shape assumption at mid-span and the integration are
+described there); the identification is the library's own, per cycle, with and without
+the floor's motion as an input.
 """
 
 from __future__ import annotations
