@@ -83,6 +83,7 @@ def test_simulate_effect_specs_are_checked_by_the_effect(tmp_path, capsys):
         assert simulate(tmp_path, "--effect", bad)[0] == 2
         assert re.search(words, capsys.readouterr().err)
 
+
 def test_demo_reports_the_sample_and_writes_the_figure(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path / "fig")]) == 0
     text = capsys.readouterr().out

@@ -51,7 +51,13 @@ def run_console(code: str, where: str):
         assert status == 0, f"{where}: {line!r} exited {status}"
 
 
-@pytest.mark.parametrize("page", PAGES, ids=[p.name for p in PAGES])
+SLOW_PAGES = {"effects.md", "tutorial-missing-physics.md", "person.md"}
+"""Pages whose examples take 20 s or more (record-level fits and diagnoses): CI runs them, the developer run
+(``-m "not slow"``) does not."""
+
+
+@pytest.mark.parametrize("page", [pytest.param(p, marks=pytest.mark.slow) if p.name in SLOW_PAGES else p
+                                  for p in PAGES], ids=[p.name for p in PAGES])
 def test_examples_run(page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     registered = dict(EFFECTS)
