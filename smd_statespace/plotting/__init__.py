@@ -1,3 +1,4 @@
-"""Figures: :mod:`.cycles` (convergence, parameters against the bouncing frequency, comparisons) and
-:mod:`.population` (histograms with skew-normal fits, trends). Model checks draw their own
-(:meth:`smd_statespace.diagnostics.ModelCheck.plot_diagnostics`)."""
+"""Figures: :mod:`.cycles` (convergence, parameters against the bouncing frequency, comparisons),
+:mod:`.population` (histograms with skew-normal fits, trends) and :mod:`.check` (a model check's fit
+and residual diagnostics, drawn by :meth:`smd_statespace.diagnostics.ModelCheck.plot_fit` and
+:meth:`~smd_statespace.diagnostics.ModelCheck.plot_diagnostics`)."""
