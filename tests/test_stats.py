@@ -463,6 +463,13 @@ def test_implausible_and_inadequate_cycles_are_left_out_and_counted():
     assert "warning: 5 ok cycles have estimates that cannot be true (xi_h < 0: 3," in text
     kept = population_stats(frame, n_bootstrap=0, bands="1.5,2.6,3", include_implausible=True)
     assert kept.cells["xi_h", 0].n == 30 and kept.counts["implausible"] == 5 and "5 implausible kept" in kept.summary()
+    # as identify writes them: implausible cycles have their *_determined flags cleared; kept still means used
+    flags = ["f_h_determined", "xi_h_determined", "blf_1_determined", "blf_2_determined", "blf_3_determined"]
+    written = frame.assign(implausible=False, implausible_reason="", **dict.fromkeys(flags, True))
+    written.loc[0:4, ["implausible", "implausible_reason"]] = (True, "xi_h < 0")
+    written.loc[0:4, flags] = False
+    again = population_stats(written, n_bootstrap=0, bands="1.5,2.6,3", include_implausible=True)
+    assert again.cycles.loc[0:4, "used_xi_h"].all() and again.cycles["used_xi_h"].sum() == kept.cycles["used_xi_h"].sum()
 
     # identify's own flag is trusted (here it marks a cycle the physical check alone would keep) ...
     flagged = plain_frame(seed=5).assign(implausible=False, implausible_reason="")

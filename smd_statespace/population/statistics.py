@@ -385,7 +385,8 @@ def population_stats(sources, *, bands=None, parameters=None, mass=None, min_cyc
         Keep cycles whose ``*_determined`` flag is False (default: leave them out of that parameter).
     include_implausible : bool
         Keep cycles flagged implausible or from an inadequate model (default: leave them out;
-        they are counted either way).
+        they are counted either way). Kept, they are used for every parameter: ``identify``
+        clears their ``*_determined`` flags, which are then not applied to them.
     confidence : float
         Level of every interval (default 0.95).
     a_max : float
@@ -466,6 +467,8 @@ def population_stats(sources, *, bands=None, parameters=None, mass=None, min_cyc
         spec = PARAMETERS[parameter]
         values = table[spec.column].to_numpy(dtype=float)
         determined = np.logical_and.reduce([table[flag].to_numpy(dtype=bool) for flag in spec.determined_by])
+        if include_implausible:  # identify clears the *_determined flags of implausible cycles; kept means kept
+            determined = determined | implausible
         in_band = band >= 0
         used = in_band & np.isfinite(values) & (determined | include_undetermined)
         table[f"used_{parameter}"] = used
