@@ -37,6 +37,8 @@ import re
 import numpy as np
 import pandas as pd
 
+from ..model import acceleration_frf
+
 __all__ = ["XI_H_MIN", "C_H_MIN", "PRIOR_MARGIN", "MAX_BLF", "MAX_GRF_HARMONIC", "implausible_reasons",
            "flagged", "reason_counts", "implausible_ok"]
 
@@ -119,8 +121,7 @@ def implausible_reasons(table: pd.DataFrame, model=None, grf: bool = True) -> pd
         found.append((value > MAX_BLF, f"BLF_{i} > {MAX_BLF:g} g"))
         if grf:
             with np.errstate(divide="ignore", invalid="ignore"):
-                r = i * f_b / f_h
-                floor_force = value * r * r / np.hypot(1.0 - r * r, 2.0 * xi * r)
+                floor_force = value * np.abs(acceleration_frf(i * f_b, f_h, xi))  # Eq. 2's response at i f_b
             possible = (f_h > 0) & (xi >= XI_H_MIN) & (value <= MAX_BLF)  # otherwise already said
             found.append((possible & (floor_force > MAX_GRF_HARMONIC), f"GRF harmonic {i} > {MAX_GRF_HARMONIC:g} g"))
     reasons = [[] for _ in range(n)]

@@ -109,6 +109,34 @@ def c_h(xi_h, f_h, mass):
     return 2.0 * np.asarray(xi_h) * np.asarray(mass) * TWO_PI * np.asarray(f_h)
 
 
+def acceleration_frf(frequency, f_h, xi_h):
+    """Frequency response of Eq. 2 from force (in g) to COM acceleration (in g).
+
+    Parameters
+    ----------
+    frequency : float or array_like
+        Excitation frequency (Hz).
+    f_h : float or array_like
+        SMD natural frequency (Hz).
+    xi_h : float or array_like
+        SMD damping ratio (-) (arrays broadcast with ``frequency``).
+
+    Returns
+    -------
+    complex ndarray
+        ``H = -w^2 / (w_h^2 - w^2 + 2 i xi_h w_h w)``: the harmonic
+        ``g C e^{i w t}`` of ``g F`` produces ``H g C e^{i w t}`` in ``u''``.
+    """
+    omega = 2.0 * np.pi * np.asarray(frequency, dtype=float)
+    omega_h = 2.0 * np.pi * f_h
+    return -(omega**2) / (omega_h**2 - omega**2 + 2j * xi_h * omega_h * omega)
+
+
+
+# ---------------------------------------------------------------------------
+# effects
+
+
 def blf(a, b):
     """Biomechanical load factor ``BLF_i = sqrt(a_i^2 + b_i^2)`` in g (Eq. 5)."""
     return np.hypot(a, b)

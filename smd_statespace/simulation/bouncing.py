@@ -70,7 +70,8 @@ import pandas as pd
 from ..errors import OptionError
 from ..io import G, Record, check_mass, make_record, write_record
 from ..model import SMDModel, c_h, k_h
-from .dynamics import _cycle_states, _number, _simulation_effects, _System, _vector, acceleration_frf
+from ..model import acceleration_frf
+from .dynamics import _cycle_states, _number, _simulation_effects, _System, _vector
 from .variation import (SMOOTH_CORRELATION_CYCLES, TRUNCATION_SD, VARIATIONS, _cycles_frame, _draw_cycles,
                         _smooth_cycles, _smooth_force, _smooth_geometry, _smooth_run_in, _smooth_states)
 

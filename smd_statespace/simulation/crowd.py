@@ -63,7 +63,8 @@ from ..model import c_h, k_h
 from .population import _population_columns
 from ..model import SMDModel
 from .bouncing import GRF_PHASE_LAG, default_phases
-from .dynamics import _cycle_states, _simulation_effects, _System, acceleration_frf
+from ..model import acceleration_frf
+from .dynamics import _cycle_states, _simulation_effects, _System
 from .variation import TRUNCATION_SD, _draw_cycles
 
 __all__ = [
@@ -305,7 +306,7 @@ def periodic_grf_minimum(f_b, f_h, xi_h, blf, points=2048):
     With the force phases of :func:`~smd_statespace.simulation.default_phases`,
     harmonic ``k`` of the steady dynamic GRF is ``|H(k f_b)| BLF_k cos(k theta
     - pi/4)`` body weights (``H`` of
-    :func:`~smd_statespace.simulation.acceleration_frf`), so the GRF is ``1 +
+    :func:`~smd_statespace.model.acceleration_frf`), so the GRF is ``1 +
     sum_k |H(k f_b)| BLF_k cos(k theta - pi/4)`` body weights; its minimum over
     a cycle is taken on ``points`` phases (error below ``(pi/points)^2 / 2 sum
     k^2 |H_k| BLF_k``, about 1e-5 body weights). Below zero the person would

@@ -24,7 +24,7 @@ from ..errors import OptionError
 from ..io import G, check_mass
 from ..model import CycleInputs, SMDModel
 
-__all__ = ["RTOL", "ATOL", "integrate_response", "acceleration_frf", "ambient_floor_excitation",
+__all__ = ["RTOL", "ATOL", "integrate_response", "ambient_floor_excitation",
            "ambient_line_count"]
 
 RTOL = 1e-10
@@ -66,34 +66,6 @@ def _vector(values, name, *, nonnegative=False, where="simulate_bouncing"):
     if nonnegative and np.any(array < 0):
         raise OptionError(f"{where}: {name} must hold amplitudes >= 0 (use phases for the sign), got {values!r}")
     return array
-
-
-def acceleration_frf(frequency, f_h, xi_h):
-    """Frequency response of Eq. 2 from force (in g) to COM acceleration (in g).
-
-    Parameters
-    ----------
-    frequency : float or array_like
-        Excitation frequency (Hz).
-    f_h : float
-        SMD natural frequency (Hz).
-    xi_h : float
-        SMD damping ratio (-).
-
-    Returns
-    -------
-    complex ndarray
-        ``H = -w^2 / (w_h^2 - w^2 + 2 i xi_h w_h w)``: the harmonic
-        ``g C e^{i w t}`` of ``g F`` produces ``H g C e^{i w t}`` in ``u''``.
-    """
-    omega = 2.0 * np.pi * np.asarray(frequency, dtype=float)
-    omega_h = 2.0 * np.pi * f_h
-    return -(omega**2) / (omega_h**2 - omega**2 + 2j * xi_h * omega_h * omega)
-
-
-
-# ---------------------------------------------------------------------------
-# effects
 
 
 def _simulation_effects(effects, mass, where="simulate_bouncing"):
