@@ -1,6 +1,6 @@
 """Tests of smd_statespace.signals: Eq. 3, zero-phase high-pass, integration, cycles.
 
-Test signals are built here with known answers (no dependency on simulate.py):
+Test signals are built here with known answers (no dependency on the simulator):
 
 * a multi-sine acceleration whose velocity and displacement are known in
   closed form, for the integration round trip;

@@ -343,13 +343,13 @@ class PopulationStats:
 
     # -- figures -----------------------------------------------------------
     def plot_trends(self, path=None):
-        """Parameters against ``f_b`` with band means ± sd and trends (like Fig. 6-8); see :mod:`.stats_plots`."""
+        """Parameters against ``f_b`` with band means ± sd and trends (like Fig. 6-8); see :mod:`smd_statespace.plotting.population`."""
         from ..plotting.population import plot_trends
 
         return plot_trends(self, path)
 
     def plot_histograms(self, parameter: str, path=None, published: bool = True):
-        """Per-band histograms of one parameter with the fitted Eq. 19 densities; see :mod:`.stats_plots`."""
+        """Per-band histograms of one parameter with the fitted Eq. 19 densities; see :mod:`smd_statespace.plotting.population`."""
         from ..plotting.population import plot_histograms
 
         return plot_histograms(self, parameter, path, published=published)
