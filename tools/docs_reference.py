@@ -4,11 +4,12 @@ Two Markdown pages are written from the code itself, so they cannot drift from i
 
 ``docs/api.md``
     Every public module, class, function, method and documented constant of the
-    library, from its numpydoc docstring, parsed with :mod:`numpydoc.docscrape`
-    (numpydoc is in the ``test`` extra). The build *fails* when a public
-    function, class or method has no docstring, when numpydoc cannot parse a
-    docstring or warns about it (an unknown section, say), or when a
-    ``Parameters`` section names an argument the signature does not have.
+    library, loaded and parsed by `griffe <https://mkdocstrings.github.io/griffe/>`_
+    (the library behind mkdocstrings; static analysis of the source, numpy-style
+    docstrings), rendered to Markdown here. The build *fails* when a public
+    function, class or method has no docstring (nor one to inherit), when griffe
+    warns about a docstring (a ``Parameters`` entry the signature does not have,
+    say) or when a docstring has a section numpydoc does not know.
 ``docs/cli.md``
     Every subcommand and option of ``smd-statespace``, from the argparse parser
     :func:`smd_statespace.cli.build_parser`.
@@ -25,15 +26,11 @@ docstring or a new option without a regenerated reference fails the tests.
 from __future__ import annotations
 
 import argparse
-import ast
-import importlib
-import inspect
 import io
-import pkgutil
+import logging
 import re
 import sys
 import textwrap
-import warnings
 from contextlib import redirect_stdout
 from pathlib import Path
 
@@ -47,7 +44,7 @@ EXCLUDED_MODULES = ("smd_statespace.__main__", "smd_statespace.cli")
 
 API_HEADER = """# API reference
 
-Generated from the numpydoc docstrings by `python tools/docs_reference.py`; do not
+Generated from the numpydoc docstrings with griffe by `python tools/docs_reference.py`; do not
 edit by hand (the tests regenerate it and fail if it differs). Equation numbers are those of
 Wang, Chen & Nagayama (2019); the [theory page](theory.md) maps them to this code, and the
 [command-line reference](cli.md) lists the `smd-statespace` options.
@@ -70,84 +67,94 @@ class ReferenceError_(Exception):
 
 
 # ---------------------------------------------------------------------------
-# Finding the public objects
+# Loading the package with griffe and finding the public objects
 # ---------------------------------------------------------------------------
 
+ROOT = Path(__file__).resolve().parents[1]
 
-def public_modules() -> list[str]:
-    """Names of the library's modules that the API reference documents, in import order."""
-    package = importlib.import_module(PACKAGE)
-    names = [PACKAGE]
-    for info in pkgutil.walk_packages(package.__path__, prefix=PACKAGE + "."):
-        name = info.name
+
+def load(package: str = PACKAGE):
+    """The package as griffe sees it: modules, classes, functions, attributes and their docstrings."""
+    import griffe
+
+    return griffe.load(package, docstring_parser="numpy", search_paths=[str(ROOT)])
+
+
+def public_modules(package=None) -> list[str]:
+    """Dotted names of the modules the API reference documents, packages first."""
+    package = load() if package is None else package
+    names = []
+
+    def walk(module):
+        name = module.path
         if any(part.startswith("_") for part in name.split(".")[1:]):
-            continue
+            return
         if any(name == excluded or name.startswith(excluded + ".") for excluded in EXCLUDED_MODULES):
-            continue
+            return
         names.append(name)
+        for child in module.modules.values():
+            walk(child)
+
+    walk(package)
     return sorted(names, key=lambda n: (n.count("."), n))
 
 
-def _is_own(obj, module) -> bool:
-    return getattr(obj, "__module__", None) == module.__name__
+def _kind(obj) -> str:
+    return obj.kind.value
 
 
 def public_members(module):
-    """``(name, object)`` of the module's public classes and functions.
+    """``(name, object)`` of a module's public classes and functions (aliases resolved).
 
     A module with ``__all__`` lists exactly those names (re-exports included);
     otherwise every non-underscore class or function defined in the module.
     """
-    if hasattr(module, "__all__"):
-        names = [n for n in module.__all__ if not n.startswith("_")]
-        members = [(n, getattr(module, n)) for n in names]
-        return [(n, obj) for n, obj in members if inspect.isclass(obj) or inspect.isfunction(obj)]
-    members = []
-    for name, obj in vars(module).items():
-        if name.startswith("_") or not (inspect.isclass(obj) or inspect.isfunction(obj)):
-            continue
-        if _is_own(obj, module):
-            members.append((name, obj))
-    return members
+    if module.exports is not None:
+        names = [n if isinstance(n, str) else n.name for n in module.exports]
+        members = [(n, module.members[n]) for n in names if not n.startswith("_") and n in module.members]
+    else:
+        members = [(n, m) for n, m in module.members.items() if not n.startswith("_") and not m.is_alias]
+    out = []
+    for name, member in members:
+        target = _target(member)
+        if target is not None and _kind(target) in ("class", "function"):
+            out.append((name, member))
+    return out
+
+
+def _target(member):
+    """What ``member`` is: itself, or the object an alias (an import) points at; None if griffe cannot tell."""
+    import griffe
+
+    try:
+        return member.final_target if member.is_alias else member
+    except griffe.AliasResolutionError:  # e.g. names bound by tuple unpacking, which griffe does not track
+        return None
 
 
 def documented_constants(module) -> list[tuple[str, str, str]]:
-    """``(name, value source, docstring)`` of module constants followed by a string literal."""
-    try:
-        tree = ast.parse(inspect.getsource(module))
-    except (OSError, TypeError):  # pragma: no cover - source not available
-        return []
+    """``(name, value, docstring)`` of the module's own attributes that have a docstring."""
     out = []
-    body = tree.body
-    for node, following in zip(body, body[1:]):
-        if not isinstance(node, (ast.Assign, ast.AnnAssign)):
+    for name, member in module.members.items():
+        if name.startswith("_") or member.is_alias or _kind(member) != "attribute" or member.docstring is None:
             continue
-        targets = node.targets if isinstance(node, ast.Assign) else [node.target]
-        if len(targets) != 1 or not isinstance(targets[0], ast.Name) or targets[0].id.startswith("_"):
-            continue
-        if not (isinstance(following, ast.Expr) and isinstance(following.value, ast.Constant)
-                and isinstance(following.value.value, str)):
-            continue
-        value = ast.get_source_segment(inspect.getsource(module), node.value) or ""
-        value = " ".join(value.split())
+        value = " ".join(str(member.value).split()) if member.value is not None else ""
         if len(value) > 70:
             value = value[:67] + "..."
-        out.append((targets[0].id, value, inspect.cleandoc(following.value.value)))
+        out.append((name, value, member.docstring.value))
     return out
 
 
 def class_members(cls):
     """``(name, object, kind)`` of a class's own public methods and properties, in source order."""
     out = []
-    for name, raw in vars(cls).items():
-        if name.startswith("_"):
+    for name, member in cls.members.items():
+        if name.startswith("_") or member.is_alias:
             continue
-        if isinstance(raw, property):
-            out.append((name, raw, "property"))
-        elif isinstance(raw, (staticmethod, classmethod)):
-            out.append((name, raw.__func__, "method"))
-        elif inspect.isfunction(raw):
-            out.append((name, raw, "method"))
+        if _kind(member) == "function":
+            out.append((name, member, "method"))
+        elif _kind(member) == "attribute" and "property" in member.labels:
+            out.append((name, member, "property"))
     return out
 
 
@@ -155,19 +162,19 @@ def class_members(cls):
 # Parsing and checking a docstring
 # ---------------------------------------------------------------------------
 
+KNOWN_ADMONITIONS = ("Notes", "References", "See Also", "Warnings", "Warning")
+"""numpydoc sections that griffe keeps as free text (admonitions); any other heading is a mistake."""
+
 
 def docstring(obj, owner=None):
-    """``obj``'s docstring, inherited from the same member of a base class of ``owner`` when it has none."""
-    doc = inspect.getdoc(obj.fget if isinstance(obj, property) else obj)
-    if (not doc or not doc.strip()) and owner is not None:
-        name = (obj.fget if isinstance(obj, property) else obj).__name__
-        for base in owner.__mro__[1:]:
-            if name in vars(base):
-                raw = vars(base)[name]
-                doc = inspect.getdoc(raw.fget if isinstance(raw, property) else raw)
-                if doc:
-                    break
-    return doc
+    """``obj``'s docstring text, inherited from the same member of a base class of ``owner`` when it has none."""
+    if obj.docstring is not None and obj.docstring.value.strip():
+        return obj.docstring
+    if owner is not None:
+        for base in owner.mro():
+            if obj.name in base.members and base.members[obj.name].docstring is not None:
+                return base.members[obj.name].docstring
+    return None
 
 
 _QUALIFIED = re.compile(r"^(?P<title>" + "|".join(SECTIONS) + r") \((?P<note>[^)]*)\)\n(?P<rule>-+)$", re.M)
@@ -184,53 +191,55 @@ def _qualified_headings(doc: str):
     return _QUALIFIED.sub(plain, doc), qualifiers
 
 
+class _Collect(logging.Handler):
+    """Collects griffe's warnings while one docstring is parsed."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.messages = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+
 def parse(obj, where: str, problems: list, owner=None):
-    """Parse ``obj``'s docstring with numpydoc; append problems (missing, warnings, errors) to ``problems``.
+    """Parse ``obj``'s docstring with griffe; append problems (missing, griffe warnings, unknown sections).
 
-    Section headings may carry a note in brackets (``Attributes (after :meth:`run`)``); the note
-    is kept in ``parsed.qualifiers`` and shown in the section's title.
+    Returns the list of griffe docstring sections (with ``qualifiers``: notes of qualified
+    headings such as ``Attributes (after :meth:`run`)``, shown in the section's title), or None.
     """
-    from numpydoc.docscrape import NumpyDocString
+    import griffe
 
-    doc = docstring(obj, owner)
-    if not doc or not doc.strip():
+    found = docstring(obj, owner)
+    if found is None:
         problems.append(f"{where}: no docstring")
         return None
-    doc, qualifiers = _qualified_headings(doc)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            parsed = NumpyDocString(doc)
-        except Exception as exc:  # numpydoc raises ValueError and friends on malformed sections
-            problems.append(f"{where}: numpydoc cannot parse the docstring: {exc}")
-            return None
-    for warning in caught:
-        problems.append(f"{where}: numpydoc: {warning.message}")
-    parsed.qualifiers = qualifiers
-    if callable(obj) and not isinstance(obj, property):
-        _check_parameters(obj, parsed, where, problems)
-    return parsed
-
-
-def _check_parameters(obj, parsed, where, problems):
-    """Every name in ``Parameters`` must be an argument of the signature (catches renamed arguments)."""
-    target = obj.__init__ if inspect.isclass(obj) else obj
+    text, qualifiers = _qualified_headings(found.value)
+    handler = _Collect()
+    logger = logging.getLogger("griffe")
+    logger.addHandler(handler)
     try:
-        signature = inspect.signature(target)
-    except (TypeError, ValueError):  # pragma: no cover - builtins
-        return
-    accepted = set()
-    for p in signature.parameters.values():
-        accepted.add(p.name)
-        if p.kind is p.VAR_POSITIONAL:
-            accepted.add("*" + p.name)
-        if p.kind is p.VAR_KEYWORD:
-            accepted.add("**" + p.name)
-    for param in list(parsed["Parameters"]) + list(parsed["Other Parameters"]):
-        for name in (n.strip() for n in param.name.split(",")):
-            if name and name not in accepted:
-                problems.append(f"{where}: documents parameter {name!r}, which the signature "
-                                f"{inspect.signature(target)} does not have")
+        sections = griffe.Docstring(text, lineno=found.lineno, parent=obj, parser="numpy").parse()
+    finally:
+        logger.removeHandler(handler)
+    for message in handler.messages:
+        problems.append(f"{where}: {message.split(': ', 1)[-1]}")
+    for section in sections:
+        if section.kind.value == "admonition" and section.title not in KNOWN_ADMONITIONS:
+            problems.append(f"{where}: Unknown section {section.title}")
+    return _Parsed(sections, qualifiers)
+
+
+class _Parsed:
+    """griffe's sections of one docstring, by kind, with the notes of qualified headings."""
+
+    TITLES = {"parameters": "Parameters", "other_parameters": "Other Parameters", "returns": "Returns",
+              "yields": "Yields", "receives": "Receives", "raises": "Raises", "warns": "Warns",
+              "attributes": "Attributes"}
+
+    def __init__(self, sections, qualifiers):
+        self.sections = sections
+        self.qualifiers = qualifiers
 
 
 # ---------------------------------------------------------------------------
@@ -296,8 +305,8 @@ def rst_to_markdown(lines) -> str:
 def module_prose(doc: str) -> str:
     """A module docstring as Markdown: free prose whose ``Title`` / ``-----`` headings become level-4 headings.
 
-    Module docstrings are narrative (the numpydoc sections are for functions and classes), so
-    they are not parsed by numpydoc.
+    Module docstrings are narrative (the numpy-style sections are for functions and classes), so
+    they are not parsed into sections.
     """
     lines = doc.splitlines()
     out, chunk = [], []
@@ -334,46 +343,77 @@ def _section(title: str, params) -> str:
     return f"**{title}**\n\n" + "\n".join(rows)
 
 
+def _items(title, items) -> str:
+    rows = []
+    for item in items:
+        name = (getattr(item, "name", "") or "").replace("*", "\\*")
+        annotation = getattr(item, "annotation", None)
+        kind = str(annotation) if annotation else ""
+        head = f"`{name}`" if name else ""
+        if kind:
+            head = f"{head} : {_inline(kind)}" if head else _inline(kind)
+        desc = rst_to_markdown(item.description).replace("\n\n", " ") if item.description else ""
+        if "```" in desc:  # keep literal blocks out of list items
+            desc = " ".join(line for line in rst_to_markdown(item.description).splitlines()
+                            if not line.startswith("```"))
+        rows.append(f"- {head}" + (f" — {desc}" if desc else ""))
+    return f"**{title}**\n\n" + "\n".join(rows) if rows else ""
+
+
 def render_doc(parsed, heading: str, level: int) -> str:
-    """One object's reference: heading, summary, extended summary and every numpydoc section."""
+    """One object's reference: heading, the text, then every section griffe parsed, in order."""
     parts = [f"{'#' * level} {heading}"]
-    summary = rst_to_markdown(parsed["Summary"])
-    if summary:
-        parts.append(summary)
-    extended = rst_to_markdown(parsed["Extended Summary"])
-    if extended:
-        parts.append(extended)
-    for title in SECTIONS:
-        note = getattr(parsed, "qualifiers", {}).get(title)
-        block = _section(f"{title} ({_inline(note)})" if note else title, parsed[title])
-        if block:
-            parts.append(block)
-    if parsed["See Also"]:
-        names = []
-        for funcs, desc in parsed["See Also"]:
-            for name, _role in funcs:
-                names.append(f"`{name}`" + (f" ({' '.join(desc)})" if desc else ""))
-        parts.append("**See also** " + ", ".join(names))
-    for title in ("Notes", "References", "Examples"):
-        body = rst_to_markdown(parsed[title])
-        if body:
-            parts.append(f"**{title}**\n\n{body}")
-    return "\n\n".join(parts)
+    for section in parsed.sections:
+        kind = section.kind.value
+        if kind == "text":
+            parts.append(rst_to_markdown(section.value))
+        elif kind in _Parsed.TITLES:
+            title = _Parsed.TITLES[kind]
+            note = parsed.qualifiers.get(title)
+            parts.append(_items(f"{title} ({_inline(note)})" if note else title, section.value))
+        elif kind == "admonition":
+            body = rst_to_markdown(section.value.description)
+            if section.title == "See Also":
+                body = " ".join(body.split("\n"))
+            parts.append(f"**{section.title}**\n\n{body}")
+        elif kind == "examples":
+            body = "\n\n".join(rst_to_markdown(text) if k.value == "text" else f"```\n{text}\n```"
+                                for k, text in section.value)
+            parts.append(f"**Examples**\n\n{body}")
+    return "\n\n".join(part for part in parts if part)
 
 
 def _signature(name, obj) -> str:
-    target = obj
-    try:
-        sig = inspect.signature(target)
-    except (TypeError, ValueError):  # pragma: no cover
-        return f"{name}(...)"
-    params = list(sig.parameters.values())
-    if params and params[0].name in ("self", "cls"):
-        params = params[1:]
-    text = str(sig.replace(parameters=params, return_annotation=inspect.Signature.empty))
-    text = re.sub(r"<([\w.]+) object at 0x[0-9a-f]+>", r"\1", text)  # stable defaults
-    text = re.sub(r"(: |-> )'([^']*)'", r"\1\2", text)  # postponed annotations without their quotes
-    return f"{name}{text}"
+    """``name(a, b=1, *args, **kw)`` from griffe's parameters (``self``/``cls`` dropped)."""
+    target = obj.final_target if obj.is_alias else obj
+    if _kind(target) == "class":
+        init = target.members.get("__init__")
+        for base in target.mro() if init is None else ():
+            if "__init__" in base.members:
+                init = base.members["__init__"]
+                break
+        if init is None:
+            return f"{name}()"
+        target = init
+    pieces, star_done = [], False
+    for parameter in target.parameters:
+        if parameter.name in ("self", "cls") and not pieces:
+            continue
+        kind = parameter.kind.value
+        text = parameter.name
+        if kind == "variadic positional":
+            text, star_done = "*" + text, True
+        elif kind == "variadic keyword":
+            text = "**" + text
+        elif kind == "keyword-only" and not star_done:
+            pieces.append("*")
+            star_done = True
+        if parameter.annotation is not None:
+            text += f": {parameter.annotation}"
+        if parameter.default is not None and not kind.startswith("variadic"):
+            text += (" = " if parameter.annotation is not None else "=") + str(parameter.default)
+        pieces.append(text)
+    return f"{name}({', '.join(pieces)})"
 
 
 # ---------------------------------------------------------------------------
@@ -387,18 +427,18 @@ def _anchor(text: str) -> str:
 
 def build_api() -> str:
     """The text of ``docs/api.md``; raises :class:`ReferenceError_` listing every docstring problem."""
+    package = load()
     problems: list[str] = []
     sections = []
     contents = []
-    for module_name in public_modules():
-        module = importlib.import_module(module_name)
+    for module_name in public_modules(package):
+        module = package[module_name[len(PACKAGE) + 1:]] if module_name != PACKAGE else package
         parts = [f"## `{module_name}`"]
         contents.append(f"- [`{module_name}`](#{_anchor(module_name)})")
-        module_doc = inspect.getdoc(module)
-        if not module_doc:
+        if module.docstring is None:
             problems.append(f"{module_name}: no module docstring")
         else:
-            parts.append(module_prose(module_doc))
+            parts.append(module_prose(module.docstring.value))
         constants = documented_constants(module)
         if constants:
             rows = ["| constant | value | meaning |", "|---|---|---|"]
@@ -406,29 +446,27 @@ def build_api() -> str:
                 meaning = _inline(" ".join(doc.split())).replace("|", "\\|")
                 rows.append(f"| `{name}` | `{value.replace('|', '/')}` | {meaning} |")
             parts.append("\n".join(rows))
-        for name, obj in public_members(module):
+        for name, member in public_members(module):
             where = f"{module_name}.{name}"
-            heading = f"`{_signature(name, obj)}`" if not inspect.isclass(obj) else \
-                f"class `{_signature(name, obj)}`"
-            if inspect.isclass(obj) and obj.__module__ != module_name:
-                parts.append(f"### `{name}`\n\nRe-exported from [`{obj.__module__}`](#{_anchor(obj.__module__)}).")
+            target = _target(member)
+            if target.parent.path != module_name:
+                origin = target.parent.path
+                parts.append(f"### `{name}`\n\nRe-exported from [`{origin}`](#{_anchor(origin)}).")
                 continue
-            if inspect.isfunction(obj) and obj.__module__ != module_name:
-                parts.append(f"### `{name}`\n\nRe-exported from [`{obj.__module__}`](#{_anchor(obj.__module__)}).")
-                continue
-            doc = parse(obj, where, problems)
+            is_class = _kind(target) == "class"
+            heading = f"class `{_signature(name, target)}`" if is_class else f"`{_signature(name, target)}`"
+            doc = parse(target, where, problems)
             if doc is None:
                 continue
             parts.append(render_doc(doc, heading, 3))
-            if inspect.isclass(obj):
-                for member_name, member, kind in class_members(obj):
-                    member_where = f"{where}.{member_name}"
-                    member_doc = parse(member, member_where, problems, owner=obj)
+            if is_class:
+                for member_name, child, kind in class_members(target):
+                    member_doc = parse(child, f"{where}.{member_name}", problems, owner=target)
                     if member_doc is None:
                         continue
                     label = f"`{name}.{member_name}`" + (" (property)" if kind == "property" else "")
                     if kind == "method":
-                        label = f"`{name}.{_signature(member_name, member)}`"
+                        label = f"`{name}.{_signature(member_name, child)}`"
                     parts.append(render_doc(member_doc, label, 4))
         sections.append("\n\n".join(parts))
     if problems:

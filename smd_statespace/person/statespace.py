@@ -59,10 +59,12 @@ class RecordStateSpace(MLEModel):
 
     @property
     def param_names(self):
+        """Names of the parameters, as the record-level model has them (statsmodels' ``param_names``)."""
         return list(self.record_model.param_names)
 
     @property
     def start_params(self):
+        """Starting values of the parameters: the record-level model's (statsmodels' ``start_params``)."""
         return self.record_model.start_params()
 
     def update(self, params, **kwargs):
