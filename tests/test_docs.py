@@ -30,9 +30,11 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 FENCE = re.compile(r"^```(python|console)(?: file=(\S+))?\n(.*?)^```", flags=re.S | re.M)
 PAGES = sorted(
-    [path for path in DOCS.glob("*.md") if FENCE.search(path.read_text(encoding="utf-8"))]
+    [path for path in DOCS.glob("*.md") if FENCE.search(path.read_text(encoding="utf-8"))
+     and not (DOCS / "notebooks" / f"{path.stem}.ipynb").exists()]
     + [ROOT / "README.md"]
 )
+"""Pages whose examples run here; a tutorial with a notebook runs as that notebook (``test_notebooks.py``)."""
 
 
 def blocks(page: Path):
@@ -51,7 +53,7 @@ def run_console(code: str, where: str):
         assert status == 0, f"{where}: {line!r} exited {status}"
 
 
-SLOW_PAGES = {"effects.md", "tutorial-missing-physics.md", "person.md"}
+SLOW_PAGES = {"effects.md", "person.md"}
 """Pages whose examples take 20 s or more (record-level fits and diagnoses): CI runs them, the developer run
 (``-m "not slow"``) does not."""
 
