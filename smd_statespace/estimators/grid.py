@@ -105,11 +105,7 @@ class GridReference(Estimator):
                 # Predictive mixture over the grid, weighted by the posterior so far.
                 predicted_mean, trace.innovation_cov[k] = predictive_mixture(normalised(log_lik), predicted, S)
                 trace.innovations[k] = data.y[k] - predicted_mean
-                try:
-                    x, P, log_density = kalman.update(x, P, data.y[k], predicted, S, H)
-                except np.linalg.LinAlgError:
-                    raise EstimatorFailure(
-                        f"cycle {data.index}: innovation covariance not positive definite at sample {k}") from None
+                x, P, log_density = kalman.update(x, P, data.y[k], predicted, S, H, f"cycle {data.index}, sample {k}")
                 log_lik += log_density
                 trace.mean[k], trace.std[k] = mixture_moments(normalised(log_lik), x, P, linear)
         if not np.all(np.isfinite(log_lik)):

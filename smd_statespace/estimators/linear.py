@@ -17,7 +17,7 @@ import numpy as np
 from scipy.special import logsumexp
 
 from ..model import SMDModel
-from .base import Setup
+from .base import EstimatorFailure, Setup
 
 LOG_2PI = np.log(2.0 * np.pi)
 
@@ -88,14 +88,20 @@ class ConditionalKalman:
         S = H @ P @ H.transpose(0, 2, 1) + self.R
         return predicted, S, H
 
-    def update(self, x, P, y, predicted, S, H):
+    def update(self, x, P, y, predicted, S, H, where=""):
         """Kalman update of every filter with observation ``y``.
 
         Returns the updated ``x``, ``P`` (Joseph form) and every filter's
         log predictive density ``log N(y; predicted, S)``, shape ``(B,)``.
+        An innovation covariance that is not positive definite raises
+        :class:`~smd_statespace.estimators.base.EstimatorFailure` naming
+        ``where`` (e.g. ``"cycle 3, sample 12"``).
         """
         residual = y - predicted
-        chol = np.linalg.cholesky(S)
+        try:
+            chol = np.linalg.cholesky(S)
+        except np.linalg.LinAlgError:
+            raise EstimatorFailure(f"{where}: innovation covariance not positive definite") from None
         solved = np.linalg.solve(chol, residual[..., None])[..., 0]
         log_det = 2.0 * np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)
         log_density = -0.5 * (np.sum(solved**2, axis=1) + log_det + residual.shape[-1] * LOG_2PI)

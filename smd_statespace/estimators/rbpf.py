@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import OptionError
 from ..model import SMDModel
-from .base import (CycleData, Estimator, EstimatorFailure, FilterResult, ParticleStart, Trace, dynamic_mask,
+from .base import (CycleData, Estimator, FilterResult, ParticleStart, Trace, dynamic_mask,
                    prepare, register_estimator)
 from .linear import ConditionalKalman, mixture_moments, normalised, predictive_mixture, verify_linear
 from .particle import check_particle_options, effective_sample_size, reflect, reweight, systematic_resample
@@ -111,11 +111,7 @@ class RaoBlackwellisedFilter(Estimator):
                 predicted, S, H = kalman.predict_observation(x, P, data.t[k], data.inputs)
                 predicted_mean, trace.innovation_cov[k] = predictive_mixture(np.exp(log_weights), predicted, S)
                 trace.innovations[k] = data.y[k] - predicted_mean
-                try:
-                    x, P, log_density = kalman.update(x, P, data.y[k], predicted, S, H)
-                except np.linalg.LinAlgError:
-                    raise EstimatorFailure(
-                        f"cycle {data.index}: innovation covariance not positive definite at sample {k}") from None
+                x, P, log_density = kalman.update(x, P, data.y[k], predicted, S, H, f"cycle {data.index}, sample {k}")
                 log_weights, increment = reweight(log_weights, log_density, data, k)
                 trace.log_likelihood += increment
                 weights = np.exp(log_weights)
