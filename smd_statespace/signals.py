@@ -487,6 +487,13 @@ def find_cycles(time, force, fb_range=SUPPORTED_FB, *, source=None, prominence=P
     lo, hi = _check_fb_range(fb_range)
     if not (isinstance(prominence, (int, float)) and 0.0 < prominence < 1.0):
         raise OptionError(f"prominence={prominence!r} must be a fraction of the force range in (0, 1)")
+    time, force = _checked_signals(time, force, label)
+    peaks = _grf_peaks(time, force, hi, prominence, label)
+    return peaks, _cycles_between(time, peaks, lo, hi, label)
+
+
+def _checked_signals(time, force, label):
+    """``time`` and ``force`` as flat float arrays, or an error in words (sizes, NaN, too short)."""
     time = np.asarray(time, dtype=float).ravel()
     force = np.asarray(force, dtype=float).ravel()
     if time.size != force.size:
@@ -495,8 +502,12 @@ def find_cycles(time, force, fb_range=SUPPORTED_FB, *, source=None, prominence=P
         raise CycleError(f"{label}record has only {time.size} samples; no bouncing cycle can be found")
     if not (np.all(np.isfinite(time)) and np.all(np.isfinite(force))):
         raise RecordError(f"{label}time or force holds NaN or infinite values")
-    fs = 1.0 / float(np.median(np.diff(time)))
+    return time, force
 
+
+def _grf_peaks(time, force, highest_fb, prominence, label):
+    """Sample indices of the GRF peaks (at least two), at most one per :data:`PEAK_SPACING` of a period."""
+    fs = 1.0 / float(np.median(np.diff(time)))
     low_pct, high_pct = np.percentile(force, [1.0, 99.0])
     span = float(high_pct - low_pct)
     level = abs(float(np.mean(force)))
@@ -507,10 +518,9 @@ def find_cycles(time, force, fb_range=SUPPORTED_FB, *, source=None, prominence=P
             f"{label}no GRF peaks found: the force varies by only {span:.3g} N "
             f"({span / level:.1%} of its mean {level:.4g} N); bouncing needs at least {MIN_FORCE_RANGE:.0%}"
         )
-
-    period = _bouncing_period(force, fs, hi)
+    period = _bouncing_period(force, fs, highest_fb)
     if period is None:
-        period = 1.0 / hi  # no repetition visible (e.g. under two cycles): shortest supported period
+        period = 1.0 / highest_fb  # no repetition visible (e.g. under two cycles): shortest supported period
     distance = max(1, int(PEAK_SPACING * period * fs))
     peaks, _ = signal.find_peaks(force, distance=distance, prominence=prominence * span)
     duration = float(time[-1] - time[0])
@@ -521,7 +531,11 @@ def find_cycles(time, force, fb_range=SUPPORTED_FB, *, source=None, prominence=P
             f"{label}record is shorter than one bouncing cycle: only 1 GRF peak in {duration:.2f} s; "
             "a cycle runs from one peak to the next"
         )
+    return peaks
 
+
+def _cycles_between(time, peaks, lo, hi, label):
+    """One :class:`Cycle` from each peak to the next, invalid (with the reason) when its length is odd."""
     starts, stops = peaks[:-1], peaks[1:]
     durations = time[stops] - time[starts]
     f_b = 1.0 / durations
@@ -553,7 +567,7 @@ def find_cycles(time, force, fb_range=SUPPORTED_FB, *, source=None, prominence=P
                 reason="; ".join(reasons),
             )
         )
-    return peaks, cycles
+    return cycles
 
 
 # ---------------------------------------------------------------------------
