@@ -144,6 +144,128 @@ def _columns(frame: pd.DataFrame) -> str:
     return ", ".join(names[:15]) + (f", ... ({len(names)} columns)" if len(names) > 15 else "")
 
 
+def _loaded_source(item, index: int) -> tuple[pd.DataFrame, str]:
+    """One source as a table with stripped column names and an ``f_b`` column, or an error in words."""
+    frame, source = _one_source(item, index)
+    frame.columns = [str(c).strip() for c in frame.columns]
+    if frame.empty:
+        raise RecordError(f"{source}: no rows (a header only; expected one row per cycle)")
+    if "f_b" not in frame:
+        raise RecordError(f"{source}: no column 'f_b' (the bouncing frequency of each cycle, Hz); "
+                          f"the columns are {_columns(frame)}")
+    return frame, source
+
+
+def _chosen_parameters(loaded, asked, explicit: bool, mass) -> tuple[list, list]:
+    """The parameters every source gives, and a note for each one left out.
+
+    A parameter asked for explicitly (``--parameters``) that a source cannot give is an error
+    naming that source and its columns.
+    """
+    notes, chosen = [], []
+    for name in asked:
+        lacking = [(source, why) for frame, source in loaded if (why := _lacks(frame, name, mass))]
+        if not lacking:
+            chosen.append(name)
+        elif explicit:
+            source, why = lacking[0]
+            frame = next(f for f, s in loaded if s == source)
+            raise RecordError(f"{source}: {why}, asked for by --parameters; the columns are {_columns(frame)}")
+        else:
+            notes.append(f"{name} left out: {lacking[0][1]} in {', '.join(s for s, _ in lacking)}")
+    if not chosen:
+        frame, source = loaded[0]
+        raise RecordError(f"{source}: none of the parameter columns f_h, xi_h, k_h, c_h, blf_1, blf_2, blf_3; "
+                          f"the columns are {_columns(frame)}")
+    return chosen, notes
+
+
+class _Assumed:
+    """What :func:`read_results` assumed for columns a source lacks, said once per source in its notes."""
+
+    def __init__(self):
+        self.derived = {}  # (source, where the mass came from) -> [K_h, C_h]
+        self.unflagged = {}  # source -> [*_determined columns taken as True]
+        self.unstatused = []  # sources without a status column
+        self.unchecked = []  # sources checked here against the physical limits
+
+    def notes(self, flags) -> list:
+        notes = [f"{', '.join(names)} computed by Eq. 17-18 from f_h, xi_h and {where} ({source})"
+                 for (source, where), names in self.derived.items()]
+        if self.unstatused:
+            notes.append(f"no status column in {', '.join(self.unstatused)}: every row taken as an identified cycle")
+        for source, columns in self.unflagged.items():
+            named = "*_determined columns" if len(columns) == len(flags) > 1 else (
+                f"{', '.join(columns)} column{'s' if len(columns) > 1 else ''}")
+            notes.append(f"no {named} in {source}: its cycles are treated as determined")
+        if self.unchecked:
+            notes.append(f"no implausible column in {', '.join(self.unchecked)}: cycles checked here against the "
+                         "physical limits (xi_h < 0, C_h < 0, BLF or floor-force harmonic > 2 g)")
+        return notes
+
+
+def _parameter_columns(frame, source, chosen, mass, assumed: _Assumed) -> None:
+    """``f_b`` and the chosen parameters' columns as floats; ``K_h``/``C_h`` by Eq. 17-18 where absent."""
+    from ..model import c_h, k_h
+
+    frame["f_b"] = _numeric(frame["f_b"], source, "f_b")
+    for name in chosen:
+        column = PARAMETERS[name].column
+        if column in frame:
+            frame[column] = _numeric(frame[column], source, column)
+            continue
+        if "mass" in frame:
+            masses = _numeric(frame["mass"], source, "mass")
+            bad = ~(masses > 0) & np.isfinite(masses)
+            if bad.any():
+                row = int(np.argmax(bad))
+                raise RecordError(f"{source}: column 'mass', data row {row + 1}: {frame['mass'].iloc[row]!r} "
+                                  "is not a body mass (a positive number of kg)")
+            where = "its 'mass' column"
+        else:
+            masses, where = np.full(len(frame), mass), f"--mass {mass:g} kg"
+        f_h = _numeric(frame["f_h"], source, "f_h")
+        if name == "K_h":
+            frame[column] = k_h(f_h, masses)  # Eq. 17
+        else:
+            frame[column] = c_h(_numeric(frame["xi_h"], source, "xi_h"), f_h, masses)  # Eq. 18
+        assumed.derived.setdefault((source, where), []).append(name)
+
+
+def _flag_columns(frame, source, flags, assumed: _Assumed) -> None:
+    """The ``*_determined`` flags as bools (True where absent) and ``status`` as lower-case text."""
+    for column in flags:
+        if column in frame:
+            frame[column] = _flags(frame[column], source, column)
+        else:
+            frame[column] = True
+            assumed.unflagged.setdefault(source, []).append(column)
+    if "status" in frame:
+        frame["status"] = frame["status"].astype(str).str.strip().str.lower()
+    else:
+        frame["status"] = _STATUS_OK
+        assumed.unstatused.append(source)
+
+
+def _plausibility_columns(frame, source, assumed: _Assumed) -> None:
+    """``implausible`` with its reason (checked here when absent) and :data:`ADEQUATE_COLUMN`."""
+    if "implausible" in frame:
+        frame["implausible"] = _flags(frame["implausible"], source, "implausible")
+        reason = frame["implausible_reason"] if "implausible_reason" in frame else pd.Series("", index=frame.index)
+        reason = reason.astype(object).where(reason.notna(), "").astype(str)
+        frame["implausible_reason"] = reason.where(frame["implausible"], "")
+    else:
+        checked = frame[[c for c in ["f_b", "f_h", "xi_h", "c_h"] + [f"blf_{i}" for i in range(1, 10)]
+                         if c in frame]]
+        reasons = implausible_reasons(checked)
+        reasons[frame["status"] != _STATUS_OK] = ""
+        frame["implausible_reason"] = reasons
+        frame["implausible"] = (reasons != "").to_numpy()
+        assumed.unchecked.append(source)
+    frame[ADEQUATE_COLUMN] = (_flags(frame[ADEQUATE_COLUMN], source, ADEQUATE_COLUMN, missing=True)
+                              if ADEQUATE_COLUMN in frame else True)
+
+
 def read_results(sources, *, parameters=None, mass=None) -> pd.DataFrame:
     """Read and check one or many tables of identified cycles (``results.csv`` of ``identify`` or any other).
 
@@ -191,7 +313,6 @@ def read_results(sources, *, parameters=None, mass=None) -> pd.DataFrame:
         An unknown parameter, a bad ``mass``.
     """
     from ..io import check_mass
-    from ..model import c_h, k_h
 
     if isinstance(sources, (str, os.PathLike, pd.DataFrame)):
         sources = [sources]
@@ -203,99 +324,18 @@ def read_results(sources, *, parameters=None, mass=None) -> pd.DataFrame:
                              option="--parameters" if explicit else "parameters")
     if mass is not None:
         mass = check_mass(mass, "--mass")
-    loaded = []
-    for index, item in enumerate(sources):
-        frame, source = _one_source(item, index)
-        frame.columns = [str(c).strip() for c in frame.columns]
-        if frame.empty:
-            raise RecordError(f"{source}: no rows (a header only; expected one row per cycle)")
-        if "f_b" not in frame:
-            raise RecordError(f"{source}: no column 'f_b' (the bouncing frequency of each cycle, Hz); "
-                              f"the columns are {_columns(frame)}")
-        loaded.append((frame, source))
-
-    notes, chosen = [], []
-    for name in asked:
-        lacking = [(source, why) for frame, source in loaded if (why := _lacks(frame, name, mass))]
-        if not lacking:
-            chosen.append(name)
-        elif explicit:
-            source, why = lacking[0]
-            frame = next(f for f, s in loaded if s == source)
-            raise RecordError(f"{source}: {why}, asked for by --parameters; the columns are {_columns(frame)}")
-        else:
-            notes.append(f"{name} left out: {lacking[0][1]} in {', '.join(s for s, _ in lacking)}")
-    if not chosen:
-        frame, source = loaded[0]
-        raise RecordError(f"{source}: none of the parameter columns f_h, xi_h, k_h, c_h, blf_1, blf_2, blf_3; "
-                          f"the columns are {_columns(frame)}")
-    specs = [PARAMETERS[name] for name in chosen]
-    flags = sorted({flag for spec in specs for flag in spec.determined_by})
-    unflagged, unstatused, unchecked, derived = {}, [], [], {}
+    loaded = [_loaded_source(item, index) for index, item in enumerate(sources)]
+    chosen, notes = _chosen_parameters(loaded, asked, explicit, mass)
+    flags = sorted({flag for name in chosen for flag in PARAMETERS[name].determined_by})
+    assumed = _Assumed()
     frames = []
     for frame, source in loaded:
-        frame["f_b"] = _numeric(frame["f_b"], source, "f_b")
-        for name in chosen:
-            column = PARAMETERS[name].column
-            if column in frame:
-                frame[column] = _numeric(frame[column], source, column)
-                continue
-            # K_h or C_h by Eq. 17-18 from f_h, xi_h and the body mass
-            if "mass" in frame:
-                masses = _numeric(frame["mass"], source, "mass")
-                bad = ~(masses > 0) & np.isfinite(masses)
-                if bad.any():
-                    row = int(np.argmax(bad))
-                    raise RecordError(f"{source}: column 'mass', data row {row + 1}: {frame['mass'].iloc[row]!r} "
-                                      "is not a body mass (a positive number of kg)")
-                where = "its 'mass' column"
-            else:
-                masses, where = np.full(len(frame), mass), f"--mass {mass:g} kg"
-            f_h = _numeric(frame["f_h"], source, "f_h")
-            if name == "K_h":
-                frame[column] = k_h(f_h, masses)
-            else:
-                frame[column] = c_h(_numeric(frame["xi_h"], source, "xi_h"), f_h, masses)
-            derived.setdefault((source, where), []).append(name)
-        for column in flags:
-            if column in frame:
-                frame[column] = _flags(frame[column], source, column)
-            else:
-                frame[column] = True
-                unflagged.setdefault(source, []).append(column)
-        if "status" in frame:
-            frame["status"] = frame["status"].astype(str).str.strip().str.lower()
-        else:
-            frame["status"] = _STATUS_OK
-            unstatused.append(source)
-        if "implausible" in frame:
-            frame["implausible"] = _flags(frame["implausible"], source, "implausible")
-            reason = frame["implausible_reason"] if "implausible_reason" in frame else pd.Series("", index=frame.index)
-            reason = reason.astype(object).where(reason.notna(), "").astype(str)
-            frame["implausible_reason"] = reason.where(frame["implausible"], "")
-        else:
-            checked = frame[[c for c in ["f_b", "f_h", "xi_h", "c_h"] + [f"blf_{i}" for i in range(1, 10)]
-                             if c in frame]]
-            reasons = implausible_reasons(checked)
-            reasons[frame["status"] != _STATUS_OK] = ""
-            frame["implausible_reason"] = reasons
-            frame["implausible"] = (reasons != "").to_numpy()
-            unchecked.append(source)
-        frame[ADEQUATE_COLUMN] = (_flags(frame[ADEQUATE_COLUMN], source, ADEQUATE_COLUMN, missing=True)
-                                  if ADEQUATE_COLUMN in frame else True)
+        _parameter_columns(frame, source, chosen, mass, assumed)
+        _flag_columns(frame, source, flags, assumed)
+        _plausibility_columns(frame, source, assumed)
         frame.insert(0, "source", source)
         frames.append(frame)
-    for (source, where), names in derived.items():
-        notes.append(f"{', '.join(names)} computed by Eq. 17-18 from f_h, xi_h and {where} ({source})")
-    if unstatused:
-        notes.append(f"no status column in {', '.join(unstatused)}: every row taken as an identified cycle")
-    for source, columns in unflagged.items():
-        named = "*_determined columns" if len(columns) == len(flags) > 1 else (
-            f"{', '.join(columns)} column{'s' if len(columns) > 1 else ''}")
-        notes.append(f"no {named} in {source}: its cycles are treated as determined")
-    if unchecked:
-        notes.append(f"no implausible column in {', '.join(unchecked)}: cycles checked here against the physical "
-                     "limits (xi_h < 0, C_h < 0, BLF or floor-force harmonic > 2 g)")
+    notes += assumed.notes(flags)
     table = pd.concat(frames, ignore_index=True, sort=False)
     table.attrs = {"parameters": tuple(chosen), "notes": notes}
     return table
