@@ -282,3 +282,17 @@ def test_identify_warns_when_the_base_model_misses_an_effect_and_names_the_next_
     assert bool(said) is warned
     if warned:
         assert "smd-statespace diagnose" in said[0] and "--estimator record" in said[0]
+
+
+def test_wald_interval_is_symmetric_inside_the_bounds_and_ends_at_a_bound_it_would_cross():
+    from scipy import stats
+
+    from smd_statespace.person.fit import wald_interval
+    from smd_statespace.person.model import XI_H_BOUNDS
+
+    z = stats.norm.ppf(0.95)
+    low, high = wald_interval(0.3, 0.05, 0.9, XI_H_BOUNDS)
+    assert np.isclose(low, 0.3 - z * 0.05) and np.isclose(high, 0.3 + z * 0.05)
+    low, high = wald_interval(0.05, 0.1, 0.9, XI_H_BOUNDS)  # 0.05 - 1.645 * 0.1 < 0: no negative damping
+    assert low == XI_H_BOUNDS[0] and np.isclose(high, 0.05 + z * 0.1)
+    assert wald_interval(5.9, 0.2, 0.9, (0.5, 6.0))[1] == 6.0

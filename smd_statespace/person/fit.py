@@ -350,6 +350,31 @@ def _fit_timing(model_for, timing, variation, first=None):
     return model, fit_model(model, fitted["params"])
 
 
+def wald_interval(estimate, standard_error, level, bounds) -> tuple:
+    """Estimate +- z * standard error, cut at the parameter's search bounds.
+
+    A damping ratio cannot be negative, nor ``f_h`` leave its search range: where the
+    symmetric interval reaches past a bound, it ends at the bound (the values cut off are
+    impossible, so the coverage is unchanged).
+
+    Parameters
+    ----------
+    estimate, standard_error : float
+    level : float
+        Confidence level in (0, 1); ``z`` is the standard normal's ``0.5 + level / 2`` quantile.
+    bounds : (float, float)
+        Lowest and highest possible value.
+
+    Examples
+    --------
+    >>> wald_interval(0.05, 0.1, 0.9, (1e-3, 3.0))  # doctest: +ELLIPSIS
+    (0.001, 0.214...)
+    """
+    z = stats.norm.ppf(0.5 + level / 2.0)
+    low, high = bounds
+    return (float(max(low, estimate - z * standard_error)), float(min(high, estimate + z * standard_error)))
+
+
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type="oim", drift=False, check=True):
     """Identify one person's SMD model from a whole bouncing record.
@@ -386,6 +411,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         standard errors of ``f_h`` and ``xi_h`` (and of ``k_h``, ``c_h``)
         multiplied by :data:`CALIBRATION`; ``"wald"``: the same from the
         observed information alone (too narrow: docs/person-benchmark.md);
+        both cut at the search bounds (:func:`wald_interval`: ``xi_h`` never below 0);
         ``"profile"``: profile-likelihood intervals (measured: about 9 s more
         on a 30 s record; as narrow as the Wald ones).
     level : float
@@ -474,14 +500,12 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         scale[0], scale[1] = factors["f_h"], factors["xi_h"]
         cov = cov * np.outer(scale, scale)
     se = np.sqrt(np.diag(cov))
-    z = stats.norm.ppf(0.5 + level / 2.0)
     interval = {}
     for which, name in enumerate(("f_h", "xi_h")):
-        wald = (params[which] - z * se[which], params[which] + z * se[which])
         if intervals == "profile":
             interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
         else:
-            interval[name] = wald
+            interval[name] = wald_interval(params[which], se[which], level, model.bounds[which])
     return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
                         intervals=interval, interval_method={"profile": "profile", "wald": f"wald ({cov_type})"}.get(
                             intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, "
