@@ -120,6 +120,31 @@ SAMPLE_TRUTH = "sample_truth.json"
 # small helpers
 
 
+def steady_grf_shape(grf_amplitude, points):
+    """Dynamic GRF over one cycle from its harmonics' amplitudes, with the phases of :func:`default_phases`.
+
+    Harmonic ``k`` contributes ``A_k cos(k theta - pi/4)`` (:data:`GRF_PHASE_LAG`).
+
+    Parameters
+    ----------
+    grf_amplitude : array_like, shape (..., K)
+        Amplitudes ``A_k = |H(k f_b)| BLF_k`` of harmonics 1..K (body weights, or g).
+    points : int
+        Phases ``theta`` per cycle.
+
+    Returns
+    -------
+    theta : ndarray, shape (points,)
+        Cycle phases (rad), from 0, not reaching ``2 pi``.
+    shape : ndarray, shape (..., points)
+        The dynamic GRF at each phase, in the amplitudes' unit.
+    """
+    grf_amplitude = np.asarray(grf_amplitude, dtype=float)
+    orders = np.arange(1, grf_amplitude.shape[-1] + 1)
+    theta = np.linspace(0.0, 2.0 * np.pi, int(points), endpoint=False)
+    return theta, grf_amplitude @ np.cos(np.outer(orders, theta) - GRF_PHASE_LAG)
+
+
 def default_phases(blf, f_b, f_h, xi_h, extra_blf=()):
     """Force phases that give a realistic GRF shape on a rigid floor.
 
@@ -153,8 +178,7 @@ def default_phases(blf, f_b, f_h, xi_h, extra_blf=()):
     orders = np.arange(1, n + extra_blf.size + 1)
     response = acceleration_frf(orders * f_b, f_h, xi_h)
     grf_amplitude = np.abs(response[:n]) * blf
-    theta = np.linspace(0.0, 2.0 * np.pi, 4096, endpoint=False)
-    shape = grf_amplitude @ np.cos(np.outer(orders[:n], theta) - GRF_PHASE_LAG)
+    theta, shape = steady_grf_shape(grf_amplitude, 4096)
     theta_peak = float(theta[np.argmax(shape)]) if np.any(grf_amplitude > 0) else 0.0
     grf_phase = GRF_PHASE_LAG - orders * theta_peak
     force_phase = grf_phase + np.angle(response)

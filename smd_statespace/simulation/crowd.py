@@ -59,12 +59,10 @@ from matplotlib.figure import Figure
 from .. import article
 from ..errors import OptionError
 from ..io import G
-from ..model import c_h, k_h
-from .population import _population_columns
-from ..model import SMDModel
-from .bouncing import GRF_PHASE_LAG, default_phases
-from ..model import acceleration_frf
+from ..model import SMDModel, acceleration_frf
+from .bouncing import default_phases, steady_grf_shape
 from .dynamics import _cycle_states, _simulation_effects, _System
+from .population import _population_columns, with_stiffness_and_damping
 from .variation import TRUNCATION_SD, _draw_cycles
 
 __all__ = [
@@ -294,10 +292,7 @@ def draw_people(n, f_b, seed=None, table=None, bounds=None) -> pd.DataFrame:
 def _draw_parameters(root, indices, draws, f_b, fits, bounds):
     """Parameters of people ``indices`` at their draws ``draws``: arrays, as :func:`sample_population`."""
     rows = [_population_columns(1, f_b, person_seeds(root, i, d)[0], fits, bounds) for i, d in zip(indices, draws)]
-    columns = {key: np.concatenate([row[key] for row in rows]) for key in rows[0]}
-    columns["K_h"] = k_h(columns["f_h"], columns["mass"])  # Eq. 17
-    columns["C_h"] = c_h(columns["xi_h"], columns["f_h"], columns["mass"])  # Eq. 18
-    return columns
+    return with_stiffness_and_damping({key: np.concatenate([row[key] for row in rows]) for key in rows[0]})
 
 
 def periodic_grf_minimum(f_b, f_h, xi_h, blf, points=2048):
@@ -333,9 +328,8 @@ def periodic_grf_minimum(f_b, f_h, xi_h, blf, points=2048):
     blf = np.atleast_2d(np.asarray(blf, dtype=float))
     orders = np.arange(1, blf.shape[1] + 1)
     amplitude = np.abs(acceleration_frf(orders * f_b, f_h[:, None], xi_h[:, None])) * blf
-    theta = np.linspace(0.0, 2.0 * np.pi, int(points), endpoint=False)
-    shape = np.cos(np.outer(orders, theta) - GRF_PHASE_LAG)
-    return 1.0 + (amplitude @ shape).min(axis=1)
+    _, shape = steady_grf_shape(amplitude, points)
+    return 1.0 + shape.min(axis=1)
 
 
 # ---------------------------------------------------------------------------

@@ -149,7 +149,11 @@ def sample_population(n, f_b, seed=None, table=None, bounds=None):
     OptionError
         ``f_b`` outside every band, bad ``n``, ``table`` or ``bounds``.
     """
-    frame = pd.DataFrame(_population_columns(n, f_b, seed, table, bounds))
-    frame["K_h"] = k_h(frame["f_h"], frame["mass"])  # Eq. 17
-    frame["C_h"] = c_h(frame["xi_h"], frame["f_h"], frame["mass"])  # Eq. 18
-    return frame
+    return pd.DataFrame(with_stiffness_and_damping(_population_columns(n, f_b, seed, table, bounds)))
+
+
+def with_stiffness_and_damping(columns):
+    """``columns`` (a mapping or table with ``f_h``, ``xi_h``, ``mass``) with ``K_h`` (N/m) and ``C_h`` (N s/m) added."""
+    columns["K_h"] = k_h(columns["f_h"], columns["mass"])  # Eq. 17
+    columns["C_h"] = c_h(columns["xi_h"], columns["f_h"], columns["mass"])  # Eq. 18
+    return columns
