@@ -296,3 +296,35 @@ def test_wald_interval_is_symmetric_inside_the_bounds_and_ends_at_a_bound_it_wou
     low, high = wald_interval(0.05, 0.1, 0.9, XI_H_BOUNDS)  # 0.05 - 1.645 * 0.1 < 0: no negative damping
     assert low == XI_H_BOUNDS[0] and np.isclose(high, 0.05 + z * 0.1)
     assert wald_interval(5.9, 0.2, 0.9, (0.5, 6.0))[1] == 6.0
+
+
+@pytest.mark.slow
+def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys):
+    sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=30, fs=1000.0, seed=11)
+    result = identify_person(sim.record)
+    assert result.record.fs == pytest.approx(100.0) and result.model.y.size == sim.record.time[::10].size
+    assert result.notes == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and every 10th sample "
+                            "kept (rate 100 Hz; rate=None or --rate 0 keeps every sample)"]
+    assert "note: fitted at 100 Hz" in result.summary() and result.to_dict()["fs"] == pytest.approx(100.0)
+    low, high = result.intervals["f_h"]
+    assert low < 2.8 < high  # the person, from a tenth of the samples
+    path = tmp_path / "fast.csv"
+    sim.write(path)
+    assert main(["identify", str(path), "--mass", "70", "--rate", "-1", "--out", str(tmp_path / "o")]) == 2
+    assert "--rate" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_calibrated_intervals_add_the_model_error_floor_and_the_sd_stays_the_records(long_fit):
+    from scipy import stats
+
+    from smd_statespace.person.fit import MODEL_ERROR_FLOOR
+
+    z = stats.norm.ppf(0.95)
+    for which, name, floor in ((0, "f_h", MODEL_ERROR_FLOOR["f_h"] * long_fit.f_h),
+                               (1, "xi_h", MODEL_ERROR_FLOOR["xi_h"])):
+        low, high = long_fit.intervals[name]
+        half = z * np.hypot(long_fit.se[which], floor)
+        assert high == pytest.approx(long_fit.params[which] + half)
+        assert low == pytest.approx(max(long_fit.params[which] - half, long_fit.model.bounds[which][0]))
+        assert long_fit.determined(name)  # the floor widens the interval, not what the record determines

@@ -22,6 +22,7 @@ from smd_statespace.signals import (
     Cycle,
     Preprocessed,
     com_acceleration,
+    decimate_record,
     find_cycles,
     highpass,
     integrate,
@@ -639,3 +640,46 @@ def test_find_cycles_rejects_nan():
     with pytest.raises(RecordError) as info:
         find_cycles(t, force, source="gap.csv")
     assert "gap.csv" in one_line(info)
+
+
+def _band_limited(t):
+    """A bouncing-like force (N): 2.2 Hz and two harmonics up to 30 Hz, all below 0.4 of 100 Hz."""
+    return MASS * G * (1.0 + 0.3 * np.sin(2 * np.pi * 2.2 * t + 0.3) + 0.05 * np.sin(2 * np.pi * 13.1 * t)
+                       + 0.015 * np.sin(2 * np.pi * 30.0 * t))
+
+
+def test_decimation_keeps_the_bouncing_band_and_removes_what_would_fold_onto_it():
+    t = np.arange(0.0, 20.0, 0.001)
+    high = 20.0 * np.sin(2 * np.pi * 80.0 * t)  # 80 Hz: kept every 10th sample it would fold onto 20 Hz
+    floor = 0.1 * np.sin(2 * np.pi * 9.5 * t)
+    record = make_record(t, _band_limited(t) + high, MASS, floor_acc=floor + 0.05 * np.sin(2 * np.pi * 80.0 * t))
+    regressor = np.sin(2 * np.pi * 5.0 * t)
+    out, factor, (decimated,) = decimate_record(record, 100.0, [regressor])
+    assert factor == 10 and out.fs == pytest.approx(100.0) and out.time.size == 2000
+    np.testing.assert_array_equal(out.time, t[::10])
+    inside = slice(20, -20)  # 0.2 s from either end: the filter's end effects
+    assert np.abs(out.force - _band_limited(out.time))[inside].max() < 0.01 * 20.0  # the 80 Hz part: < 1 %
+    assert np.abs(record.force[::10] - _band_limited(out.time))[inside].max() > 0.9 * 20.0  # plain subsampling folds it
+    assert np.abs(out.floor_acc - 0.1 * np.sin(2 * np.pi * 9.5 * out.time))[inside].max() < 2e-4
+    assert np.abs(decimated - np.sin(2 * np.pi * 5.0 * out.time))[inside].max() < 2e-3  # 0.2 % passband ripple
+    assert out.mass == MASS and out.source == record.source
+
+
+@pytest.mark.parametrize("fs, rate, factor", [(1000.0, 100.0, 10), (2000.0, 100.0, 20), (250.0, 100.0, 2),
+                                              (150.0, 100.0, 1), (100.0, 100.0, 1), (1000.0, None, 1)])
+def test_decimation_keeps_the_rate_between_rate_and_twice_it(fs, rate, factor):
+    t = np.arange(0.0, 10.0, 1.0 / fs)
+    record = make_record(t, _band_limited(t), MASS)
+    out, got, _ = decimate_record(record, rate)
+    assert got == factor
+    if factor == 1:
+        assert out is record
+    else:
+        assert rate <= out.fs < 2 * rate
+
+
+@pytest.mark.parametrize("rate", [0.0, -5.0, float("nan"), "100"])
+def test_decimation_rate_must_be_a_positive_number(rate):
+    t = np.arange(0.0, 10.0, 0.001)
+    with pytest.raises(OptionError, match="rate="):
+        decimate_record(make_record(t, _band_limited(t), MASS), rate)

@@ -119,6 +119,21 @@ def _count(text: str) -> int:
     return _whole(text, 1, "a whole number >= 1")
 
 
+def add_rate_argument(parser):
+    """``--rate HZ``: the sample rate the record-level model works at (0 keeps every sample)."""
+    from ..signals import RECORD_RATE
+
+    parser.add_argument("--rate", type=_nonnegative, default=RECORD_RATE, metavar="HZ",
+                        help=f"record estimator: a record sampled at twice this rate or faster is low-pass filtered "
+                             f"and decimated to between HZ and 2 HZ before the fit (default {RECORD_RATE:g}, the "
+                             "rate the calibrated intervals were measured at; 0 keeps every sample, slower)")
+
+
+def rate_of(args):
+    """``--rate`` as :func:`~smd_statespace.person.identify_person` takes it: None for 0."""
+    return args.rate or None
+
+
 def add_record_arguments(parser):
     """``REC.csv --mass KG``: the record to identify."""
     parser.add_argument("record", metavar="REC.csv", help="record with columns time,force[,floor_acc]")

@@ -9,8 +9,8 @@ import pandas as pd
 
 from ..diagnostics.check import INITIAL_STATES
 from ..estimators import ESTIMATORS
-from .common import (add_model_arguments, add_record_arguments, add_run_arguments, build_model, estimator_options,
-                     out_dir, prepare_record)
+from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments, build_model,
+                     estimator_options, out_dir, prepare_record, rate_of)
 from .identify import DEFAULT_ESTIMATOR
 
 
@@ -28,6 +28,7 @@ def add_diagnose(subparsers):
     parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default=DEFAULT_ESTIMATOR,
                         help=f"estimator for every fit (default {DEFAULT_ESTIMATOR}); record: the record-level model, "
                              "each candidate added with its record-level parameters and tested by likelihood ratio")
+    add_rate_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--json", metavar="FILE", help="write the report as JSON")
@@ -65,7 +66,7 @@ def run_person_diagnose(args) -> int:
 
     directory = out_dir(args.out)
     record = read_record(args.record, args.mass)
-    base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks)
+    base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args))
     print(f"{record.source}: record-level model")
     print(base.summary())
     result = diagnose_person(base, candidates=args.effect or None, alpha=args.alpha)

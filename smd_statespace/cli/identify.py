@@ -13,8 +13,8 @@ from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError
 from ..identify.runner import DEFAULT_ESTIMATOR
-from .common import (PROG, _count, add_model_arguments, add_run_arguments, build_model, estimator_options, load_truth,
-                     out_dir, prepare_record, truth_values)
+from .common import (PROG, _count, add_model_arguments, add_rate_argument, add_run_arguments, build_model,
+                     estimator_options, load_truth, out_dir, prepare_record, rate_of, truth_values)
 
 
 SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
@@ -57,6 +57,7 @@ def add_identify(subparsers):
                         help="record estimator: 90 %% intervals of f_h, xi_h from the standard errors widened by "
                              "factors measured on simulated records (calibrated, default), from the standard errors "
                              "alone (wald: too narrow) or from the profile likelihood (slower)")
+    add_rate_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--jobs", type=_count, default=1, metavar="N", help="parallel processes (default 1)")
@@ -230,12 +231,12 @@ def run_person(args) -> int:
     record = read_record(args.record, args.mass)
     started = time.perf_counter()
     result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
-                             intervals=args.intervals, check=not args.ignore_checks)
+                             intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args))
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary())
     options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
-               "harmonics": args.harmonics}
+               "harmonics": args.harmonics, "rate": rate_of(args)}
     written = write_person(directory, result, options, truth=truth_values(load_truth(args.truth)))
     print("wrote " + ", ".join(str(path) for path in written))
     return 0

@@ -329,7 +329,6 @@ def concentrate(S, s, ee, f, n_obs):
         their maximum), ``loglike_diffuse`` (de Jong's diffuse likelihood with
         the scale at its own maximum) and ``rank`` (numerical rank of ``S``).
     """
-    q = S.shape[0]
     scale = np.sqrt(np.maximum(np.diag(S), 1e-300))
     Sn = S / np.outer(scale, scale)
     w, V = np.linalg.eigh(Sn)

@@ -78,6 +78,8 @@ class PersonResult:
     record_warnings : list of str
         What the checks of :func:`~smd_statespace.diagnostics.applicability.check_bouncing`
         found in the record before the fit (first in :attr:`warnings`).
+    notes : list of str
+        What was done to the record before the fit (decimation), in words.
     """
 
     record: object
@@ -92,6 +94,7 @@ class PersonResult:
     comparison: list
     n_evaluations: int = 0
     record_warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
 
     # ------------------------------------------------------------------ estimates
     @cached_property
@@ -328,7 +331,9 @@ class PersonResult:
         out["n_cycles"] = self.n_cycles
         out["n_samples"] = int(self.model.y.size)
         out.update(self.test_pvalues())
+        out["fs"] = self.record.fs
         out["warnings"] = self.warnings
+        out["notes"] = list(self.notes)
         out["variation_models"] = self.comparison
         return out
 
@@ -369,6 +374,7 @@ class PersonResult:
             f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
             f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
         ]
+        lines += [f"note: {n}" for n in d["notes"]]
         lines += [f"warning: {w}" for w in d["warnings"]]
         return "\n".join(lines)
 

@@ -1,0 +1,119 @@
+"""Coverage of the record-level intervals on quiet and fast records (:func:`smd_statespace.person.identify_person`).
+
+``person.fit.CALIBRATION`` was measured on 30 s records at 100 Hz with 1 % BW
+noise (``person_accuracy.py``). Real force plates are quieter and faster. This
+study simulates the same people (``person_accuracy.draw_people``) in four
+conditions, 100 Hz or 1000 Hz (decimated to 100 Hz by ``identify_person``)
+and 1 % or 0.3 % BW noise, with both generators of force variation, fits each
+record as a user would (``identify_person`` with its defaults) and counts how
+often the 90 % intervals hold the truth::
+
+    python benchmarks/person_noise.py --jobs 2 --records 16 --seed 77    # about 10 min on 2 cores
+    python benchmarks/person_noise.py --floor 0,0                         # the intervals without the floor
+
+Columns: coverage of ``f_h`` and ``xi_h``; the median signed error of ``f_h``
+(%), which the noise level does not remove; the median calibrated sd of
+``f_h`` (Hz). ``--floor F,X`` sets ``person.fit.MODEL_ERROR_FLOOR`` for the
+run (relative for ``f_h``, absolute for ``xi_h``).
+
+Everything random comes from ``SeedSequence(--seed)`` through ``draw_people``;
+the rows do not depend on ``--jobs``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import pandas as pd
+from tqdm.auto import tqdm
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import person_accuracy  # noqa: E402  (draw_people: the same people as the accuracy study)
+
+from smd_statespace.person import fit as person_fit  # noqa: E402
+from smd_statespace.person import identify_person  # noqa: E402
+from smd_statespace.simulation import simulate_bouncing  # noqa: E402
+
+CONDITIONS = (("100 Hz, 1 % BW", 100.0, 0.01), ("100 Hz, 0.3 % BW", 100.0, 0.003),
+              ("1000 Hz, 1 % BW", 1000.0, 0.01), ("1000 Hz, 0.3 % BW", 1000.0, 0.003))
+"""(label, sampling rate in Hz, GRF noise as a fraction of body weight)."""
+
+DURATION = 30.0
+
+
+def one(task) -> dict:
+    """Simulate and identify one record; never raises."""
+    person, (label, fs, noise), generator, floor = task
+    if floor is not None:
+        person_fit.MODEL_ERROR_FLOOR.update(f_h=floor[0], xi_h=floor[1])
+    row = {"condition": label, "generator": generator, "record": int(person["record"]), "error": ""}
+    blf = [person[f"blf{i}"] for i in range(1, 5)]
+    try:
+        record = simulate_bouncing(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"],
+                                   duration=DURATION, fs=fs, blf=blf, noise=noise, seed=int(person["sim_seed"]),
+                                   variation=generator).record
+        result = identify_person(record)
+    except Exception as exc:  # noqa: BLE001 - one record must never kill the study
+        row["error"] = f"{type(exc).__name__}: {str(exc).splitlines()[0][:120]}"
+        return row
+    for which, name in enumerate(("f_h", "xi_h")):
+        low, high = result.intervals[name]
+        row[f"{name}_covered"] = bool(low <= person[name] <= high)
+        row[f"{name}_error"] = float(result.params[which] - person[name])
+        row[f"{name}_sd"] = float(result.se[which])
+    row["f_h_error_pct"] = 100.0 * row["f_h_error"] / person["f_h"]
+    return row
+
+
+def summary(frame: pd.DataFrame) -> list:
+    """Markdown table: one row per condition and generator."""
+    lines = ["| record | generator | records (failed) | f_h 90 % coverage | xi_h 90 % coverage | "
+             "f_h signed error, median | f_h sd (calibrated), median |", "|---|---|---|---|---|---|---|"]
+    for (condition, generator), rows in frame.groupby(["condition", "generator"], sort=False):
+        ok = rows[rows["error"] == ""]
+        if ok.empty:
+            lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows)}) | | | | |")
+            continue
+        lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows) - len(ok)}) | "
+                     f"{ok['f_h_covered'].mean():.0%} | {ok['xi_h_covered'].mean():.0%} | "
+                     f"{ok['f_h_error_pct'].median():+.1f} % | {ok['f_h_sd'].median():.3f} Hz |")
+    ok = frame[frame["error"] == ""]
+    lines.append(f"| all | | {len(frame)} ({len(frame) - len(ok)}) | {ok['f_h_covered'].mean():.0%} | "
+                 f"{ok['xi_h_covered'].mean():.0%} | | |")
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--records", type=int, default=16, help="people per condition and generator (default 16)")
+    parser.add_argument("--seed", type=int, default=77, help="root of the SeedSequence (default 77)")
+    parser.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
+    parser.add_argument("--floor", default=None, metavar="F,X",
+                        help="model-error floor of f_h (relative) and xi_h for this run (default: the library's)")
+    parser.add_argument("--csv", type=Path, default=None, help="also write every record's row here")
+    args = parser.parse_args(argv)
+    floor = None if args.floor is None else tuple(float(v) for v in args.floor.split(","))
+    people = person_accuracy.draw_people(args.records, args.seed)
+    tasks = [(person, condition, generator, floor) for condition in CONDITIONS
+             for generator in person_accuracy.GENERATORS for _, person in people.iterrows()]
+    started = time.perf_counter()
+    with ProcessPoolExecutor(max(1, args.jobs)) as pool:
+        rows = list(tqdm(pool.map(one, tasks), total=len(tasks), unit="record", desc="records"))
+    frame = pd.DataFrame(rows)
+    if args.csv is not None:
+        frame.to_csv(args.csv, index=False)
+    used = floor or (person_fit.MODEL_ERROR_FLOOR["f_h"], person_fit.MODEL_ERROR_FLOOR["xi_h"])
+    print(f"model-error floor: f_h {used[0]:g} (relative), xi_h {used[1]:g}; seed {args.seed}")
+    print("\n".join(summary(frame)))
+    for _, row in frame[frame["error"] != ""].iterrows():
+        print(f"failed: {row['condition']} {row['generator']} #{row['record']}: {row['error']}")
+    print(f"\n{len(frame)} records, {(time.perf_counter() - started) / 60:.1f} min, {args.jobs} process(es)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
