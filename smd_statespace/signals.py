@@ -61,7 +61,9 @@ from .io import G, Record
 __all__ = [
     "SUPPORTED_FB",
     "RECORD_RATE",
+    "check_rate",
     "decimate_record",
+    "decimation_note",
     "OBSERVATION_CHANNELS",
     "PADDINGS",
     "Cycle",
@@ -128,6 +130,14 @@ Table 3 below 20 Hz); the likelihood's cost grows with the samples (a 60 s recor
 """
 
 
+def check_rate(rate):
+    """``rate`` if it is a positive number of Hz or None; otherwise an :class:`OptionError` naming it."""
+    if rate is not None and not (isinstance(rate, (int, float)) and not isinstance(rate, bool)
+                                 and math.isfinite(rate) and rate > 0):
+        raise OptionError(f"rate={rate!r} must be a positive sample rate in Hz (or None to keep every sample)")
+    return rate
+
+
 def decimate_record(record: Record, rate=RECORD_RATE, extra=()):
     """The record at ``rate`` to ``2 rate`` Hz: anti-aliasing low-pass, then every ``q``-th sample.
 
@@ -156,10 +166,8 @@ def decimate_record(record: Record, rate=RECORD_RATE, extra=()):
     extra : list of ndarray
         The ``extra`` signals, decimated alike.
     """
-    if rate is None:
+    if check_rate(rate) is None:
         return record, 1, list(extra)
-    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
-        raise OptionError(f"rate={rate!r} must be a positive sample rate in Hz (or None to keep every sample)")
     factor = int(math.floor(record.fs / rate + 1e-9))
     if factor < 2:
         return record, 1, list(extra)
@@ -171,6 +179,14 @@ def decimate_record(record: Record, rate=RECORD_RATE, extra=()):
     floor_acc = None if record.floor_acc is None else down(record.floor_acc)[:time.size]
     decimated = replace(record, time=time, force=down(record.force)[:time.size], floor_acc=floor_acc)
     return decimated, factor, [down(values)[:time.size] for values in extra]
+
+
+def decimation_note(measured_rate: float, record: Record, factor: int, rate) -> list:
+    """What :func:`decimate_record` did, in words for a result's notes (``[]`` when it kept every sample)."""
+    if factor == 1:
+        return []
+    return [f"fitted at {record.fs:.4g} Hz: the record ({measured_rate:.4g} Hz) was low-pass filtered and every "
+            f"{factor}th sample kept (rate {rate:g} Hz; rate=None or --rate 0 keeps every sample)"]
 
 
 def com_acceleration(force, mass):

@@ -265,3 +265,24 @@ def test_compare_unknown_estimator_exit_2(short_record, tmp_path, capsys):
     assert main(["compare", str(short_record), "--mass", "66", "--estimators", "ekf,kf", "--out",
                  str(tmp_path / "c")]) == 2
     assert "unknown 'kf'" in capsys.readouterr().err
+
+
+def test_per_cycle_identify_decimates_a_fast_record_and_records_the_rate(tmp_path, capsys):
+    fast = tmp_path / "fast.csv"
+    assert main(["simulate", "--out", str(fast), "--mass", "66", "--fb", "2.4", "--fh", "2.8", "--xi", "0.3",
+                 "--duration", "7", "--seed", "3", "--fs", "1000"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "id"
+    assert main(["identify", str(fast), "--mass", "66", "--estimator", "ekf", "--max-passes", "2", "--out", str(out),
+                 "--quiet"]) == 0
+    assert "note: fitted at 100 Hz: the record (1000 Hz)" in capsys.readouterr().out
+    assert json.loads((out / "run.json").read_text())["rate"] == 100.0
+    table = pd.read_csv(out / "results.csv")
+    assert (table.status == "ok").sum() >= 6
+    kept = tmp_path / "kept"
+    assert main(["identify", str(fast), "--mass", "66", "--estimator", "ekf", "--max-passes", "1", "--rate", "0",
+                 "--out", str(kept), "--quiet"]) == 0
+    assert "note:" not in capsys.readouterr().out and json.loads((kept / "run.json").read_text())["rate"] is None
+    assert main(["compare", str(fast), "--mass", "66", "--estimators", "ekf", "--rate", "-1", "--out",
+                 str(tmp_path / "c")]) == 2
+    assert "--rate" in capsys.readouterr().err

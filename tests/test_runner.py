@@ -122,7 +122,8 @@ def test_grid_runs_one_pass(record):
 @pytest.mark.parametrize(
     "kwargs,pattern",
     [({"estimator": "kalman"}, "unknown estimator 'kalman'"), ({"estimator": "pf", "n_particles": 0}, "n_particles"),
-     ({"max_passes": 0}, "max_passes"), ({"tolerance": 5}, "tolerance"), ({"seed": -1}, "seed")],
+     ({"max_passes": 0}, "max_passes"), ({"tolerance": 5}, "tolerance"), ({"seed": -1}, "seed"),
+     ({"rate": 0}, "rate=0"), ({"rate": "fast"}, "rate='fast'")],
 )
 def test_bad_runner_options(kwargs, pattern):
     with pytest.raises(OptionError, match=pattern):
@@ -260,3 +261,25 @@ def test_comparison_figure_draws_a_simulations_truth_on_every_panel_and_takes_a_
         lines = [line for line in ax.get_lines() if line.get_label() == "truth"]
         assert len(lines) == 1 and lines[0].get_ydata()[0] == expected
     assert fig._suptitle.get_text().startswith("Two models compared")
+
+
+def test_a_fast_record_is_decimated_before_its_cycles_and_the_runner_says_so():
+    fast = simulate_bouncing(mass=64.0, f_b=2.2, f_h=2.6, xi_h=0.35, duration=9.0, fs=1000.0, seed=21).record
+    runner = CycleRunner(estimator=ScriptedEstimator(), progress=False)
+    table = runner.run(fast)
+    assert runner.preprocessed_.fs == pytest.approx(100.0)
+    assert runner.notes_ == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and every 10th sample "
+                             "kept (rate 100 Hz; rate=None or --rate 0 keeps every sample)"]
+    every = CycleRunner(estimator=ScriptedEstimator(), progress=False, rate=None)
+    full = every.run(fast)
+    assert every.preprocessed_.fs == pytest.approx(1000.0) and every.notes_ == []
+    # the same bouncing cycles, found from a tenth of the samples (starts within two 100 Hz samples)
+    assert list(table.status) == list(full.status)
+    np.testing.assert_allclose(table.t_start, full.t_start, atol=0.02)
+    # each cycle's f_b is quantised by the 10 ms samples (about 2 % at 2.2 Hz), their mean is not
+    np.testing.assert_allclose(table.f_b, full.f_b, rtol=0.05)
+    assert table.f_b.mean() == pytest.approx(full.f_b.mean(), rel=0.005)
+    # a pipeline output is used as it is: the user preprocessed it, the runner does not decimate it again
+    given = CycleRunner(estimator=ScriptedEstimator(), progress=False)
+    given.run(preprocess(fast))
+    assert given.preprocessed_.fs == pytest.approx(1000.0) and given.notes_ == []

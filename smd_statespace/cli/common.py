@@ -120,13 +120,14 @@ def _count(text: str) -> int:
 
 
 def add_rate_argument(parser):
-    """``--rate HZ``: the sample rate the record-level model works at (0 keeps every sample)."""
+    """``--rate HZ``: the sample rate every estimator works at (0 keeps every sample)."""
     from ..signals import RECORD_RATE
 
     parser.add_argument("--rate", type=_nonnegative, default=RECORD_RATE, metavar="HZ",
-                        help=f"record estimator: a record sampled at twice this rate or faster is low-pass filtered "
-                             f"and decimated to between HZ and 2 HZ before the fit (default {RECORD_RATE:g}, the "
-                             "rate the calibrated intervals were measured at; 0 keeps every sample, slower)")
+                        help=f"a record sampled at twice this rate or faster is low-pass filtered and decimated to "
+                             f"between HZ and 2 HZ before the fit (default {RECORD_RATE:g}: the article's rate, at "
+                             "which the per-cycle noise settings and the record estimator's calibrated intervals "
+                             "were set; 0 keeps every sample, slower)")
 
 
 def rate_of(args):
@@ -202,12 +203,19 @@ def estimator_options(name: str, args) -> dict:
 
 
 def prepare_record(args):
-    """Read, check and preprocess ``args.record``; returns ``(Record, Preprocessed)``."""
+    """Read, check, decimate (``--rate``) and preprocess ``args.record``; returns ``(Record, Preprocessed)``.
+
+    The decimation is said on standard output in a ``note:`` line.
+    """
     from ..io import read_record
-    from ..signals import preprocess
+    from ..signals import decimate_record, decimation_note, preprocess
 
     record = read_record(args.record, args.mass)
     checked(record, args)
+    measured_rate = record.fs
+    record, factor, _ = decimate_record(record, rate_of(args))
+    for note in decimation_note(measured_rate, record, factor, rate_of(args)):
+        print(f"note: {note}")
     return record, preprocess(record)
 
 

@@ -6,8 +6,8 @@ import pandas as pd
 
 from ..errors import OptionError
 from ..estimators import ESTIMATORS
-from .common import (add_model_arguments, add_record_arguments, add_run_arguments, build_model, load_truth, out_dir,
-                     prepare_record, truth_values)
+from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments, build_model,
+                     load_truth, out_dir, prepare_record, truth_values)
 from .identify import identify, plausible_cycles
 
 COMPARED = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3")
@@ -47,6 +47,7 @@ def add_compare(subparsers):
     parser.add_argument("--truth", metavar="JSON", help="truth file of a synthetic record (simulate writes one)")
     add_model_arguments(parser)
     add_run_arguments(parser)
+    add_rate_argument(parser)
     return parser
 
 
@@ -131,7 +132,7 @@ def run_compare(args) -> int:
             from ..person import identify_person
 
             started = time.perf_counter()
-            person = identify_person(record, n_harmonics=args.harmonics, check=False)  # checked above
+            person = identify_person(record, n_harmonics=args.harmonics, check=False, rate=None)  # checked, decimated
             person_seconds = time.perf_counter() - started
             continue
         _, tables[name], seconds[name] = identify(args, model, preprocessed, name)

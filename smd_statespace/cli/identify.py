@@ -154,7 +154,7 @@ def write_outputs(directory, runner, table, args, estimator, truth=None) -> list
         "version": __version__, "command": "identify", "record": str(args.record), "mass": args.mass,
         "estimator": estimator, "options": estimator_options(estimator, args), "harmonics": args.harmonics,
         "discretisation": args.discretisation, "effects": list(args.effect), "max_passes": args.max_passes,
-        "seed": args.seed,
+        "seed": args.seed, "rate": rate_of(args),
     }, indent=2))
     written = [results, sidecar]
     ok = table[table["status"] == "ok"]
@@ -202,7 +202,8 @@ def run_batch_identify(args) -> int:
     if args.estimator == "record":
         _refuse_effects(args)
     records = collect_records(args.record, args.mass, args.manifest)
-    options = dict(max_passes=args.max_passes, seed=args.seed, **estimator_options(args.estimator, args))
+    options = dict(max_passes=args.max_passes, seed=args.seed, rate=rate_of(args),
+                   **estimator_options(args.estimator, args))
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
                         progress=not args.quiet, check=not args.ignore_checks)

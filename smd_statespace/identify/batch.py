@@ -240,20 +240,21 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
     """
     from ..diagnostics.applicability import check_bouncing
     from ..io import read_record
+    from ..signals import RECORD_RATE
     from .runner import CycleRunner
-    from ..signals import preprocess
 
     try:
         measured = read_record(record.path, record.mass)
         if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row
             from ..person import identify_person
 
-            person = identify_person(measured, n_harmonics=model.n_harmonics, check=check)
+            person = identify_person(measured, n_harmonics=model.n_harmonics, check=check,
+                                     rate=runner_options.get("rate", RECORD_RATE))
             table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
         else:
             runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
             check_bouncing(measured).raise_if_refused(override=not check)
-            table = runner.run(preprocess(measured), record_key=record.key)
+            table = runner.run(measured, record_key=record.key)  # decimated to runner_options["rate"], preprocessed
     except SMDInputError as exc:
         table = pd.DataFrame([{"status": "failed", "reason": " ".join(str(exc).split())}])
     except (ArithmeticError, np.linalg.LinAlgError) as exc:  # numerical failure outside a filter: contained
@@ -300,7 +301,8 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
         Estimator name (default :data:`~smd_statespace.identify.runner.DEFAULT_ESTIMATOR`).
     runner_options : dict, optional
         :class:`~smd_statespace.identify.runner.CycleRunner` options (``max_passes``,
-        ``seed``, ``n_particles``, ...).
+        ``seed``, ``rate``, ``n_particles``, ...); with ``estimator="record"`` only ``rate`` is
+        used (default :data:`~smd_statespace.signals.RECORD_RATE`).
     jobs : int
         Records identified in parallel processes (results do not depend on it).
     resume : bool

@@ -43,7 +43,7 @@ from ..estimators import ESTIMATORS, EstimatorFailure, FilterResult, cycle_data,
 from ..io import Record
 from ..model import SMDModel, blf
 from .plausibility import implausible_reasons
-from ..signals import Preprocessed, preprocess
+from ..signals import RECORD_RATE, Preprocessed, check_rate, decimate_record, decimation_note, preprocess
 
 DEFAULT_ESTIMATOR = "ekf"
 """Estimator used when none is named: fast, deterministic and, with repeated passes, honest about its
@@ -189,6 +189,16 @@ class CycleRunner:
         Runs cycles in parallel (processes, threads or a Dask cluster's executor).
     keep_results : bool
         Keep every cycle's final :class:`FilterResult` in ``results_`` (for diagnostics).
+    rate : float or None
+        A :class:`~smd_statespace.io.Record` sampled at twice this rate (Hz) or faster is
+        low-pass filtered and decimated to between ``rate`` and ``2 rate`` before it is
+        preprocessed (:func:`~smd_statespace.signals.decimate_record`; default
+        :data:`~smd_statespace.signals.RECORD_RATE`). The article's noise levels and random
+        walk (Eq. 6) are per sample at its 100 Hz; at 1000 Hz the same settings walk ten
+        times as often, and every cycle costs ten times more (``benchmarks/fast_records.py``,
+        docs/performance.md "Fast records": median ``f_h`` error 0.87 -> 0.65 Hz with the
+        EKF, 1.36 -> 0.69 Hz with the grid, 10-11 times faster). None keeps every sample. A :class:`~smd_statespace.signals.Preprocessed` input is
+        used as it is.
     **options
         Estimator options, e.g. ``n_particles=5000``.
 
@@ -202,10 +212,13 @@ class CycleRunner:
         Final-pass filter results (with ``keep_results=True``).
     preprocessed_ : Preprocessed
         The pipeline output the cycles came from.
+    notes_ : list of str
+        What was done to the record before the cycles, in words (the decimation).
     """
 
     def __init__(self, model: SMDModel | None = None, estimator=None, max_passes: int = 8, tolerance: float = 0.05,
-                 seed: int = 0, progress: bool = True, executor=None, keep_results: bool = True, **options):
+                 seed: int = 0, progress: bool = True, executor=None, keep_results: bool = True,
+                 rate=RECORD_RATE, **options):
         self.model = SMDModel() if model is None else model
         if isinstance(estimator, str) and estimator not in ESTIMATORS:
             raise OptionError(f"unknown estimator {estimator!r}; choose one of {', '.join(sorted(ESTIMATORS))}")
@@ -222,6 +235,7 @@ class CycleRunner:
         self.progress = progress
         self.executor = executor
         self.keep_results = keep_results
+        self.rate = check_rate(rate)
 
     def cycles(self, preprocessed: Preprocessed):
         """The valid cycles of a record, as :class:`~smd_statespace.estimators.CycleData`."""
@@ -239,6 +253,11 @@ class CycleRunner:
         record_key : int
             Identity of the record within a batch, part of every cycle's seed.
         """
+        self.notes_ = []
+        if isinstance(record, Record):
+            measured_rate = record.fs
+            record, factor, _ = decimate_record(record, self.rate)
+            self.notes_ = decimation_note(measured_rate, record, factor, self.rate)
         preprocessed = preprocess(record) if isinstance(record, Record) else record
         check_sampling(self.model, preprocessed)
         mass = float(preprocessed.mass if mass is None else mass)

@@ -28,7 +28,7 @@ from scipy import optimize, stats
 from ..diagnostics.applicability import check_bouncing
 from ..errors import CycleError, SMDInputError
 from ..io import G, Record
-from ..signals import RECORD_RATE, decimate_record
+from ..signals import RECORD_RATE, decimate_record, decimation_note
 from .model import VARIATIONS, Regressor, RecordModel
 from .timing import TIMING_METHODS, CycleTiming, estimate_timing
 
@@ -487,9 +487,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     measured_rate = record.fs
     record, factor, values = decimate_record(record, rate, [r.values for r in regressors])
     regressors = [replace(r, values=v) for r, v in zip(regressors, values)]
-    notes = [] if factor == 1 else [
-        f"fitted at {record.fs:.4g} Hz: the record ({measured_rate:.4g} Hz) was low-pass filtered and every "
-        f"{factor}th sample kept (rate {rate:g} Hz; rate=None or --rate 0 keeps every sample)"]
+    notes = decimation_note(measured_rate, record, factor, rate)
     y = record.force / record.mass - G  # Eq. 3
     if timing not in ("model",) + TIMING_METHODS:
         raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
