@@ -300,8 +300,14 @@ def test_wald_interval_is_symmetric_inside_the_bounds_and_ends_at_a_bound_it_wou
 
 @pytest.mark.slow
 def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys):
+    from smd_statespace.person.fit import AUTO_VARIATIONS, TIMING_ITERATIONS
+
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=30, fs=1000.0, seed=11)
-    result = identify_person(sim.record)
+    capsys.readouterr()
+    result = identify_person(sim.record, progress=True)
+    steps = len(AUTO_VARIATIONS) + TIMING_ITERATIONS + 2 + 1  # variation models, timing fits, information
+    bar = capsys.readouterr().err
+    assert "identify (record)" in bar and f"{steps}/{steps}" in bar  # every search counted, none twice
     assert result.record.fs == pytest.approx(100.0) and result.model.y.size == sim.record.time[::10].size
     assert result.notes == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and every 10th sample "
                             "kept (rate 100 Hz; rate=None or --rate 0 keeps every sample)"]

@@ -132,7 +132,8 @@ def run_compare(args) -> int:
             from ..person import identify_person
 
             started = time.perf_counter()
-            person = identify_person(record, n_harmonics=args.harmonics, check=False, rate=None)  # checked, decimated
+            person = identify_person(record, n_harmonics=args.harmonics, check=False, rate=None,  # checked, decimated
+                                     progress=not args.quiet)
             person_seconds = time.perf_counter() - started
             continue
         _, tables[name], seconds[name] = identify(args, model, preprocessed, name)

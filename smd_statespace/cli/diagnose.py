@@ -66,7 +66,8 @@ def run_person_diagnose(args) -> int:
 
     directory = out_dir(args.out)
     record = read_record(args.record, args.mass)
-    base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args))
+    base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args),
+                           progress=not args.quiet)
     print(f"{record.source}: record-level model")
     print(base.summary())
     result = diagnose_person(base, candidates=args.effect or None, alpha=args.alpha)

@@ -232,7 +232,8 @@ def run_person(args) -> int:
     record = read_record(args.record, args.mass)
     started = time.perf_counter()
     result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
-                             intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args))
+                             intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args),
+                             progress=not args.quiet)
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary())
