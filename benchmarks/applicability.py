@@ -8,6 +8,7 @@ variation), and counts what each gets::
 
     python benchmarks/applicability.py                 # 80 clean records, writes docs/figures/applicability.png
     python benchmarks/applicability.py --clean 20
+    python benchmarks/applicability.py --fs 1000 --clean 20 --figure /tmp/a.png   # a force plate's rate
 
 Everything random comes from ``numpy.random.SeedSequence(--seed)``.
 """
@@ -37,7 +38,7 @@ WEIGHT = MASS * G
 
 
 def stand_ins(rng) -> dict:
-    """Forces (N) of records that are not bouncing, at 100 Hz over 30 s."""
+    """Forces (N) of records that are not bouncing, at ``FS`` over 30 s."""
     t = np.arange(0.0, DURATION, 1.0 / FS)
 
     def noisy(force):
@@ -56,7 +57,7 @@ def stand_ins(rng) -> dict:
     squat[(t > 3.0) & (t < 3.4)] = 0.5 * WEIGHT
     squat[(t >= 3.4) & (t < 3.8)] = 1.5 * WEIGHT
     walk = WEIGHT * (1.0 + 0.3 * np.sin(2 * np.pi * 1.6 * t) + 0.12 * np.sin(np.pi * 1.6 * t))
-    bounce = simulate_bouncing(mass=MASS, f_b=2.2, f_h=2.8, xi_h=0.3, duration=DURATION, seed=5).record.force
+    bounce = simulate_bouncing(mass=MASS, f_b=2.2, f_h=2.8, xi_h=0.3, duration=DURATION, fs=FS, seed=5).record.force
     return {
         "countermovement jump": (t, noisy(jump)),
         "hopping at 2 Hz": (t, noisy(hop)),
@@ -74,7 +75,7 @@ def clean_records(n: int, seed: int):
         rng = np.random.default_rng(child)
         f_b, f_h, xi_h = rng.uniform(1.5, 3.5), rng.uniform(1.8, 4.2), rng.uniform(0.1, 0.5)
         blf = tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))
-        sim = simulate_bouncing(mass=MASS, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=DURATION, blf=blf,
+        sim = simulate_bouncing(mass=MASS, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=DURATION, blf=blf, fs=FS,
                                 seed=int(rng.integers(2**31)), variation=("jumps", "smooth")[k % 2])
         yield (f_b, f_h, xi_h), sim.record
 
@@ -96,11 +97,14 @@ def figure(path: Path, time, force, message: str):
 
 
 def main(argv=None):
+    global FS
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--clean", type=int, default=80, help="clean simulated records (default 80)")
     parser.add_argument("--seed", type=int, default=2026, help="root of the SeedSequence (default 2026)")
     parser.add_argument("--figure", type=Path, default=REPO / "docs" / "figures" / "applicability.png")
+    parser.add_argument("--fs", type=float, default=FS, help=f"sampling rate of every record (Hz, default {FS:g})")
     args = parser.parse_args(argv)
+    FS = args.fs
     rng = np.random.default_rng(np.random.SeedSequence(args.seed).spawn(1)[0])
     print("| record | verdict | kind | what the library says |")
     print("|---|---|---|---|")
