@@ -13,7 +13,8 @@ often the 90 % intervals hold the truth::
 
 Columns: coverage of ``f_h`` and ``xi_h``; the median signed error of ``f_h``
 (%), which the noise level does not remove; the median calibrated sd of
-``f_h`` (Hz). ``--floor F,X`` sets ``person.fit.MODEL_ERROR_FLOOR`` for the
+``f_h`` (Hz); the share of records whose innovations pass the Ljung-Box test
+(p >= 0.01: no "the model misses something" warning). ``--floor F,X`` sets ``person.fit.MODEL_ERROR_FLOOR`` for the
 run (relative for ``f_h``, absolute for ``xi_h``).
 
 Everything random comes from ``SeedSequence(--seed)`` through ``draw_people``;
@@ -66,24 +67,27 @@ def one(task) -> dict:
         row[f"{name}_error"] = float(result.params[which] - person[name])
         row[f"{name}_sd"] = float(result.se[which])
     row["f_h_error_pct"] = 100.0 * row["f_h_error"] / person["f_h"]
+    row["white"] = bool(result.to_dict()["ljung_box_p"] >= 0.01)  # no "the model misses something" warning
     return row
 
 
 def summary(frame: pd.DataFrame) -> list:
     """Markdown table: one row per condition and generator."""
     lines = ["| record | generator | records (failed) | f_h 90 % coverage | xi_h 90 % coverage | "
-             "f_h signed error, median | f_h sd (calibrated), median |", "|---|---|---|---|---|---|---|"]
+             "f_h signed error, median | f_h sd (calibrated), median | Ljung-Box p >= 0.01 |",
+             "|---|---|---|---|---|---|---|---|"]
     for (condition, generator), rows in frame.groupby(["condition", "generator"], sort=False):
         ok = rows[rows["error"] == ""]
         if ok.empty:
-            lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows)}) | | | | |")
+            lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows)}) | | | | | |")
             continue
         lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows) - len(ok)}) | "
                      f"{ok['f_h_covered'].mean():.0%} | {ok['xi_h_covered'].mean():.0%} | "
-                     f"{ok['f_h_error_pct'].median():+.1f} % | {ok['f_h_sd'].median():.3f} Hz |")
+                     f"{ok['f_h_error_pct'].median():+.1f} % | {ok['f_h_sd'].median():.3f} Hz | "
+                     f"{ok['white'].mean():.0%} |")
     ok = frame[frame["error"] == ""]
     lines.append(f"| all | | {len(frame)} ({len(frame) - len(ok)}) | {ok['f_h_covered'].mean():.0%} | "
-                 f"{ok['xi_h_covered'].mean():.0%} | | |")
+                 f"{ok['xi_h_covered'].mean():.0%} | | | {ok['white'].mean():.0%} |")
     return lines
 
 
