@@ -79,8 +79,8 @@ cycle-to-cycle force variation is only an approximation. Without a floor, the ca
 jumps per cycle (tuning run, seed 2024, 16 records per condition). The floor was chosen on
 that run (pooled coverage with it: 91 % ``f_h``, 91 % ``xi_h``) and checked on records of
 another seed (``benchmarks/person_noise.py --seed 77``, docs/person.md "Quiet and fast
-records"): pooled coverage 66 -> 87 % (``f_h``) and 62 -> 80 % (``xi_h``); ``xi_h`` of
-records whose force drifts smoothly stays under-covered at low noise (44-69 %).
+records"): pooled coverage 65 -> 87 % (``f_h``) and 64 -> 81 % (``xi_h``); ``xi_h`` of
+records whose force drifts smoothly stays under-covered at low noise (50-75 %).
 """
 
 TIMING_ITERATIONS = 3
