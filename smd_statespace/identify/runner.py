@@ -196,8 +196,8 @@ class CycleRunner:
         :data:`~smd_statespace.signals.RECORD_RATE`). The article's noise levels and random
         walk (Eq. 6) are per sample at its 100 Hz; at 1000 Hz the same settings walk ten
         times as often, and every cycle costs ten times more (``benchmarks/fast_records.py``,
-        docs/performance.md "Fast records": median ``f_h`` error 0.87 -> 0.65 Hz with the
-        EKF, 1.36 -> 0.69 Hz with the grid, 10-11 times faster). None keeps every sample.
+        docs/performance.md "Fast records": median ``f_h`` error 0.87 -> 0.69 Hz with the
+        EKF, 1.36 -> 0.68 Hz with the grid, 9-13 times faster). None keeps every sample.
         A :class:`~smd_statespace.signals.Preprocessed` input is used as it is.
     **options
         Estimator options, e.g. ``n_particles=5000``.
