@@ -17,8 +17,9 @@ and splits the record into bouncing cycles:
 4. **Cycles**: the record is split at GRF peaks, one cycle from one peak to the
    next (:func:`find_cycles`); consecutive cycles share their boundary sample.
 
-The record-level model (:mod:`smd_statespace.person`) instead takes the force
-itself, at most at about :data:`RECORD_RATE` (:func:`decimate_record`).
+Every estimator works at most at about :data:`RECORD_RATE`: a faster record is
+low-pass filtered and decimated first (:func:`decimate_record`). The record-level
+model (:mod:`smd_statespace.person`) then takes the force itself.
 
 :func:`preprocess` runs all four steps on a :class:`~smd_statespace.io.Record`
 and returns a :class:`Preprocessed` holding every intermediate signal, so that
@@ -121,12 +122,13 @@ _AR_LOADING = 1e-9  # relative diagonal loading of the Toeplitz system
 
 
 RECORD_RATE = 100.0
-"""Sample rate (Hz) the record-level model works at: faster records are decimated to between this and twice it.
+"""Sample rate (Hz) every estimator works at: faster records are decimated to between this and twice it.
 
 Bouncing forces carry nothing above about 25 Hz (six harmonics of 3.5 Hz, floor modes of
-Table 3 below 20 Hz); the likelihood's cost grows with the samples (a 60 s record: 13 s at
-100 Hz, 114 s at 1000 Hz), and the calibration of the record-level intervals
-(:data:`smd_statespace.person.fit.CALIBRATION`) was measured at 100 Hz.
+Table 3 below 20 Hz). The article's per-sample noise levels and random walk (Eq. 6) were
+set at its 100 Hz, and so was the calibration of the record-level intervals
+(:data:`smd_statespace.person.fit.CALIBRATION`); the cost grows with the samples (a 60 s
+record, record-level: 13 s at 100 Hz, 114 s at 1000 Hz).
 """
 
 
@@ -182,8 +184,8 @@ def decimate_record(record: Record, rate=RECORD_RATE, extra=()):
     kept = record.time.size // factor
 
     def down(values):
-        mirrored = np.asarray(values, dtype=float)[:kept * factor]
-        return signal.resample(np.concatenate([mirrored, mirrored[::-1]]), 2 * kept)[:kept]
+        whole = np.asarray(values, dtype=float)[:kept * factor]
+        return signal.resample(np.concatenate([whole, whole[::-1]]), 2 * kept)[:kept]
 
     time = record.time[:kept * factor:factor]
     floor_acc = None if record.floor_acc is None else down(record.floor_acc)
