@@ -253,12 +253,12 @@ class CycleRunner:
         record_key : int
             Identity of the record within a batch, part of every cycle's seed.
         """
-        self.notes_ = []
         if isinstance(record, Record):
-            measured_rate = record.fs
-            record, factor, _ = decimate_record(record, self.rate)
-            self.notes_ = decimation_note(measured_rate, record, factor, self.rate)
-        preprocessed = preprocess(record) if isinstance(record, Record) else record
+            decimated, factor, _ = decimate_record(record, self.rate)
+            self.notes_ = decimation_note(record.fs, decimated, factor, self.rate)
+            preprocessed = preprocess(decimated)
+        else:
+            self.notes_, preprocessed = [], record
         check_sampling(self.model, preprocessed)
         mass = float(preprocessed.mass if mass is None else mass)
         self.preprocessed_ = preprocessed

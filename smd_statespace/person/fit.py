@@ -543,26 +543,25 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         params = fitted["params"]
         cov, free = information(model, params, cov_type)
         step()
-        factors = CALIBRATION[model.variation]
-        if intervals == "calibrated":
-            scale = np.ones(params.size)
-            scale[0], scale[1] = factors["f_h"], factors["xi_h"]
-            cov = cov * np.outer(scale, scale)
-        se = np.sqrt(np.diag(cov))
-        interval = {}
-        for which, name in enumerate(("f_h", "xi_h")):
-            if intervals == "profile":
-                interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
-            else:
-                # the floor widens the interval, not the sd: the sd says what the record determines
-                floor = 0.0 if intervals == "wald" else MODEL_ERROR_FLOOR[name] * (
-                    params[0] if name == "f_h" else 1.0)
-                interval[name] = wald_interval(params[which], float(np.hypot(se[which], floor)), level,
-                                               model.bounds[which])
-        method = {"profile": "profile", "wald": f"wald ({cov_type})"}.get(
-            intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, {factors['xi_h']:g}, "
-                       "with a model-error floor)")
-        return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
-                            intervals=interval, interval_method=method, level=level, comparison=comparison,
-                            n_evaluations=fitted["n_evaluations"], record_warnings=record_warnings, notes=notes)
+    factors = CALIBRATION[model.variation]
+    if intervals == "calibrated":
+        scale = np.ones(params.size)
+        scale[0], scale[1] = factors["f_h"], factors["xi_h"]
+        cov = cov * np.outer(scale, scale)
+    se = np.sqrt(np.diag(cov))
+    interval = {}
+    for which, name in enumerate(("f_h", "xi_h")):
+        if intervals == "profile":
+            interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
+        else:
+            # the floor widens the interval, not the sd: the sd says what the record determines
+            floor = 0.0 if intervals == "wald" else MODEL_ERROR_FLOOR[name] * (params[0] if name == "f_h" else 1.0)
+            interval[name] = wald_interval(params[which], float(np.hypot(se[which], floor)), level,
+                                           model.bounds[which])
+    method = {"profile": "profile", "wald": f"wald ({cov_type})"}.get(
+        intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, {factors['xi_h']:g}, "
+                   "with a model-error floor)")
+    return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
+                        intervals=interval, interval_method=method, level=level, comparison=comparison,
+                        n_evaluations=fitted["n_evaluations"], record_warnings=record_warnings, notes=notes)
 
