@@ -173,18 +173,29 @@ def test_a_new_run_rewrites_settings_left_in_its_folder(records, tmp_path):
 
 
 @pytest.mark.slow
-def test_record_estimator_gives_one_person_per_record_that_stats_reads(records, tmp_path, capsys):
-    """``identify FOLDER --estimator record``: one row per record (the person), the flat record fails in one line,
-    and ``stats`` reads the table as it is (f_b, f_h, xi_h, BLFs, mass, the flags)."""
-    found = collect_records(records, manifest=records / "manifest.csv")
-    summary = run_batch(found, tmp_path / "people", estimator="record", progress=False)
-    assert summary.failed_records == ["flat.csv"] and "rows (one person per record)" in summary.line()
-    table = pd.read_csv(summary.results)
+def test_record_estimator_batch_command_gives_one_person_per_record_that_stats_reads(records, tmp_path, capsys):
+    """The documented study path through the command line (docs/batch.md): ``identify FOLDER --manifest M
+    --estimator record --jobs 2`` writes one person per record and the people's figure, fails the flat record
+    in one line (exit 1, no traceback), resumes without refitting; ``stats`` reads the table as people."""
+    out = tmp_path / "people"
+    argv = ["identify", str(records), "--manifest", str(records / "manifest.csv"), "--estimator", "record",
+            "--out", str(out), "--jobs", "2", "--quiet"]
+    assert main(argv) == 1  # flat.csv fails; the others are people
+    printed = capsys.readouterr()
+    assert "Traceback" not in printed.err and "flat.csv" in printed.err and len(printed.err.strip().splitlines()) == 1
+    assert "rows (one person per record)" in printed.out and (out / "people.png").stat().st_size > 10_000
+    table = pd.read_csv(out / "results.csv")
     people = table[table["status"] == "ok"].set_index("record")
     assert list(people.index) == ["rec0.csv", "rec1.csv", "rec2.csv"]
     assert people["f_h"].between(2.4 * 0.9, 2.4 * 1.1).all()  # the simulated people all have f_h 2.4 Hz
     assert (people["f_b"] - [1.8, 1.95, 2.1]).abs().max() < 0.05
     assert {"f_h_sd", "xi_h", "blf_1", "mass", "implausible", "model_adequate", "ljung_box_p"} <= set(people.columns)
-    from smd_statespace.cli import main
 
-    assert main(["stats", str(summary.results), "--out", str(tmp_path / "stats"), "--bootstrap", "5"]) == 0
+    assert main(argv + ["--resume"]) == 1  # nothing is fitted again; the flat record's failure is kept
+    assert "0 identified now, 4 taken from the earlier run, 1 failed" in capsys.readouterr().out
+    assert pd.read_csv(out / "results.csv").equals(table)
+
+    assert main(["stats", str(out / "results.csv"), "--out", str(tmp_path / "stats"), "--bootstrap", "5"]) == 0
+    report = capsys.readouterr().out
+    assert "4 people read from 1 file(s): 3 ok, 1 failed left out" in report
+    assert "too few people: need" in report and "cycles" not in report.replace("n_cycles", "")

@@ -194,6 +194,7 @@ def run_batch_identify(args) -> int:
 
     from ..identify.batch import collect_records, run_batch
     from ..plotting.cycles import plot_parameters
+    from ..plotting.people import plot_people
 
     if args.truth is not None:
         raise OptionError("--truth applies to one record, not to a batch")
@@ -209,8 +210,12 @@ def run_batch_identify(args) -> int:
                         progress=not args.quiet, check=not args.ignore_checks)
     written = [summary.results, directory / "run.json"]
     if (summary.table["status"] == "ok").any():
-        written.append(directory / "parameters.png")
-        plot_parameters(summary.table, written[-1], against="f_b")
+        if args.estimator == "record":
+            written.append(directory / "people.png")
+            plot_people(summary.table, written[-1])
+        else:
+            written.append(directory / "parameters.png")
+            plot_parameters(summary.table, written[-1], against="f_b")
     print(f"{summary.line()}; {time.perf_counter() - started:.1f} s")
     warning = implausible_warning(summary.table)
     if warning:

@@ -91,7 +91,7 @@ def run_stats(args) -> int:
         path = directory / f"hist_{PARAMETERS[parameter].column}.png"
         stats.plot_histograms(parameter, path)
         written.append(path)
-    print(f"\n{stats.counts['in_bands']} cycles, {args.bootstrap} bootstrap resamples: statistics in {fitted:.1f} s, "
+    print(f"\n{stats.counts['in_bands']} {stats.noun}, {args.bootstrap} bootstrap resamples: statistics in {fitted:.1f} s, "
           f"with tables and figures {time.perf_counter() - started:.1f} s")
     print("wrote " + ", ".join(str(path) for path in written))
     return 0

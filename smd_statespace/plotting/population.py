@@ -62,7 +62,7 @@ def plot_trends(stats, path=None) -> Figure:
     nrows = math.ceil(n_panels / ncols)
     fig = Figure(figsize=(3.3 * ncols, 2.9 * nrows))
     axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
-    cycles = stats.cycles
+    cycles, noun = stats.cycles, stats.noun
     centres = stats.bands.centres
     low, high = stats.bands.intervals[0][0], stats.bands.intervals[-1][1]
     for ax, parameter in zip(axes, parameters):
@@ -93,19 +93,19 @@ def plot_trends(stats, path=None) -> Figure:
                 ax.text(0.98, 0.95, f"{trend.vertex_kind} at {trend.vertex:.2f} Hz\n(outside the bands)",
                         transform=ax.transAxes, ha="right", va="top", fontsize=7, color="tab:blue")
         elif trend is not None:  # "no trend (too few cycles: ...)" or "no trend (no spread: ...)"
-            why = str(trend).partition("(")[2].partition(":")[0] or "too few cycles"
+            why = str(trend).partition("(")[2].partition(":")[0] or f"too few {noun}"
             ax.text(0.5, 0.06, f"no trend: {why}", transform=ax.transAxes, ha="center", va="bottom",
                     fontsize=8, color="tab:red")
         # y-range from the bulk of the cycles, so that a few outliers do not flatten the panel
         values = used[PARAMETERS[parameter].column].to_numpy()
         if not values.size:
             ax.set_yticks([])
-            ax.text(0.5, 0.55, "no cycles" + ("" if stats.options["include_undetermined"] else
+            ax.text(0.5, 0.55, f"no {noun}" + ("" if stats.options["include_undetermined"] else
                                               " that determined it"), transform=ax.transAxes, ha="center",
                     va="center", fontsize=9, color="tab:red")
         if values.size:
             q_lo, q_hi = np.percentile(values, [0.5, 99.5])
-            span = max(q_hi - q_lo, 1e-12)
+            span = max(q_hi - q_lo, 1e-3 * max(abs(q_hi), abs(q_lo)), 1e-12)  # one value: a readable range
             ax.set_ylim(min(q_lo, np.nanmin(means - sds)) - 0.05 * span,
                         max(q_hi, np.nanmax(means + sds)) + 0.05 * span)
         ax.set_title(_label(parameter), fontsize=10)
@@ -114,12 +114,12 @@ def plot_trends(stats, path=None) -> Figure:
     count_ax = axes[len(parameters)]
     in_band = np.array([int((cycles["band"] == b).sum()) for b in range(len(stats.bands))])
     width = 0.8 * np.min(np.diff([lo for lo, _ in stats.bands] + [high])) / 3.0
-    count_ax.bar(centres - width, in_band, width, color="0.7", label="ok cycles")
+    count_ax.bar(centres - width, in_band, width, color="0.7", label=f"ok {noun}")
     for k, (parameter, color) in enumerate((("f_h", "tab:blue"), ("xi_h", "tab:orange"))):
         if parameter in stats.parameters:
             used_n = [stats.cells[parameter, b].n for b in range(len(stats.bands))]
             count_ax.bar(centres + k * width, used_n, width, color=color, label=f"used for {_label(parameter)}")
-    count_ax.set_title("cycles per band", fontsize=10)
+    count_ax.set_title(f"{noun} per band", fontsize=10)
     count_ax.set_ylim(0, 1.75 * max(int(in_band.max()), 1))
     count_ax.legend(fontsize=7, loc="upper left", frameon=False, ncol=1)
     count_ax.grid(alpha=0.3, axis="y")
@@ -129,16 +129,16 @@ def plot_trends(stats, path=None) -> Figure:
     for ax in axes[-ncols:]:
         ax.set_xlabel("bouncing frequency $f_b$ (Hz)")
     handles = [Line2D([], [], marker=".", ls="", color="0.55", ms=7)]
-    labels = ["cycles" + (f" (an even subsample of {MAX_POINTS} per panel)" if len(cycles) > MAX_POINTS else "")]
+    labels = [noun + (f" (an even subsample of {MAX_POINTS} per panel)" if len(cycles) > MAX_POINTS else "")]
     _collect_legend(axes[:len(parameters)], handles, labels)
     fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=8, frameon=False,
                bbox_to_anchor=(0.5, 1.0 - 0.36 / fig.get_figheight()))
-    included = "all cycles" if stats.options["include_undetermined"] else "cycles that determined each parameter"
+    included = f"all {noun}" if stats.options["include_undetermined"] else f"{noun} that determined each parameter"
     impossible = stats.counts.get("implausible", 0) + stats.counts.get("inadequate", 0)
     if impossible:
         included += (f", {impossible} implausible kept" if stats.options.get("include_implausible")
                      else f", {impossible} implausible left out")
-    fig.suptitle(f"Parameters against bouncing frequency ({included}; {stats.counts['in_bands']} ok cycles in the "
+    fig.suptitle(f"Parameters against bouncing frequency ({included}; {stats.counts['in_bands']} ok {noun} in the "
                  "bands)", fontsize=11, x=0.01, ha="left", y=1.0 - 0.08 / fig.get_figheight(), va="top")
     fig.tight_layout(rect=(0, 0, 1, 1.0 - 0.52 / fig.get_figheight()))
     return _save(fig, path)
@@ -191,7 +191,7 @@ def plot_histograms(stats, parameter: str, path=None, published: bool = True) ->
                 # density over the whole sample (values beyond the drawn range count in the total)
                 counts, edges = np.histogram(inside, bins=int(np.clip(np.sqrt(here.size), 5, 40)))
                 density = counts / (here.size * np.diff(edges))
-                ax.stairs(density, edges, fill=True, color="0.82", label="cycles")
+                ax.stairs(density, edges, fill=True, color="0.82", label=stats.noun)
                 ax.stairs(density, edges, color="0.55", lw=0.6)
         if cell.fit is not None:
             ax.plot(x, cell.fit.dist().pdf(x), color="tab:red", lw=1.6, label="fit (Eq. 19)")

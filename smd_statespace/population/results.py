@@ -139,6 +139,19 @@ def _lacks(frame: pd.DataFrame, name: str, mass) -> str:
     return ""
 
 
+_SINGULAR = {"cycles": "cycle", "people": "person", "rows": "row"}
+
+
+def row_noun(frame: pd.DataFrame) -> str:
+    """What one row of an identification table is, in the plural: ``"people"`` or ``"cycles"``.
+
+    The record-level model (``identify --estimator record``) writes one row per person
+    (``n_cycles`` says how many cycles it saw, there is no ``cycle`` column); the per-cycle
+    estimators write one row per cycle.
+    """
+    return "people" if "cycle" not in frame and "n_cycles" in frame else "cycles"
+
+
 def _columns(frame: pd.DataFrame) -> str:
     names = [str(c) for c in frame.columns]
     return ", ".join(names[:15]) + (f", ... ({len(names)} columns)" if len(names) > 15 else "")
@@ -189,17 +202,18 @@ class _Assumed:
         self.unstatused = []  # sources without a status column
         self.unchecked = []  # sources checked here against the physical limits
 
-    def notes(self, flags) -> list:
+    def notes(self, flags, noun: str = "cycles") -> list:
         notes = [f"{', '.join(names)} computed by Eq. 17-18 from f_h, xi_h and {where} ({source})"
                  for (source, where), names in self.derived.items()]
         if self.unstatused:
-            notes.append(f"no status column in {', '.join(self.unstatused)}: every row taken as an identified cycle")
+            notes.append(f"no status column in {', '.join(self.unstatused)}: every row taken as an identified "
+                         f"{_SINGULAR.get(noun, noun)}")
         for source, columns in self.unflagged.items():
             named = "*_determined columns" if len(columns) == len(flags) > 1 else (
                 f"{', '.join(columns)} column{'s' if len(columns) > 1 else ''}")
-            notes.append(f"no {named} in {source}: its cycles are treated as determined")
+            notes.append(f"no {named} in {source}: its {noun} are treated as determined")
         if self.unchecked:
-            notes.append(f"no implausible column in {', '.join(self.unchecked)}: cycles checked here against the "
+            notes.append(f"no implausible column in {', '.join(self.unchecked)}: {noun} checked here against the "
                          "physical limits (xi_h < 0, C_h < 0, BLF or floor-force harmonic > 2 g)")
         return notes
 
@@ -301,7 +315,8 @@ def read_results(sources, *, parameters=None, mass=None) -> pd.DataFrame:
         columns as floats, ``status`` as lower-case text, the flags (``*_determined``,
         ``implausible``, :data:`ADEQUATE_COLUMN`) as bools, ``implausible_reason`` as text.
         ``attrs["parameters"]`` holds the parameters read, ``attrs["notes"]`` what was assumed
-        or left out.
+        or left out, ``attrs["noun"]`` what a row is (``"cycles"``, ``"people"`` or, for a mix of
+        both, ``"rows"``; see :func:`row_noun`).
 
     Raises
     ------
@@ -335,9 +350,11 @@ def read_results(sources, *, parameters=None, mass=None) -> pd.DataFrame:
         _plausibility_columns(frame, source, assumed)
         frame.insert(0, "source", source)
         frames.append(frame)
-    notes += assumed.notes(flags)
+    kinds = {row_noun(frame) for frame in frames}
+    noun = kinds.pop() if len(kinds) == 1 else "rows"
+    notes += assumed.notes(flags, noun)
     table = pd.concat(frames, ignore_index=True, sort=False)
-    table.attrs = {"parameters": tuple(chosen), "notes": notes}
+    table.attrs = {"parameters": tuple(chosen), "notes": notes, "noun": noun}
     return table
 
 

@@ -146,14 +146,14 @@ class CellFit:
 
 
 def _fit_cell(parameter, band, values, excluded, undetermined, *, min_cycles, n_bootstrap, rng, confidence,
-              a_max) -> CellFit:
+              a_max, noun: str = "cycles") -> CellFit:
     values = values[np.isfinite(values)]
     n = int(values.size)
     mean = float(values.mean()) if n else math.nan
     sd = float(values.std(ddof=1)) if n > 1 else math.nan
     common = dict(parameter=parameter, band=band, n=n, excluded=excluded, undetermined=undetermined, mean=mean, sd=sd)
     if n < min_cycles:
-        return CellFit(fit=None, note=f"too few cycles: {n} < {min_cycles}", **common)
+        return CellFit(fit=None, note=f"too few {noun}: {n} < {min_cycles}", **common)
     if np.ptp(values) == 0:
         return CellFit(fit=None, note=f"no spread: all {n} values equal", **common)
     fit = fit_skewnorm(values, a_max=a_max)
@@ -199,6 +199,9 @@ class PopulationStats:
     options : dict
         ``min_cycles``, ``n_bootstrap``, ``seed``, ``include_undetermined``, ``include_implausible``,
         ``confidence``, ``a_max``.
+    noun : str
+        What a row is, in the plural, for the report: ``"cycles"`` (per-cycle results),
+        ``"people"`` (record-level results, one person per record) or ``"rows"`` (a mix).
     """
 
     cycles: pd.DataFrame
@@ -208,6 +211,7 @@ class PopulationStats:
     trends: dict
     counts: dict
     options: dict
+    noun: str = "cycles"
 
     # -- tables ---------------------------------------------------------
     def to_frame(self) -> pd.DataFrame:
@@ -270,15 +274,15 @@ class PopulationStats:
     # -- report -----------------------------------------------------------
     def counts_line(self) -> str:
         """One line: rows read, left out by status, implausible, outside the bands, used."""
-        c = self.counts
+        c, noun = self.counts, self.noun
         others = ", ".join(f"{n} {status}" for status, n in sorted(c["by_status"].items()) if status != _STATUS_OK)
         verb = "kept" if self.options["include_implausible"] else "left out"
         flagged = [f"{c['implausible']} implausible"] if c["implausible"] else []
         flagged += [f"{c['inadequate']} from an inadequate model"] if c["inadequate"] else []
-        return (f"{c['rows']} cycles read from {len(c['sources'])} file(s): {c['ok']} ok"
+        return (f"{c['rows']} {noun} read from {len(c['sources'])} file(s): {c['ok']} ok"
                 + (f", {others} left out" if others else "")
-                + (f"; of the ok cycles {' and '.join(flagged)} {verb}" if flagged else "")
-                + f"; {c['outside_bands']} ok cycles outside the bands; {c['in_bands']} in {len(self.bands)} bands "
+                + (f"; of the ok {noun} {' and '.join(flagged)} {verb}" if flagged else "")
+                + f"; {c['outside_bands']} ok {noun} outside the bands; {c['in_bands']} in {len(self.bands)} bands "
                   f"({', '.join(self.bands.labels)} Hz)")
 
     def implausible_lines(self) -> list[str]:
@@ -287,9 +291,9 @@ class PopulationStats:
         verb = "kept (include_implausible)" if self.options["include_implausible"] else "left out"
         if c["implausible"]:
             why = ", ".join(f"{reason}: {n}" for reason, n in c["implausible_reasons"].items())
-            lines.append(f"warning: {c['implausible']} ok cycles have estimates that cannot be true ({why}); {verb}")
+            lines.append(f"warning: {c['implausible']} ok {self.noun} have estimates that cannot be true ({why}); {verb}")
         if c["inadequate"]:
-            lines.append(f"warning: {c['inadequate']} ok cycles come from a model found inadequate for their record "
+            lines.append(f"warning: {c['inadequate']} ok {self.noun} come from a model found inadequate for their record "
                          f"({ADEQUATE_COLUMN} False); {verb}")
         return lines
 
@@ -299,10 +303,10 @@ class PopulationStats:
         table = self.exclusions()
         for parameter, row in table.iterrows():
             if self.options["include_undetermined"]:
-                text = (f"{parameter}: {int(row['used'])} cycles used, {int(row['undetermined'])} of them "
+                text = (f"{parameter}: {int(row['used'])} {self.noun} used, {int(row['undetermined'])} of them "
                         "undetermined (included)")
             else:
-                text = f"{parameter}: {int(row['used'])} cycles used, {int(row['excluded'])} undetermined left out"
+                text = f"{parameter}: {int(row['used'])} {self.noun} used, {int(row['excluded'])} undetermined left out"
             if row["missing_value"]:
                 text += f", {int(row['missing_value'])} without a value"
             lines.append(text)
@@ -316,14 +320,14 @@ class PopulationStats:
             parts = ["Population statistics (Wang, Chen & Nagayama 2019, Section 5)", self.counts_line()]
             parts += self.implausible_lines()
             parts += [f"note: {note}" for note in self.counts.get("notes", [])]
-            parts.append("cycles that did not determine a parameter (*_determined False): "
+            parts.append(f"{self.noun} that did not determine a parameter (*_determined False): "
                          + ("included" if o["include_undetermined"] else "left out of that parameter"))
             parts += ["  " + line for line in self.exclusion_lines()]
             parts += ["", "mean ± sd (n) per band:", self.band_table().to_string()]
             ci = (f"; {o['confidence']:.0%} bootstrap intervals from {o['n_bootstrap']} resamples (seed {o['seed']}) "
                   "in table2.csv") if o["n_bootstrap"] else ""
             parts += ["", f"Skew-normal fits (Eq. 19), cells 'm, s, a', Table 2 layout; fitted when a band has "
-                          f">= {o['min_cycles']} cycles{ci}:", self.table2().to_string()]
+                          f">= {o['min_cycles']} {self.noun}{ci}:", self.table2().to_string()]
             if self.bands.is_article:
                 comparison = self.compare_table2()
                 fitted = comparison.dropna(subset=["ks"])
@@ -333,7 +337,7 @@ class PopulationStats:
                                   f"distribution functions {fitted['ks'].max():.3f} ({worst[0]}, band {worst[1]}); "
                                   f"median {fitted['ks'].median():.3f} over {len(fitted)} fitted cells "
                                   "(table2_vs_article.csv)"]
-            parts += ["", "Trends in the bouncing frequency (OLS on the cycles):"]
+            parts += ["", f"Trends in the bouncing frequency (OLS on the {self.noun}):"]
             for parameter, trend in self.trends.items():
                 parts.append(trend.summary() if isinstance(trend, TrendResult) else f"{parameter}: {trend}")
         return "\n".join(parts)
@@ -426,26 +430,26 @@ def population_stats(sources, *, bands=None, parameters=None, mass=None, min_cyc
                               "with degree 1 or 2")
         degrees[name] = degree
     table = read_results(sources, parameters=parameters, mass=mass)
-    parameters, notes = table.attrs["parameters"], list(table.attrs["notes"])
+    parameters, notes, noun = table.attrs["parameters"], list(table.attrs["notes"]), table.attrs["noun"]
     sources_read = list(dict.fromkeys(table["source"]))
     by_status = {str(k): int(v) for k, v in table["status"].value_counts().items()}
     ok = (table["status"] == _STATUS_OK).to_numpy()
     if not ok.any():
         detail = ", ".join(f"{n} {s}" for s, n in sorted(by_status.items()))
-        raise RecordError(f"{', '.join(sources_read)}: no 'ok' cycles to analyse ({detail})")
+        raise RecordError(f"{', '.join(sources_read)}: no 'ok' {noun} to analyse ({detail})")
     implausible = ok & table["implausible"].to_numpy(dtype=bool)
     inadequate = ok & ~table[ADEQUATE_COLUMN].to_numpy(dtype=bool)
     usable = ok & ((~implausible & ~inadequate) | include_implausible)
     if not usable.any():
         why = ", ".join(f"{reason}: {n}" for reason, n in reason_counts(table.loc[implausible,
                                                                                    "implausible_reason"]).items())
-        raise RecordError(f"{', '.join(sources_read)}: all {int(ok.sum())} ok cycles are implausible ({why or 'none'})"
+        raise RecordError(f"{', '.join(sources_read)}: all {int(ok.sum())} ok {noun} are implausible ({why or 'none'})"
                           f" or from an inadequate model ({int(inadequate.sum())}); nothing to analyse "
                           "(--include-implausible keeps them)")
     band = np.where(usable, bands.assign(table["f_b"].to_numpy()), -1)
     if not (band >= 0).any():
         f_ok = table.loc[usable, "f_b"]
-        raise RecordError(f"{', '.join(sources_read)}: none of the {int(usable.sum())} ok cycles has f_b inside the "
+        raise RecordError(f"{', '.join(sources_read)}: none of the {int(usable.sum())} ok {noun} has f_b inside the "
                           f"bands {bands.intervals[0][0]:g}-{bands.intervals[-1][1]:g} Hz (their f_b: "
                           f"{f_ok.min():.3g}-{f_ok.max():.3g} Hz); choose --bands to cover them")
     table["band"] = band
@@ -478,14 +482,14 @@ def population_stats(sources, *, bands=None, parameters=None, mass=None, min_cyc
             cells[parameter, b] = _fit_cell(
                 parameter, b, values[here & used], 0 if include_undetermined else undetermined, undetermined,
                 min_cycles=min_cycles, n_bootstrap=n_bootstrap, rng=np.random.default_rng(
-                    _seed_sequence(seed, 0, p_index, b)), confidence=confidence, a_max=a_max)
+                    _seed_sequence(seed, 0, p_index, b)), confidence=confidence, a_max=a_max, noun=noun)
         degree = int(degrees.get(parameter, 1))
-        shortfall = _trend_shortfall(f_b[used], degree) or _no_spread(values[used])
+        shortfall = _trend_shortfall(f_b[used], degree, noun) or _no_spread(values[used])
         trends[parameter] = f"no trend ({shortfall})" if shortfall else fit_trend(
             f_b[used], values[used], degree, parameter=parameter, n_bootstrap=n_bootstrap,
             rng=np.random.default_rng(_seed_sequence(seed, 1, p_index)), confidence=confidence, cov_type=cov_type)
     return PopulationStats(cycles=table, bands=bands, parameters=parameters, cells=cells, trends=trends,
-                           counts=counts, options=options)
+                           counts=counts, options=options, noun=noun)
 
 
 def _cdf_distance(first, second, points: int = 8001) -> float:

@@ -126,11 +126,11 @@ class TrendResult:
         return "\n".join(lines)
 
 
-def _trend_shortfall(f: np.ndarray, degree: int) -> str:
-    """Why ``f`` cannot carry a polynomial trend of ``degree`` (empty when it can)."""
+def _trend_shortfall(f: np.ndarray, degree: int, noun: str = "cycles") -> str:
+    """Why ``f`` (one bouncing frequency per row, ``noun``) cannot carry a polynomial trend of ``degree`` (empty when it can)."""
     distinct = np.unique(f[np.isfinite(f)]).size
     if f.size < degree + 3 or distinct < degree + 1:
-        return (f"too few cycles: need {degree + 3} at {degree + 1} or more distinct bouncing frequencies, "
+        return (f"too few {noun}: need {degree + 3} at {degree + 1} or more distinct bouncing frequencies, "
                 f"got {f.size} at {distinct}")
     return ""
 
