@@ -353,6 +353,39 @@ class FloorMode(Effect):
         """The measured floor when the record has a floor acceleration; else None (the modal floor only when asked)."""
         return cls("measured") if getattr(result.record, "floor_acc", None) is not None else None
 
+    RECORD_FREQUENCY_STEP = 0.01
+    """Relative spacing of the trial floor frequencies over ``frequency_range`` (1 %: 230 trials over 2-20 Hz).
+
+    A floor mode's likelihood peak is about as narrow as its half-power band
+    (``2 xi_f f_f``: 0.07 Hz at 3.5 Hz and ``xi_f`` 0.01); measured on a
+    simulated record with the article's plate mode (3.48 Hz, ``xi_f``
+    0.0037), the log-likelihood gained 25 at 3.48 Hz and at most 15 at
+    3.45 and 3.50 Hz.
+    """
+
+    def record_starts(self, result) -> list:
+        """A modal floor's trial starts: the innovations' strongest line (or the given frequency) and a fine log grid.
+
+        A floor mode at a harmonic of the bouncing frequency (mode 1 of the
+        article's plate, 3.48 Hz, under a person bouncing at 1.74 Hz) hides
+        under the force's own harmonic, so the strongest unexplained line
+        alone misses it; the grid's best start by likelihood finds it.
+        """
+        if not self.modal or self.known:
+            return []
+        from ..person.diagnose import innovation_line
+
+        low, high = self.frequency_range
+        if self.frequency:
+            frequencies = [self.frequency]
+        else:
+            count = int(np.ceil(np.log(high / low) / np.log1p(self.RECORD_FREQUENCY_STEP))) + 1
+            frequencies = [float(np.clip(innovation_line(result), low, high))] + list(np.geomspace(low, high, count))
+        d_lo, d_hi = self.damping_range
+        m_lo, m_hi = self.mass_ratio_range
+        xi_f, mu = float(np.clip(0.01, d_lo, d_hi)), float(np.clip(0.01, m_lo, m_hi))
+        return [{"f_f": f, "xi_f": xi_f, "mass_ratio": mu} for f in frequencies]
+
     def record_candidate(self, result):
         """Record level: ``-kappa z''`` with the measured ``z''``, or the floor predicted from the GRF.
 

@@ -90,6 +90,10 @@ class Harmonics(Effect):
             raise OptionError(f"harmonics: give blf=... (g) to simulate {self.count} extra harmonics")
         return (self.blf or self.DEFAULT_BLF[:self.count]), self.phases
 
+    def record_harmonics(self, model) -> int:
+        """Record level: ``count`` more harmonics of the force's template and spread."""
+        return self.count
+
     def record_candidate(self, result):
         """Record level: ``count`` more force harmonics, template coefficients and a spread each (3 per harmonic)."""
         from ..person.diagnose import RecordCandidate, with_harmonics

@@ -186,6 +186,27 @@ class Effect:
         """
         return cls()
 
+    def record_harmonics(self, model: "SMDModel") -> int:
+        """Force harmonics this effect adds to the record-level model (default 0).
+
+        An effect whose terms are more harmonics of the force (``harmonics``)
+        enters the record-level model as that many more harmonics of the
+        template, varying from cycle to cycle like the others, instead of
+        as parameters.
+        """
+        return 0
+
+    def record_starts(self, result) -> list:
+        """Candidate starting values of this effect's parameters for the record-level search (default: none).
+
+        ``result`` is the :class:`~smd_statespace.person.results.PersonResult`
+        without the effect. Each candidate is a dict of parameter values; the
+        search starts from the one with the highest likelihood. Parameters not
+        given start at 0 when their range holds 0 (the effect absent), else at
+        their slot's nominal value.
+        """
+        return []
+
     def record_candidate(self, result):
         """How this effect enters the record-level model of ``result``'s record.
 

@@ -251,14 +251,14 @@ def diagnose_person(result, candidates=None, alpha=0.01) -> PersonDiagnosis:
         # hidden harmonics with f_h 6 Hz, xi_h 3)
         row["on_bound"] = model.person_at_bound(fitted["params"])
         row["significant"] = bool(row["p_value"] < level) and not row["on_bound"]
-        start = 2 + model.n_coefficients
+        start = model.n_dynamic + model.n_coefficients
         names = [r.name for r in model.regressors]
         if candidate.parameter in names:
             k = start + names.index(candidate.parameter)
             row["estimate"] = float(out["delta"][k])
             row["estimate_sd"] = float(np.sqrt(out["delta_cov_unscaled"][k, k] * out["sigma2"]))
         else:  # the extra harmonics' template amplitudes (g)
-            tau = out["delta"][2:2 + model.n_coefficients]
+            tau = out["delta"][model.n_dynamic:model.n_dynamic + model.n_coefficients]
             n = result.model.n_harmonics + 1
             row["estimate"] = float(np.hypot(tau[2 * n - 1], tau[2 * n]))
             row["estimate_sd"] = float("nan")

@@ -33,7 +33,7 @@ from ..signals import RECORD_RATE, decimate_record, decimation_note
 from .model import VARIATIONS, Regressor, RecordModel
 from .timing import TIMING_METHODS, CycleTiming, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "profile_interval"]
+__all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "person_result", "profile_interval"]
 
 MIN_CYCLES = 8
 """Fewest force cycles for the record-level model (the cycle-to-cycle spread needs several)."""
@@ -113,31 +113,35 @@ def fit_model(model: RecordModel, start=None, quick=False) -> dict:
         (bool), ``message``.
     """
     count = [0]
-    start = None if start is None else np.asarray(start, dtype=float)
+    # the search runs in units of each parameter's typical size (1 for f_h, xi_h and the log
+    # variances; an effect's nominal magnitude for its parameters: a cubic coefficient of 400 1/m^2)
+    scales = model.scales
+    bounds = [(low / scale, high / scale) for (low, high), scale in zip(model.bounds, scales)]
 
-    def negative(params):
+    def negative(scaled):
         count[0] += 1
-        value = model.loglike(params)
+        value = model.loglike(scaled * scales)
         return -value if np.isfinite(value) else 1e300
 
     if start is None:
         candidates = [model.start_params(f, x) for f in START_F_H for x in START_XI_H]
-        start = min(candidates, key=negative)
+        start = min(candidates, key=lambda params: negative(params / scales))
+    start = np.asarray(start, dtype=float) / scales
     options = {"ftol": 1e-7} if quick else {}
-    result = optimize.minimize(negative, start, method="L-BFGS-B", bounds=model.bounds, options=options)
+    result = optimize.minimize(negative, start, method="L-BFGS-B", bounds=bounds, options=options)
     if quick:
-        return {"params": result.x, "loglike": -float(result.fun), "n_evaluations": count[0], "converged": True,
-                "message": str(result.message)}
+        return {"params": result.x * scales, "loglike": -float(result.fun), "n_evaluations": count[0],
+                "converged": True, "message": str(result.message)}
     # L-BFGS-B with numerical gradients often stops on its line search at the optimum; a
     # restart from there that gains nothing confirms it
     if not result.success:
-        again = optimize.minimize(negative, result.x, method="L-BFGS-B", bounds=model.bounds)
+        again = optimize.minimize(negative, result.x, method="L-BFGS-B", bounds=bounds)
         converged = again.success or abs(again.fun - result.fun) < 1e-3
         result = again if again.fun <= result.fun else result
     else:
         converged = True
-    return {"params": result.x, "loglike": -float(result.fun), "n_evaluations": count[0], "converged": bool(converged),
-            "message": str(result.message)}
+    return {"params": result.x * scales, "loglike": -float(result.fun), "n_evaluations": count[0],
+            "converged": bool(converged), "message": str(result.message)}
 
 
 def _hessian(func, x, steps):
@@ -184,7 +188,7 @@ def information(model: RecordModel, params, cov_type="robust") -> tuple:
     """
     params = np.asarray(params, dtype=float)
     bounds = np.asarray(model.bounds)
-    steps = np.where(np.arange(params.size) < 2, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3)
+    steps = np.where(np.arange(params.size) < 2, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3 * model.scales)
     free = (params - steps > bounds[:, 0]) & (params + steps < bounds[:, 1])
     free[:2] = True
     index = np.flatnonzero(free)
@@ -318,8 +322,9 @@ def corrected_timing(model: RecordModel, params) -> CycleTiming:
     first = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
     phi = np.full(b.size - 1, np.nan)
     rho = np.full(b.size - 1, np.nan)
-    phi[cycle[first]] = smoothed[2 + p, first]
-    rho[cycle[first]] = smoothed[3 + p, first]
+    nx = model.n_dynamic
+    phi[cycle[first]] = smoothed[nx + p, first]
+    rho[cycle[first]] = smoothed[nx + 1 + p, first]
     period, middle = np.diff(b), 0.5 * (b[:-1] + b[1:])
 
     def start_from(j, at):  # where cycle j's corrected phase reaches its own start
@@ -350,7 +355,7 @@ def _fit_timing(model_for, timing, variation, first=None, step=lambda: None):
     best = (base, fitted)
     model = base
     for iteration in range(TIMING_ITERATIONS + 1):
-        template = model.filter(params)["delta"][2:2 + model.n_coefficients]
+        template = model.filter(params)["delta"][model.n_dynamic:model.n_dynamic + model.n_coefficients]
         model = model_for(timing, variation, template)
         if iteration == 0:
             named = dict(zip(base.param_names, params))
@@ -403,7 +408,7 @@ def wald_interval(estimate, standard_error, level, bounds) -> tuple:
 
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type="oim", drift=False, check=True,
-                    rate=RECORD_RATE, progress=False):
+                    rate=RECORD_RATE, progress=False, effects=()):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -469,6 +474,14 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         Show a progress bar (tqdm) over the likelihood searches (one per variation model,
         ``TIMING_ITERATIONS + 2`` for ``timing="model"``, then the information matrix):
         a 30 s record takes 7-25 s.
+    effects : sequence of Effect or str
+        Physical effects added to the person's model (objects, names or
+        ``NAME:key=value`` specs, as ``--effect``): the same effects every
+        estimator and the simulator use (:mod:`smd_statespace.effects`). The
+        person is first identified without them (``result.before``), then with
+        them at that fit's variation model and cycle timing, their parameters
+        estimated jointly with ``f_h`` and ``xi_h``
+        (:func:`~smd_statespace.person.extend.fit_effects`).
 
     Returns
     -------
@@ -481,13 +494,15 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     CycleError
         No bouncing cycles, or fewer than :data:`MIN_CYCLES`.
     OptionError
-        Unknown ``variation``, ``timing`` or ``intervals``.
+        Unknown ``variation``, ``timing``, ``intervals`` or effect, or an effect that needs a
+        column the record lacks (``floor_acc``).
     FitError
         The fit does not converge or does not determine ``f_h`` and ``xi_h``.
     """
     from ..errors import OptionError
-    from .results import PersonResult
+    from .extend import check_effects, fit_effects
 
+    effects = check_effects(effects, record)
     if variation != "auto" and variation not in VARIATIONS:
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:
@@ -540,9 +555,27 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                            "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
-        params = fitted["params"]
-        cov, free = information(model, params, cov_type)
+        result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
+                               comparison=comparison, record_warnings=record_warnings, notes=notes)
         step()
+    if effects:
+        result = fit_effects(result, effects, intervals=intervals, cov_type=cov_type, progress=progress)
+    return result
+
+
+def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, cov_type="oim", comparison=(),
+                  record_warnings=(), notes=(), **extra):
+    """The :class:`~smd_statespace.person.results.PersonResult` of a fitted record-level model.
+
+    The covariance of the estimates (:func:`information`), the intervals of
+    ``f_h`` and ``xi_h`` (calibrated Wald, Wald or profile, see
+    :func:`identify_person`) and Wald intervals of the effects' parameters.
+    ``extra`` goes to the result (``before``, ``effects``, ``linearisations``).
+    """
+    from .results import PersonResult
+
+    params = fitted["params"]
+    cov, free = information(model, params, cov_type)
     factors = CALIBRATION[model.variation]
     if intervals == "calibrated":
         scale = np.ones(params.size)
@@ -558,10 +591,15 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
             floor = 0.0 if intervals == "wald" else MODEL_ERROR_FLOOR[name] * (params[0] if name == "f_h" else 1.0)
             interval[name] = wald_interval(params[which], float(np.hypot(se[which], floor)), level,
                                            model.bounds[which])
+    for name in model.effect_parameters:  # the effects' parameters: Wald intervals from the information
+        which = model.param_names.index(name)
+        interval[name] = (wald_interval(params[which], se[which], level, model.bounds[which])
+                          if np.isfinite(se[which]) else tuple(model.bounds[which]))
     method = {"profile": "profile", "wald": f"wald ({cov_type})"}.get(
         intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, {factors['xi_h']:g}, "
                    "with a model-error floor)")
     return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
-                        intervals=interval, interval_method=method, level=level, comparison=comparison,
-                        n_evaluations=fitted["n_evaluations"], record_warnings=record_warnings, notes=notes)
+                        intervals=interval, interval_method=method, level=level, comparison=list(comparison),
+                        n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),
+                        notes=list(notes), **extra)
 

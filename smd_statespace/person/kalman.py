@@ -3,14 +3,20 @@
 The record-level model (:mod:`smd_statespace.person.model`) is linear and
 Gaussian once ``f_h``, ``xi_h`` and the noise levels are fixed. Its state is
 
-``s_k = [u_k, u_dot_k, alpha_k (p), m_k (p, only for variation "both")]``
+``s_k = [x_k (n_x), alpha_k (p), m_k (p, only for variation "both")]``
 
-with ``alpha`` the force coefficients ``[a0, a1, b1, ..., an, bn]`` (g) in
-force in the cycle that contains sample ``k``. Within a cycle only the first
-two rows move (the exact discretisation of Eq. 2 under the Fourier force)::
+with ``x = [u, u_dot, ...]`` the dynamic states of the person (and of any
+effect with dynamics of its own, such as a floor mode: ``n_x`` of them) and
+``alpha`` the force coefficients ``[a0, a1, b1, ..., an, bn]`` (g) in force in
+the cycle that contains sample ``k``. Within a cycle only the first ``n_x``
+rows move (the exact discretisation of Eq. 2 under the Fourier force, or its
+linearisation about a path for a nonlinear effect)::
 
-    [u, u_dot]_k = Phi [u, u_dot]_{k-1} + Gamma_{k-1} alpha + X_tr[k-1] beta + w_k
-    y_k = h_x [u, u_dot]_k + H_k alpha_k + X_obs[k] beta + v_k,   v_k ~ N(0, sigma^2)
+    x_k = Phi_{k-1} x_{k-1} + Gamma_{k-1} alpha + c_{k-1} + X_tr[k-1] beta + w_k
+    y_k = h_x,k x_k + H_k alpha_k + X_obs[k] beta + v_k,   v_k ~ N(0, sigma^2)
+
+(``c`` the known part of a linearised or input-driven effect; ``Phi`` and
+``h_x`` are the same at every sample when the dynamics are linear).
 
 and at a cycle boundary the coefficients are drawn again (the "variation
 model"): ``alpha := tau + d`` ("independent"), ``alpha := alpha + e``
@@ -18,7 +24,7 @@ model"): ``alpha := tau + d`` ("independent"), ``alpha := alpha + e``
 ``e ~ N(0, E)``.
 
 The record-level template ``tau`` (or the random walk's start), the initial
-``u, u_dot`` and the coefficients ``beta`` of known regressors (effects) have
+dynamic states ``x_0`` and the coefficients ``beta`` of known regressors (effects) have
 no prior: they form the vector ``delta`` of length ``q``, which the filter
 carries as extra columns (de Jong's augmented Kalman filter, *Ann. Statist.*
 19 (1991) 1073-1083): the predicted state is ``a_k + A_k delta`` and the
@@ -26,8 +32,8 @@ innovation ``e_k - E_k delta``. At the end ``delta`` is estimated by
 generalised least squares and the likelihood is concentrated over it (and over
 the scale ``sigma^2``: every variance is given relative to ``sigma^2``).
 
-The pass uses the structure: a step changes only rows 0-1 of the state, so a
-covariance predict costs ``4 m^2`` operations instead of ``2 m^3``.
+The pass uses the structure: a step changes only the first ``n_x`` rows of the
+state, so a covariance predict costs ``2 n_x m^2`` operations instead of ``2 m^3``.
 """
 
 from __future__ import annotations
@@ -43,37 +49,38 @@ INDEPENDENT, RANDOM_WALK, BOTH, SMOOTH = 0, 1, 2, 3
 
 @numba.njit(cache=True)
 def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
-    """Draw the force coefficients again at a cycle boundary (in place)."""
+    """Draw the force coefficients again at a cycle boundary (in place); they start at row ``n_free``."""
     m = P.shape[0]
     q = A.shape[1]
+    o = n_free
     if code == INDEPENDENT:  # alpha := tau + d
-        for i in range(2, 2 + p):
+        for i in range(o, o + p):
             a[i] = 0.0
             for c in range(q):
                 A[i, c] = 0.0
-            if i - 2 < n_template:
-                A[i, n_free + i - 2] = 1.0
+            if i - o < n_template:
+                A[i, i] = 1.0
             for c in range(m):
                 P[i, c] = 0.0
                 P[c, i] = 0.0
-            P[i, i] = D[i - 2]
+            P[i, i] = D[i - o]
     elif code == RANDOM_WALK:  # alpha := alpha + e
-        for i in range(2, 2 + p):
-            P[i, i] += E[i - 2]
+        for i in range(o, o + p):
+            P[i, i] += E[i - o]
     elif code == SMOOTH:  # the coefficients run on; only the timing states are drawn again
-        for i in range(2 + n_template, 2 + p):
+        for i in range(o + n_template, o + p):
             a[i] = 0.0
             for c in range(q):
                 A[i, c] = 0.0
             for c in range(m):
                 P[i, c] = 0.0
                 P[c, i] = 0.0
-            P[i, i] = D[i - 2]
+            P[i, i] = D[i - o]
     else:  # m := m + e, alpha := m + d
         if step:
-            for i in range(2 + p, 2 + 2 * p):
-                P[i, i] += E[i - 2 - p]
-        for i in range(2, 2 + p):
+            for i in range(o + p, o + 2 * p):
+                P[i, i] += E[i - o - p]
+        for i in range(o, o + p):
             j = i + p
             a[i] = a[j]
             for c in range(q):
@@ -82,34 +89,48 @@ def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
                 P[i, c] = P[j, c]
             for c in range(m):
                 P[c, i] = P[c, j]
-            P[i, i] = P[j, j] + D[i - 2]
+            P[i, i] = P[j, j] + D[i - o]
 
 
 @numba.njit(cache=True)
-def _advance_rows(Phi, G, p, X):
-    """Rows 0-1 of ``X`` become ``Phi X[0:2] + G X[2:2+p]`` (in place): a step's effect on ``[u, u_dot]``.
+def _advance_rows(Phi, G, p, X, work):
+    """Rows ``0..n_x-1`` of ``X`` become ``Phi X[:n_x] + G X[n_x:n_x+p]`` (in place): a step's effect on the dynamic states.
 
     Each column depends only on its own entries, so the columns are updated
-    one by one. Applied to ``P`` (rows: ``T P``), ``P.T`` (columns:
-    ``(T P) T'``), the mean and its ``delta``-columns.
+    one by one (``work`` holds one column's new rows). Applied to ``P``
+    (rows: ``T P``), ``P.T`` (columns: ``(T P) T'``), the mean and its
+    ``delta``-columns.
     """
+    nx = Phi.shape[0]
+    if nx == 2:  # the person alone (the usual case), written out: twice as fast
+        for c in range(X.shape[1]):
+            v0 = Phi[0, 0] * X[0, c] + Phi[0, 1] * X[1, c]
+            v1 = Phi[1, 0] * X[0, c] + Phi[1, 1] * X[1, c]
+            for i in range(p):
+                v0 += G[0, i] * X[2 + i, c]
+                v1 += G[1, i] * X[2 + i, c]
+            X[0, c] = v0
+            X[1, c] = v1
+        return
     for c in range(X.shape[1]):
-        v0 = Phi[0, 0] * X[0, c] + Phi[0, 1] * X[1, c]
-        v1 = Phi[1, 0] * X[0, c] + Phi[1, 1] * X[1, c]
-        for i in range(p):
-            v0 += G[0, i] * X[2 + i, c]
-            v1 += G[1, i] * X[2 + i, c]
-        X[0, c] = v0
-        X[1, c] = v1
+        for r in range(nx):
+            v = 0.0
+            for j in range(nx):
+                v += Phi[r, j] * X[j, c]
+            for i in range(p):
+                v += G[r, i] * X[nx + i, c]
+            work[r] = v
+        for r in range(nx):
+            X[r, c] = work[r]
 
 
 @numba.njit(cache=True)
-def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D):
+def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
     """Advance every coefficient's smooth deviation one sample (in place, variation "smooth").
 
-    The pair ``(alpha_i - tau_i, alpha_dot_i)`` (rows ``2 + i`` and
-    ``2 + p + i``) moves by ``smooth_phi``; ``tau_i`` (the column
-    ``2 + i`` of ``delta``) stays, so ``alpha_i`` gains ``(1 - phi_00) tau_i``
+    The pair ``(alpha_i - tau_i, alpha_dot_i)`` (rows ``n_x + i`` and
+    ``n_x + p + i``) moves by ``smooth_phi``; ``tau_i`` (the column
+    ``n_x + i`` of ``delta``) stays, so ``alpha_i`` gains ``(1 - phi_00) tau_i``
     and ``alpha_dot_i`` loses ``phi_10 tau_i``; the step adds the process
     covariance ``D_i smooth_q``.
     """
@@ -117,8 +138,8 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D):
     q = A.shape[1]
     f00, f01, f10, f11 = smooth_phi[0, 0], smooth_phi[0, 1], smooth_phi[1, 0], smooth_phi[1, 1]
     for i in range(n_template):
-        r0 = 2 + i
-        r1 = 2 + p + i
+        r0 = nx + i
+        r1 = nx + p + i
         for c in range(m):  # rows: T P
             x0 = P[r0, c]
             x1 = P[r1, c]
@@ -138,8 +159,8 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D):
             x1 = A[r1, c]
             A[r0, c] = f00 * x0 + f01 * x1
             A[r1, c] = f10 * x0 + f11 * x1
-        A[r0, 2 + i] += 1.0 - f00
-        A[r1, 2 + i] -= f10
+        A[r0, nx + i] += 1.0 - f00
+        A[r1, nx + i] -= f10
         P[r0, r0] += D[i] * smooth_q[0, 0]
         P[r0, r1] += D[i] * smooth_q[0, 1]
         P[r1, r0] += D[i] * smooth_q[1, 0]
@@ -147,28 +168,32 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D):
 
 
 @numba.njit(cache=True)
-def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift, n_template,
+def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                    smooth_phi, smooth_q, smooth_p0):
     """Run the augmented Kalman filter over one record.
 
     Parameters
     ----------
     y : ndarray, shape (N,)
-        Observations (m/s^2).
-    hx : ndarray, shape (2,)
-        Observation row of ``[u, u_dot]``.
+        Observations (m/s^2), less any known part of the observation.
+    hx : ndarray, shape (K, n_x)
+        Observation row of the dynamic states ``x = [u, u_dot, ...]``: at
+        every sample (``K = N``) or the same for all (``K = 1``).
     H : ndarray, shape (N, p)
         Observation rows of the force coefficients (``g`` times the Fourier basis).
-    Phi : ndarray, shape (2, 2)
-        Transition of ``[u, u_dot]`` over one sample.
-    Gam : ndarray, shape (N, 2, p)
-        Effect of the coefficients on ``[u, u_dot]`` over the step from ``k``.
-    Qx : ndarray, shape (2, 2)
-        Process noise of ``[u, u_dot]`` per step, relative to ``sigma^2``.
+    Phi : ndarray, shape (K, n_x, n_x)
+        Transition of ``x`` over the step from ``k`` (``K = N``), or over every step (``K = 1``).
+    Gam : ndarray, shape (N, n_x, p)
+        Effect of the coefficients on ``x`` over the step from ``k``.
+    Qx : ndarray, shape (n_x, n_x)
+        Process noise of ``x`` per step, relative to ``sigma^2``.
+    offset : ndarray, shape (N, n_x)
+        Known change of ``x`` over the step from ``k`` (a measured input, or
+        the constant part of a linearised effect).
     X_obs : ndarray, shape (N, r)
         Known regressors of the observation (their coefficients are in ``delta``).
-    X_tr : ndarray, shape (N, 2, r)
-        Known regressors of the ``[u, u_dot]`` step from ``k``.
+    X_tr : ndarray, shape (N, n_x, r)
+        Known regressors of the ``x`` step from ``k``.
     reset : ndarray of bool, shape (N,)
         True where a new force cycle starts at sample ``k`` (``k >= 1``).
     code : int
@@ -206,35 +231,41 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
         ``sum e^2 / f``.
     """
     N, p = H.shape
+    nx = Phi.shape[1]
+    varying = Phi.shape[0] > 1
     r = X_obs.shape[1]
-    m = 2 + p
+    m = nx + p
     if code == BOTH:
-        m = 2 + 2 * p
+        m = nx + 2 * p
     elif code == SMOOTH:
-        m = 2 + p + n_template
-    n_free = 2  # delta = [u0, u_dot0, template (p), beta (r)]
-    q = 2 + n_template + r
+        m = nx + p + n_template
+    n_free = nx  # delta = [x0 (n_x), template (p), beta (r)]
+    q = nx + n_template + r
     a = np.zeros(m)
     A = np.zeros((m, q))
     P = np.zeros((m, m))
-    A[0, 0] = 1.0
-    A[1, 1] = 1.0
+    work = np.zeros(nx)
+    T = Phi[0].copy()
+    row = hx[0].copy()
+    has_offset = np.any(offset != 0.0)
+    for i in range(nx):
+        A[i, i] = 1.0
     if code == INDEPENDENT:
         _reset(code, a, A, P, p, D, E, n_free, n_template)
     elif code == RANDOM_WALK:
         for i in range(n_template):
-            A[2 + i, n_free + i] = 1.0
+            A[nx + i, n_free + i] = 1.0
     elif code == SMOOTH:  # stationary start: deviation variance D, rate variance D lambda^2
         for i in range(n_template):
-            A[2 + i, n_free + i] = 1.0
-            P[2 + i, 2 + i] = D[i] * smooth_p0[0, 0]
-            P[2 + i, 2 + p + i] = D[i] * smooth_p0[0, 1]
-            P[2 + p + i, 2 + i] = D[i] * smooth_p0[1, 0]
-            P[2 + p + i, 2 + p + i] = D[i] * smooth_p0[1, 1]
+            A[nx + i, n_free + i] = 1.0
+            P[nx + i, nx + i] = D[i] * smooth_p0[0, 0]
+            P[nx + i, nx + p + i] = D[i] * smooth_p0[0, 1]
+            P[nx + p + i, nx + i] = D[i] * smooth_p0[1, 0]
+            P[nx + p + i, nx + p + i] = D[i] * smooth_p0[1, 1]
         _reset(code, a, A, P, p, D, E, n_free, n_template)
     else:
         for i in range(n_template):
-            A[2 + p + i, n_free + i] = 1.0
+            A[nx + p + i, n_free + i] = 1.0
         _reset(code, a, A, P, p, D, E, n_free, n_template, False)
     e_out = np.empty(N)
     Ev_out = np.empty((N, q))
@@ -247,32 +278,38 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
     Ev = np.zeros(q)
     for k in range(N):
         if k > 0:
-            # predict rows 0-1: x2 = Phi x2 + Gam alpha (+ X_tr beta)
+            # predict the dynamic rows: x = Phi x + Gam alpha + offset (+ X_tr beta)
             G = Gam[k - 1]
-            _advance_rows(Phi, G, p, P)  # T P
-            _advance_rows(Phi, G, p, P.T)  # (T P) T'
-            P[0, 0] += Qx[0, 0]
-            P[0, 1] += Qx[0, 1]
-            P[1, 0] += Qx[1, 0]
-            P[1, 1] += Qx[1, 1]
-            _advance_rows(Phi, G, p, a.reshape((m, 1)))  # the mean
-            _advance_rows(Phi, G, p, A)  # and its delta-columns
+            if varying:
+                T = Phi[k - 1]
+            _advance_rows(T, G, p, P, work)  # T P
+            _advance_rows(T, G, p, P.T, work)  # (T P) T'
+            for i in range(nx):
+                for j in range(nx):
+                    P[i, j] += Qx[i, j]
+            _advance_rows(T, G, p, a.reshape((m, 1)), work)  # the mean
+            if has_offset:
+                for i in range(nx):
+                    a[i] += offset[k - 1, i]
+            _advance_rows(T, G, p, A, work)  # and its delta-columns
             for j in range(r):  # known regressors: the state's dependence on beta
-                A[0, 2 + n_template + j] += X_tr[k - 1, 0, j]
-                A[1, 2 + n_template + j] += X_tr[k - 1, 1, j]
+                for i in range(nx):
+                    A[i, nx + n_template + j] += X_tr[k - 1, i, j]
             if code == SMOOTH:
-                _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D)
+                _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx)
             for i in range(p):
-                P[2 + i, 2 + i] += drift[i]
+                P[nx + i, nx + i] += drift[i]
                 if code == BOTH:
-                    P[2 + p + i, 2 + p + i] += drift[i]
+                    P[nx + p + i, nx + p + i] += drift[i]
             if reset[k]:
                 _reset(code, a, A, P, p, D, E, n_free, n_template)
         # update with y_k
-        h[0] = hx[0]
-        h[1] = hx[1]
+        if varying:
+            row = hx[k]
+        for i in range(nx):
+            h[i] = row[i]
         for i in range(p):
-            h[2 + i] = H[k, i]
+            h[nx + i] = H[k, i]
         for c in range(m):
             v = 0.0
             for i in range(m):
@@ -289,7 +326,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift
                 v += h[i] * A[i, c]
             Ev[c] = v
         for j in range(r):
-            Ev[2 + n_template + j] += X_obs[k, j]
+            Ev[nx + n_template + j] += X_obs[k, j]
         inv_f = 1.0 / f
         e_out[k] = e
         f_out[k] = f

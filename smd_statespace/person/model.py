@@ -58,6 +58,7 @@ from scipy import linalg
 from ..errors import OptionError
 from ..io import G
 from . import kalman
+from .dynamics import PersonDynamics, exponentials, harmonic_gains
 from .timing import CycleTiming
 
 __all__ = ["VARIATIONS", "Regressor", "RecordModel", "coefficient_names"]
@@ -168,6 +169,14 @@ class RecordModel:
         phase-rate error ``rho_j`` (rad/s) per cycle, each drawn afresh at
         every cycle start, entering the force as
         ``(phi_j + rho_j (t - t_mid)) dF/dtheta`` with ``F`` this template.
+    dynamics : PersonDynamics, optional
+        The person's dynamics from the one SMD model and its effects
+        (:mod:`smd_statespace.person.dynamics`); default Eq. 2 alone,
+        ``SMDModel(n_harmonics)``. The effects' parameters join
+        :attr:`param_names`.
+    nominal : ndarray, shape (N, n_x), optional
+        The path a nonlinear effect is linearised about (the smoothed
+        dynamic states of a previous fit); needed only then.
     """
 
     time: np.ndarray
@@ -179,6 +188,8 @@ class RecordModel:
     drift: bool = False
     regressors: tuple = ()
     phase_template: np.ndarray | None = None
+    dynamics: PersonDynamics | None = None
+    nominal: np.ndarray | None = None
     _phase: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -186,6 +197,10 @@ class RecordModel:
             raise OptionError(f"variation {self.variation!r} is not one of: {', '.join(VARIATIONS)}")
         self.time = np.asarray(self.time, dtype=float)
         self.y = np.asarray(self.y, dtype=float)
+        if self.dynamics is None:
+            from ..model import SMDModel
+
+            self.dynamics = PersonDynamics(SMDModel(n_harmonics=self.n_harmonics), self.time)
         cycle, theta, rate = self.timing.locate(self.time)
         reset = np.zeros(self.time.size, dtype=np.bool_)
         reset[1:] = cycle[1:] != cycle[:-1]
@@ -234,6 +249,21 @@ class RecordModel:
         return G * h, G * step
 
     @property
+    def n_dynamic(self) -> int:
+        """Dynamic states ``n_x`` at the head of the state (``u``, ``u_dot`` and any effect's own)."""
+        return self.dynamics.n_dynamic
+
+    @property
+    def approximate(self) -> bool:
+        """True when a nonlinear effect is linearised about a path (the likelihood is then approximate)."""
+        return not self.dynamics.linear
+
+    @property
+    def effect_parameters(self) -> list:
+        """Names of the effects' parameters in :attr:`param_names` (they come last)."""
+        return self.dynamics.parameter_names
+
+    @property
     def dt(self) -> float:
         """Sampling interval (s)."""
         return float(self.time[1] - self.time[0])
@@ -251,7 +281,7 @@ class RecordModel:
     @property
     def delta_names(self) -> list:
         """Names of the concentrated linear unknowns: ``u0, u_dot0``, the template, the regressors' coefficients."""
-        return ["u0", "u_dot0"] + [f"template_{c}" for c in self.coefficient_names] + [
+        return [f"{name}0" for name in self.dynamics.names] + [f"template_{c}" for c in self.coefficient_names] + [
             r.name for r in self.regressors]
 
     @property
@@ -275,14 +305,22 @@ class RecordModel:
             names += [f"log_var_s_{i}" for i in self.variance_groups]
         if self.process_noise:
             names.append("log_var_w")
-        return names
+        return names + self.effect_parameters
 
     @property
     def bounds(self) -> list:
         """Search bounds of the parameters, in the order of :attr:`param_names`."""
         smooth = (np.log(SMOOTH_MIN_CYCLES / np.mean(self.timing.f_b)), np.log(LONGEST_SMOOTH_TIME))
+        effects = {slot.name: (slot.low, slot.high) for slot in self.dynamics.parameters}
         return [F_H_BOUNDS, XI_H_BOUNDS] + [
-            smooth if name == "log_smooth_time" else LOG_VAR_BOUNDS for name in self.param_names[2:]]
+            smooth if name == "log_smooth_time" else effects.get(name, LOG_VAR_BOUNDS)
+            for name in self.param_names[2:]]
+
+    @property
+    def scales(self) -> np.ndarray:
+        """Typical size of each parameter (1, or an effect's slot's nominal magnitude): the search's units."""
+        nominal = {slot.name: abs(slot.nominal) or 1.0 for slot in self.dynamics.parameters}
+        return np.array([nominal.get(name, 1.0) for name in self.param_names])
 
     def at_bound(self, params, which) -> bool:
         """True when parameter ``which`` is within 0.1 % of its search range from a bound (not an estimate)."""
@@ -300,6 +338,8 @@ class RecordModel:
         values[0], values[1] = f_h, xi_h
         if "log_smooth_time" in self.param_names:
             values[self.param_names.index("log_smooth_time")] = np.log(2.0 / np.mean(self.timing.f_b))
+        for slot in self.dynamics.parameters:  # an effect starts absent where it can, else at its nominal
+            values[self.param_names.index(slot.name)] = 0.0 if slot.low < 0.0 < slot.high else slot.nominal
         return values
 
     # ------------------------------------------------------------------ system
@@ -327,25 +367,28 @@ class RecordModel:
         Returns
         -------
         dict
-            ``hx, H, Phi, Gam, Qx, X_obs, X_tr, reset, code, D, E, drift,
-            smooth_phi, smooth_q, smooth_p0`` as
-            :func:`~smd_statespace.person.kalman.augmented_pass` takes them.
+            ``hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E,
+            drift, smooth_phi, smooth_q, smooth_p0`` as
+            :func:`~smd_statespace.person.kalman.augmented_pass` takes them,
+            and ``y_known``, the known part of the observation (subtracted
+            from ``y`` before the pass).
         """
-        f_h, xi_h = float(params[0]), float(params[1])
-        omega = 2.0 * np.pi * f_h
-        a_c = np.array([[0.0, 1.0], [-omega**2, -2.0 * xi_h * omega]])  # Eq. 2
+        named = dict(zip(self.param_names, params))
+        lin = self.dynamics.linearise(float(params[0]), float(params[1]),
+                                      {name: named[name] for name in self.effect_parameters}, self.nominal)
         dt = self.dt
-        phi = expm2(a_c, dt)
-        b_c = np.array([0.0, 1.0])
-        # constant input over a step: A^-1 (Phi - I) B
-        g0 = np.linalg.solve(a_c, (phi - np.eye(2)) @ b_c)
-        # harmonic input exp(j nu s): (j nu I - A)^-1 (exp(j nu dt) I - Phi) B, per cycle rate and order
+        phi, integral = exponentials(lin.A, dt)  # exact over a step with A held (Eq. 2 and the effects)
+        g0 = np.einsum("kij,kj->ki", integral, lin.b)  # constant force: W b
         cycle, _, rate, reset = self._phase
         orders = np.arange(1, self.n_harmonics + 1)
-        nu = self.timing_rates()[:, None] * orders  # (J, n)
-        gain = _harmonic_step_gain(a_c, phi, nu, dt)  # (J, n, 2)
-        per_sample = gain[cycle] * self._rotation[..., None]  # (N, n, 2)
-        gam = np.empty((self.time.size, 2, self.n_coefficients))
+        if lin.A.shape[0] == 1:  # one gain per cycle rate and order, rotated to each sample
+            nu = self.timing_rates()[:, None] * orders  # (J, n)
+            per_sample = harmonic_gains(lin.A, phi, lin.b, nu, dt)[cycle] * self._rotation[..., None]
+        else:  # a nonlinear effect: every sample has its own A
+            nu = self.timing_rates()[cycle][:, None] * orders
+            per_sample = harmonic_gains(lin.A, phi, lin.b, nu, dt) * self._rotation[..., None]
+        nx = self.n_dynamic
+        gam = np.empty((self.time.size, nx, self.n_coefficients))
         gam[:, :, 0] = g0
         gam[:, :, 1::2] = per_sample.real.transpose(0, 2, 1)
         gam[:, :, 2::2] = per_sample.imag.transpose(0, 2, 1)
@@ -354,20 +397,23 @@ class RecordModel:
         if self._timing_columns is not None:
             h_timing, step_values = self._timing_columns
             H = np.hstack([H, h_timing])
-            gam = np.concatenate([gam, g0[None, :, None] * step_values[:, None, :]], axis=2)
+            gam = np.concatenate([gam, g0[:, :, None] * step_values[:, None, :]], axis=2)
         D, E, S, w = self._variances(params)
-        qx = w * _integrated_white_noise(a_c, dt) if w > 0 else np.zeros((2, 2))
-        named = dict(zip(self.param_names, params))
+        qx = w * _integrated_white_noise(lin.A.mean(axis=0), lin.b.mean(axis=0), dt) if w > 0 else np.zeros((nx, nx))
         smooth = matern32_step(np.exp(named["log_smooth_time"]), dt) if "log_smooth_time" in named else (
             np.zeros((2, 2)),) * 3
         dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
-        x_tr = _regressor_steps(a_c, phi, self._X * dynamic, dt)
+        x_tr = _regressor_steps(g0, self._X * dynamic)
+        offset = np.zeros((self.time.size, nx)) if lin.c is None else np.einsum(
+            "kij,kj->ki", integral, 0.5 * (lin.c + np.vstack([lin.c[1:], lin.c[-1:]])))
         return {
-            "hx": a_c[1].copy(),
+            "hx": np.ascontiguousarray(lin.hx),
             "H": H,
-            "Phi": phi,
+            "Phi": np.ascontiguousarray(phi),
             "Gam": gam,
             "Qx": qx,
+            "offset": offset,
+            "y_known": np.zeros(self.time.size) if lin.d is None else lin.d,
             "X_obs": self._X_obs,
             "X_tr": x_tr,
             "reset": reset,
@@ -389,7 +435,8 @@ class RecordModel:
         """Run the compiled pass and concentrate; returns the pass's arrays and :func:`kalman.concentrate`'s."""
         sys = self.system(params)
         e, Ev, f, S, s, ee = kalman.augmented_pass(
-            self.y, sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["X_obs"], sys["X_tr"],
+            self.y - sys["y_known"], sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["offset"],
+            sys["X_obs"], sys["X_tr"],
             sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"], self.n_coefficients,
             sys["smooth_phi"], sys["smooth_q"], sys["smooth_p0"])
         out = kalman.concentrate(S, s, ee, f, self.y.size)
@@ -457,37 +504,25 @@ def matern32_step(length_scale, dt):
     return phi, 0.5 * (q + q.T), p_inf
 
 
-def _harmonic_step_gain(a_c, phi, nu, dt):
-    """``(j nu I - A)^-1 (exp(j nu dt) I - Phi) B`` for every ``nu``, shape nu.shape + (2,)."""
-    # 2x2 inverse in closed form, B = [0, 1]
-    a, b, c, d = a_c[0, 0], a_c[0, 1], a_c[1, 0], a_c[1, 1]
-    jn = 1j * nu
-    m00, m01, m10, m11 = jn - a, -b, -c, jn - d
-    det = m00 * m11 - m01 * m10
-    e = np.exp(jn * dt)
-    r0 = -phi[0, 1] + 0.0 * e  # (e I - Phi) B = [-Phi01, e - Phi11]
-    r1 = e - phi[1, 1]
-    g_u = (m11 * r0 - m01 * r1) / det
-    g_v = (-m10 * r0 + m00 * r1) / det
-    return np.stack([g_u, g_v], axis=-1)
-
-
-def _integrated_white_noise(a_c, dt):
-    """Covariance over one step of a unit-intensity white force on ``u''`` (Van Loan's method)."""
-    n = 2
+def _integrated_white_noise(a_c, b, dt):
+    """Covariance over one step of a unit-intensity white force entering through ``b`` (Van Loan's method)."""
+    n = a_c.shape[0]
     block = np.zeros((2 * n, 2 * n))
     block[:n, :n] = -a_c
-    block[:n, n:] = np.array([[0.0, 0.0], [0.0, 1.0]])
+    block[:n, n:] = np.outer(b, b)
     block[n:, n:] = a_c.T
     e = linalg.expm(block * dt)
     phi = e[n:, n:].T
     return phi @ e[:n, n:]
 
 
-def _regressor_steps(a_c, phi, x_obs, dt):
-    """Effect of the regressors' acceleration terms on ``[u, u']`` over a step (trapezoidal hold)."""
+def _regressor_steps(g0, x_obs):
+    """Effect of the regressors' acceleration terms on the dynamic states over a step (trapezoidal hold).
+
+    ``g0`` (shape (K, n_x)) is the change of the states over a step under a
+    unit constant acceleration input.
+    """
     if x_obs.shape[1] == 0:
-        return np.zeros((x_obs.shape[0], 2, 0))
-    g0 = np.linalg.solve(a_c, (phi - np.eye(2)) @ np.array([0.0, 1.0]))
+        return np.zeros((x_obs.shape[0], g0.shape[1], 0))
     nxt = np.vstack([x_obs[1:], x_obs[-1:]])
-    return (0.5 * (x_obs + nxt))[:, None, :] * g0[None, :, None]
+    return (0.5 * (x_obs + nxt))[:, None, :] * g0[:, :, None]

@@ -80,6 +80,12 @@ class PersonResult:
         found in the record before the fit (first in :attr:`warnings`).
     notes : list of str
         What was done to the record before the fit (decimation), in words.
+    before : PersonResult or None
+        With effects: the same person identified without them (the comparison's "before").
+    effects : tuple of Effect
+        The effects in the model (their parameters are in :attr:`params`, last).
+    linearisations : int
+        How many paths a nonlinear effect was linearised about (0: the likelihood is exact).
     """
 
     record: object
@@ -95,6 +101,9 @@ class PersonResult:
     n_evaluations: int = 0
     record_warnings: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    before: "PersonResult | None" = None
+    effects: tuple = ()
+    linearisations: int = 0
 
     # ------------------------------------------------------------------ estimates
     @cached_property
@@ -136,8 +145,8 @@ class PersonResult:
     def template(self) -> pd.DataFrame:
         """Record-level force coefficients (g) with their sds (conditional on ``f_h``, ``xi_h``)."""
         delta, cov = self._delta()
-        p = self.model.n_coefficients
-        return pd.DataFrame({"value": delta[2:2 + p], "sd": np.sqrt(np.diag(cov)[2:2 + p])},
+        p, nx = self.model.n_coefficients, self.model.n_dynamic
+        return pd.DataFrame({"value": delta[nx:nx + p], "sd": np.sqrt(np.diag(cov)[nx:nx + p])},
                             index=self.model.coefficient_names)
 
     def template_blf(self) -> pd.DataFrame:
@@ -145,7 +154,7 @@ class PersonResult:
         delta, cov = self._delta()
         rows = []
         for i in range(1, self.model.n_harmonics + 1):
-            ia, ib = 2 + 2 * i - 1, 2 + 2 * i
+            ia, ib = self.model.n_dynamic + 2 * i - 1, self.model.n_dynamic + 2 * i
             a, b = delta[ia], delta[ib]
             value = float(np.hypot(a, b))
             grad = np.array([a, b]) / max(value, 1e-12)
@@ -169,7 +178,7 @@ class PersonResult:
     def regressor_coefficients(self) -> pd.DataFrame:
         """Coefficients of the regressors (the offset, effects) with sds."""
         delta, cov = self._delta()
-        start = 2 + self.model.n_coefficients
+        start = self.model.n_dynamic + self.model.n_coefficients
         names = [r.name for r in self.model.regressors]
         return pd.DataFrame({"value": delta[start:], "sd": np.sqrt(np.diag(cov)[start:])}, index=names)
 
@@ -214,12 +223,12 @@ class PersonResult:
         res = self.statespace_results
         model = self.model
         cycle, _, _, _ = model._phase
-        p, n = model.n_coefficients, model.n_harmonics
+        p, n, nx = model.n_coefficients, model.n_harmonics, model.n_dynamic
         first = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
         last = np.r_[first[1:] - 1, cycle.size - 1]
         mid = (first + last) // 2
-        state = res.smoothed_state[2:2 + p, mid].T
-        state_cov = res.smoothed_state_cov[2:2 + p, 2:2 + p, mid].transpose(2, 0, 1) * self.filtered["sigma2"]
+        state = res.smoothed_state[nx:nx + p, mid].T
+        state_cov = res.smoothed_state_cov[nx:nx + p, nx:nx + p, mid].transpose(2, 0, 1) * self.filtered["sigma2"]
         b = model.timing.boundaries
         j = cycle[first]
         table = pd.DataFrame({"cycle": j, "t_start": b[j], "t_end": b[j + 1], "f_b": 1.0 / (b[j + 1] - b[j]),

@@ -36,13 +36,13 @@ class RecordStateSpace(MLEModel):
     model : RecordModel
         The record-level model.
     delta : ndarray, shape (q,)
-        ``[u0, u_dot0, template (p), regressor coefficients (r)]`` at which the
-        linear unknowns are fixed (from :meth:`RecordModel.filter`).
+        ``[initial dynamic states (n_x), template (p), regressor coefficients (r)]``
+        at which the linear unknowns are fixed (from :meth:`RecordModel.filter`).
 
     Notes
     -----
-    State ``[u, u_dot, alpha]`` (``[u, u_dot, alpha, m]`` for variation
-    "both", ``[u, u_dot, alpha, alpha_dot]`` for "smooth"); observation ``y = [h_x, H_k] state + X_obs beta + v`` with the
+    State ``[x, alpha]`` with ``x = [u, u_dot, ...]`` the ``n_x`` dynamic states (``[x, alpha, m]`` for variation
+    "both", ``[x, alpha, alpha_dot]`` for "smooth"); observation ``y = [h_x, H_k] state + X_obs beta + d + v`` with the
     scale ``sigma^2`` concentrated out (``concentrate_scale=True``), so every
     variance is relative to it, as in the compiled pass.
     """
@@ -50,8 +50,8 @@ class RecordStateSpace(MLEModel):
     def __init__(self, model: RecordModel, delta):
         self.record_model = model
         self.delta = np.asarray(delta, dtype=float)
-        p = model.n_force_states
-        k_states = {"both": 2 + 2 * p, "smooth": 2 + p + model.n_coefficients}.get(model.variation, 2 + p)
+        p, nx = model.n_force_states, model.n_dynamic
+        k_states = {"both": nx + 2 * p, "smooth": nx + p + model.n_coefficients}.get(model.variation, nx + p)
         super().__init__(model.y, k_states=k_states, k_posdef=k_states)
         self.ssm.filter_concentrated = True
         self.ssm["selection"] = np.eye(k_states)
@@ -85,24 +85,24 @@ class RecordStateSpace(MLEModel):
         params = super().update(params, **kwargs)
         model = self.record_model
         sys = model.system(params)
-        n, p = model.y.size, model.n_force_states
+        n, p, nx = model.y.size, model.n_force_states, model.n_dynamic
         m = self.k_states
         r = sys["X_obs"].shape[1]
         n_template = model.n_coefficients
-        u0, beta = self.delta[:2], self.delta[2 + n_template:2 + n_template + r]
+        x0, beta = self.delta[:nx], self.delta[nx + n_template:nx + n_template + r]
         tau = np.zeros(p)  # the phase and rate errors, if any, have mean zero
-        tau[:n_template] = self.delta[2:2 + n_template]
-        alpha, base = slice(2, 2 + p), slice(2 + p, 2 + 2 * p)
+        tau[:n_template] = self.delta[nx:nx + n_template]
+        alpha, base = slice(nx, nx + p), slice(nx + p, nx + 2 * p)
         design = np.zeros((1, m, n))
-        design[0, :2, :] = sys["hx"][:, None]
+        design[0, :nx, :] = np.broadcast_to(sys["hx"], (n, nx)).T
         design[0, alpha, :] = sys["H"].T
         transition = np.repeat(np.eye(m)[:, :, None], n, axis=2)
-        transition[:2, :2, :] = sys["Phi"][:, :, None]
-        transition[:2, alpha, :] = sys["Gam"].transpose(1, 2, 0)
+        transition[:nx, :nx, :] = np.broadcast_to(sys["Phi"], (n, nx, nx)).transpose(1, 2, 0)
+        transition[:nx, alpha, :] = sys["Gam"].transpose(1, 2, 0)
         intercept = np.zeros((m, n))
-        intercept[:2, :] = (sys["X_tr"] @ beta).T if r else 0.0
+        intercept[:nx, :] = sys["offset"].T + ((sys["X_tr"] @ beta).T if r else 0.0)
         state_cov = np.zeros((m, m, n))
-        state_cov[:2, :2, :] = sys["Qx"][:, :, None]
+        state_cov[:nx, :nx, :] = sys["Qx"][:, :, None]
         drift = np.diag(sys["drift"])
         state_cov[alpha, alpha, :] += drift[:, :, None]
         # statsmodels' time t maps the state at sample t to sample t + 1: a cycle starting
@@ -118,31 +118,31 @@ class RecordStateSpace(MLEModel):
         elif model.variation == "smooth":
             f, qs = sys["smooth_phi"], sys["smooth_q"]
             for i in range(n_template):
-                rows = [2 + i, 2 + p + i]
+                rows = [nx + i, nx + p + i]
                 transition[np.ix_(rows, rows)] = f[:, :, None]
                 intercept[rows[0], :] += (1.0 - f[0, 0]) * tau[i]
                 intercept[rows[1], :] -= f[1, 0] * tau[i]
                 state_cov[np.ix_(rows, rows)] += sys["D"][i] * qs[:, :, None]
-            timing = slice(2 + n_template, 2 + p)  # the phase and rate errors are drawn again per cycle
+            timing = slice(nx + n_template, nx + p)  # the phase and rate errors are drawn again per cycle
             transition[timing, :, starts] = 0.0
             state_cov[timing, timing, starts] = np.diag(sys["D"][n_template:])[:, :, None]
         else:  # m := m + e, alpha := m + e + d
             state_cov[base, base, :] += drift[:, :, None]
             transition[alpha, :, starts] = 0.0
             for i in range(p):
-                transition[2 + i, 2 + p + i, starts] = 1.0
+                transition[nx + i, nx + p + i, starts] = 1.0
             step = E + drift
             state_cov[alpha, alpha, starts] = (step + D)[:, :, None]
             state_cov[alpha, base, starts] = step[:, :, None]
             state_cov[base, alpha, starts] = step[:, :, None]
             state_cov[base, base, starts] = step[:, :, None]
         self.ssm["design"] = design
-        self.ssm["obs_intercept"] = (sys["X_obs"] @ beta)[None, :] if r else np.zeros((1, n))
+        self.ssm["obs_intercept"] = (sys["y_known"] + ((sys["X_obs"] @ beta) if r else 0.0))[None, :]
         self.ssm["transition"] = transition
         self.ssm["state_intercept"] = intercept
         self.ssm["state_cov"] = state_cov
         mean = np.zeros(m)
-        mean[:2] = u0
+        mean[:nx] = x0
         cov = np.zeros((m, m))
         if model.variation == "independent":
             mean[alpha] = tau
@@ -154,7 +154,7 @@ class RecordStateSpace(MLEModel):
             cov[alpha, alpha] = np.diag(sys["D"])
             p0 = sys["smooth_p0"]
             for i in range(n_template):
-                rows = [2 + i, 2 + p + i]
+                rows = [nx + i, nx + p + i]
                 cov[np.ix_(rows, rows)] = sys["D"][i] * p0
         else:
             mean[alpha] = tau

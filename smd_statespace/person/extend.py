@@ -1,0 +1,201 @@
+"""The person with physical effects: the one SMD model's effects added to a record-level fit.
+
+``identify_person(record, effects=[...])`` and ``identify REC --effect SPEC``
+end here: the person is identified without the effects first (its variation
+model and cycle timing are chosen there, and it is the "before" of the
+comparison), then the record-level model is rebuilt from
+``SMDModel(n_harmonics, effects=[...])`` (:mod:`smd_statespace.person.dynamics`)
+and every static parameter — ``f_h``, ``xi_h``, the effects' parameters, the
+variation and noise variances — is estimated again by maximum likelihood
+over the whole record.
+
+How an effect enters:
+
+- force harmonics (``harmonics``): more harmonics of the force, with their
+  template coefficients and cycle-to-cycle spread (:meth:`Effect.record_harmonics
+  <smd_statespace.model.Effect.record_harmonics>`);
+- linear in the state with a measured input (a floor with ``floor_acc``):
+  exactly, the input's terms are known parts of the rates and of the
+  observation;
+- linear dynamics of their own (a floor mode without an accelerometer,
+  Section 6): exactly, its states join the person's before the exact
+  discretisation;
+- nonlinear (a cubic spring, quadratic damping, asymmetric stiffness, any
+  user's effect): linearised about the smoothed path of the previous fit and
+  fitted again about the new path until the log-likelihood changes by less
+  than :data:`NOMINAL_TOLERANCE` (at most :data:`NOMINAL_ITERATIONS` times):
+  an iterated extended Kalman smoother inside the likelihood. Its
+  likelihood is then approximate, and the result says so.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from ..errors import OptionError
+from ..model import SMDModel
+from .dynamics import PersonDynamics
+from .model import RecordModel
+
+__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "split_effects", "record_signals",
+           "effect_model", "fit_effects"]
+
+NOMINAL_ITERATIONS = 6
+"""Most re-linearisations of a nonlinear effect about the new smoothed path."""
+
+NOMINAL_TOLERANCE = 0.05
+"""Change of the log-likelihood between two linearisations below which the path has settled."""
+
+
+def check_effects(effects, record) -> tuple:
+    """The effects as objects (from names or specs), checked against the record before any fit.
+
+    Raises
+    ------
+    OptionError
+        An unknown effect or option (one line naming the valid ones), or an
+        effect that needs a column the record lacks (naming the column).
+    """
+    from ..effects import make_effect
+
+    effects = tuple(make_effect(effect) for effect in effects)
+    for effect in effects:
+        columns = tuple(getattr(effect, "requires_columns", ()))
+        missing = [column for column in columns if getattr(record, column, None) is None]
+        if missing:
+            raise OptionError(f"{record.source}: effect {effect.spec!r} needs the column {missing[0]} "
+                              "(the floor's measured acceleration, m/s^2), which the record does not have; "
+                              "without one use floor_mode:source=modal")
+    SMDModel(effects=[e for e in effects if not e.record_harmonics(SMDModel())])  # duplicates, bad values
+    return effects
+
+
+def split_effects(effects, n_harmonics: int) -> tuple:
+    """``(harmonics, model)``: the record model's force harmonics and the SMD model of the other effects."""
+    base = SMDModel(n_harmonics=n_harmonics)
+    extra = sum(int(effect.record_harmonics(base)) for effect in effects)
+    dynamic = [effect for effect in effects if not effect.record_harmonics(base)]
+    return n_harmonics + extra, SMDModel(n_harmonics=n_harmonics + extra, effects=dynamic)
+
+
+def record_signals(record, model: SMDModel) -> dict:
+    """The measured inputs ``model``'s effects need, from the record's columns (``floor_disp``, ``floor_vel``).
+
+    The floor acceleration is high-passed and integrated twice as the
+    per-cycle pipeline does (:func:`smd_statespace.signals.preprocess`).
+    """
+    if not model.requires:
+        return {}
+    from ..signals import highpass, integrate
+
+    if record.floor_acc is None:
+        raise OptionError(f"{record.source}: the effects {', '.join(e.name for e in model.effects)} need the "
+                          "column floor_acc, which the record does not have")
+    acc = highpass(record.floor_acc, record.fs)
+    vel = integrate(acc, record.fs)
+    return {"floor_acc": acc, "floor_vel": vel, "floor_disp": integrate(vel, record.fs)}
+
+
+def _smoothed_path(model: RecordModel, params) -> np.ndarray:
+    """The smoothed dynamic states ``(N, n_x)`` of ``model`` at ``params``."""
+    from .statespace import RecordStateSpace
+
+    delta = model.filter(params)["delta"]
+    return RecordStateSpace(model, delta).smooth(params, cov_type="none").smoothed_state[:model.n_dynamic].T
+
+
+def effect_model(result, effects) -> RecordModel:
+    """The record-level model of ``result`` (its timing, variation, regressors) with ``effects`` added.
+
+    A nonlinear effect's first nominal path is ``result``'s smoothed ``u``,
+    ``u'`` (an effect's own dynamic states start at zero).
+    """
+    base = result.model
+    n_harmonics, smd = split_effects(effects, base.n_harmonics)
+    dynamics = PersonDynamics(smd, base.time, record_signals(result.record, smd))
+    nominal = None
+    if not dynamics.linear:
+        nominal = np.zeros((base.time.size, dynamics.n_dynamic))
+        nominal[:, :base.n_dynamic] = _smoothed_path(base, result.params)
+    template = base.phase_template
+    if template is not None and n_harmonics > base.n_harmonics:
+        template = np.r_[template, np.zeros(2 * (n_harmonics - base.n_harmonics))]
+    return RecordModel(base.time, base.y, base.timing, n_harmonics, base.variation, base.process_noise,
+                       drift=base.drift, regressors=base.regressors, phase_template=template, dynamics=dynamics,
+                       nominal=nominal)
+
+
+def _start(model: RecordModel, result, effects) -> np.ndarray:
+    """Start of the search: the fit without the effects by name, the best of the effects' own trial starts
+    (:meth:`Effect.record_starts <smd_statespace.model.Effect.record_starts>`) by likelihood, else the model's."""
+    import itertools
+
+    named = dict(zip(result.model.param_names, result.params))
+    default = model.start_params(result.f_h, result.xi_h)
+    low, high = np.asarray(model.bounds).T
+    trials = [effect.record_starts(result) or [{}] for effect in effects]
+    starts = []
+    for combination in itertools.product(*trials):
+        values = dict(named)
+        for part in combination:
+            values.update(part)
+        starts.append(np.clip([values.get(name, value) for name, value in zip(model.param_names, default)],
+                              low, high))
+    return starts[0] if len(starts) == 1 else max(starts, key=model.loglike)
+
+
+def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", progress=False):
+    """Identify the person of ``result`` again with ``effects`` added to its model.
+
+    Parameters
+    ----------
+    result : PersonResult
+        The fit without the effects (its variation model and cycle timing are kept).
+    effects : sequence of Effect or str
+        The effects to add.
+    intervals, cov_type : str
+        As :func:`~smd_statespace.person.fit.identify_person`.
+    progress : bool
+        A progress bar over the searches (one per linearisation).
+
+    Returns
+    -------
+    PersonResult
+        With ``before`` (``result``), ``effects`` and ``linearisations`` (how
+        many paths a nonlinear effect was linearised about; 0 when exact).
+    """
+    from .fit import FitError, fit_model, person_result
+
+    effects = check_effects(effects, result.record)
+    model = effect_model(result, effects)
+    fitted = fit_model(model, _start(model, result, effects), quick=model.approximate)
+    linearisations = 0
+    with tqdm(total=NOMINAL_ITERATIONS, desc="effects (record)", unit="fit", disable=not progress or not
+              model.approximate, leave=False) as bar:
+        while model.approximate and linearisations < NOMINAL_ITERATIONS:
+            linearisations += 1
+            moved = RecordModel(model.time, model.y, model.timing, model.n_harmonics, model.variation,
+                                model.process_noise, drift=model.drift, regressors=model.regressors,
+                                phase_template=model.phase_template, dynamics=model.dynamics,
+                                nominal=_smoothed_path(model, fitted["params"]))
+            again = fit_model(moved, fitted["params"], quick=True)
+            bar.update()
+            settled = abs(again["loglike"] - fitted["loglike"]) < NOMINAL_TOLERANCE
+            model, fitted = moved, again
+            if settled:
+                break
+        if linearisations:  # the last path's search run to the full tolerance
+            fitted = fit_model(model, fitted["params"])
+    if not fitted["converged"]:
+        raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
+                       f"did not converge ({fitted['message']})")
+    notes = list(result.notes)
+    if model.approximate:
+        settled = "" if linearisations < NOMINAL_ITERATIONS else (
+            f"; the path had not settled after {NOMINAL_ITERATIONS} (read the effect's estimate with care)")
+        notes.append(f"the likelihood is approximate: {', '.join(e.name for e in effects)} linearised about the "
+                     f"smoothed path, {linearisations} time(s) (an iterated extended Kalman smoother){settled}")
+    return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
+                         comparison=result.comparison, record_warnings=result.record_warnings, notes=notes,
+                         before=result, effects=tuple(effects), linearisations=linearisations)
