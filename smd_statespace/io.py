@@ -259,7 +259,9 @@ def truth_values(truth) -> dict:
     """The reported quantities of a truth (``SyntheticRecord.truth`` or a truth file): flat keys.
 
     ``f_h``, ``xi_h`` as given, ``blf`` (a list) as ``blf_1, blf_2, ...``,
-    ``K_h``, ``C_h`` as ``k_h``, ``c_h``; keys already flat (``blf_1``) are kept.
+    ``K_h``, ``C_h`` as ``k_h``, ``c_h``; keys already flat (``blf_1``) are kept; a
+    simulation's effects' parameters by their estimated names (``beta_3``; a floor's
+    ``frequency``, ``damping`` as ``f_f``, ``xi_f``).
     """
     if not truth:
         return {}
@@ -272,4 +274,12 @@ def truth_values(truth) -> dict:
     for name, value in truth.items():
         if name.startswith("blf_") or name in ("k_h", "c_h"):
             values.setdefault(name, float(value))
+    for effect in dict(truth.get("effects") or {}).values():  # a simulation's effects: their parameters
+        for name, value in dict(effect or {}).items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                values.setdefault(_EFFECT_TRUTH_NAMES.get(name, name), float(value))
     return values
+
+
+_EFFECT_TRUTH_NAMES = {"frequency": "f_f", "damping": "xi_f"}
+"""A simulated floor mode's truth keys and the names of the parameters it is estimated as."""

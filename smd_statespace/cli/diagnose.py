@@ -19,15 +19,19 @@ def add_diagnose(subparsers):
     parser = subparsers.add_parser(
         "diagnose",
         help="compare the model with the measurement, test the residuals, rank missing effects",
-        description=("Identify the record, compare the predicted GRF with the measured one (free simulation and "
-                     "one-step-ahead prediction), test the residuals (whiteness, normality, variance change, "
-                     "spectrum, phase, cross-correlation) and refit with every candidate effect to find the one "
-                     "that is missing. With --effect, the fit without and with those effects is shown side by side."),
+        description=("Identify the person from the whole record (the record-level model, as 'identify' does), "
+                     "test its innovations, then identify it again with each candidate effect (every registered "
+                     "effect, a user's too) and test each by likelihood ratio: the table shows f_h, xi_h, the "
+                     "effect's parameters, the noise and the Ljung-Box p before and after, and the verdict prints "
+                     "the 'identify --effect' command that adds the missing effect. --effect names the candidates "
+                     "to try. With a per-cycle --estimator (the article's method), each cycle is refitted with "
+                     "every candidate and the fits compared (free simulation, residual tests)."),
     )
     add_record_arguments(parser)
-    parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default=DEFAULT_ESTIMATOR,
-                        help=f"estimator for every fit (default {DEFAULT_ESTIMATOR}); record: the record-level model, "
-                             "each candidate added with its record-level parameters and tested by likelihood ratio")
+    parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default="record",
+                        help="estimator for every fit (default record: the record-level model, each candidate "
+                             f"identified with the person); a per-cycle one ({DEFAULT_ESTIMATOR}, ...) refits "
+                             "every cycle with each candidate; there --effect adds effects to the model")
     add_rate_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
@@ -59,31 +63,43 @@ def before_after(before, after) -> pd.DataFrame:
 
 
 def run_person_diagnose(args) -> int:
-    """``diagnose --estimator record``: candidate effects on the record-level model."""
+    """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..io import read_record
     from ..person import identify_person
     from ..person.diagnose import diagnose_person
+    from ..person.extend import check_effects
 
-    directory = out_dir(args.out)
+    candidates = [e for e in build_model(args).effects] or None  # a bad --effect: one line, nothing read
     record = read_record(args.record, args.mass)
+    if candidates:
+        check_effects(candidates, record)
+    directory = out_dir(args.out)
     base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args),
                            progress=not args.quiet)
     print(f"{record.source}: record-level model")
     print(base.summary())
-    result = diagnose_person(base, candidates=args.effect or None, alpha=args.alpha)
-    print("\ncandidate effects added to the record-level model (likelihood ratio, best first):")
-    columns = ["n_params", "lr", "p_value", "significant", "noise_change_%", "f_h_before", "f_h", "xi_h_before",
-               "xi_h", "estimate", "estimate_sd"]
-    with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 160):
-        print(result.table()[columns].to_string())
-    if result.adequate:
-        print("\nverdict: no candidate effect is a significant improvement at "
-              f"alpha {args.alpha:g} (Bonferroni over {len(result.rows)})")
+    result = diagnose_person(base, candidates=candidates, alpha=args.alpha, progress=not args.quiet)
+    table = result.table()
+    print("\ncandidate effects, each identified with the person (likelihood ratio, best first):")
+    if table.empty:
+        print("  none could be fitted")
     else:
-        best = result.table().loc[result.missing[0]]
-        print(f"\nverdict: missing effect '{result.missing[0]}' (LR {best['lr']:.1f} on {int(best['n_params'])} "
-              f"parameters, p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} Hz, "
-              f"xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}")
+        columns = ["df", "lr", "p_value", "significant", "f_h_before", "f_h", "xi_h_before", "xi_h",
+                   "noise_change_%", "ljung_box_p_before", "ljung_box_p", "parameters"]
+        with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 200,
+                               "display.max_colwidth", 60):
+            print(table[columns].to_string())
+    level = args.alpha / max(len(result.rows) + len(result.failed), 1)
+    if result.adequate:
+        print(f"\nverdict: no candidate effect is a significant improvement at alpha {args.alpha:g} "
+              f"(Bonferroni over {len(result.rows) + len(result.failed)}: each at {level:.2g})")
+    else:
+        best = table.loc[result.missing[0]]
+        print(f"\nverdict: missing effect '{result.missing[0]}' (LR {best['lr']:.1f} on {int(best['df'])} "
+              f"parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} "
+              f"Hz, xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
+        extra = "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
+        print("next: " + result.command(args.record, args.mass, extra))
     for note in result.notes():
         print(f"note: {note}")
     written = [directory / "person_diagnostics.png"]

@@ -180,14 +180,6 @@ def is_batch(args) -> bool:
             or (glob.has_magic(record) and not Path(record).exists()))
 
 
-def _refuse_effects(args):
-    """The record estimator takes no ``--effect`` yet: one line (after an unknown or malformed effect is named)."""
-    if args.effect:
-        build_model(args)
-        raise OptionError("--effect is not available with --estimator record yet; use a per-cycle estimator "
-                          "(--estimator ekf) to identify with an effect")
-
-
 def run_batch_identify(args) -> int:
     """Identify many records (see :mod:`smd_statespace.identify.batch`); 1 when some failed, else 0."""
     import sys
@@ -200,8 +192,6 @@ def run_batch_identify(args) -> int:
         raise OptionError("--truth applies to one record, not to a batch")
     directory = out_dir(args.out)
     model = build_model(args)
-    if args.estimator == "record":
-        _refuse_effects(args)
     records = collect_records(args.record, args.mass, args.manifest)
     options = dict(max_passes=args.max_passes, seed=args.seed, rate=rate_of(args),
                    **estimator_options(args.estimator, args))
@@ -230,21 +220,24 @@ def run_person(args) -> int:
     """``identify --estimator record``: the person from the whole record; person.json, results.csv, figures."""
     from ..io import read_record
     from ..person import identify_person
+    from ..person.extend import check_effects
     from ..person.output import write_person
 
-    _refuse_effects(args)
-    directory = out_dir(args.out)
+    effects = build_model(args).effects  # an unknown effect or option: one line before anything is read
     record = read_record(args.record, args.mass)
+    check_effects(effects, record)  # a column the record lacks (floor_acc): one line, nothing written
+    truth = truth_values(load_truth(args.truth))  # a bad --truth fails before the fit, not after
+    directory = out_dir(args.out)
     started = time.perf_counter()
     result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
                              intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args),
-                             progress=not args.quiet)
+                             progress=not args.quiet, effects=effects)
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary())
     options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
-               "harmonics": args.harmonics, "rate": rate_of(args)}
-    written = write_person(directory, result, options, truth=truth_values(load_truth(args.truth)))
+               "harmonics": args.harmonics, "rate": rate_of(args), "effects": [e.spec for e in effects]}
+    written = write_person(directory, result, options, truth=truth)
     print("wrote " + ", ".join(str(path) for path in written))
     return 0
 

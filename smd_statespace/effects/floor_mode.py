@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from .. import article
 from ..errors import OptionError
@@ -345,9 +344,6 @@ class FloorMode(Effect):
                      f"Hz and xi_h {medians[0]['xi_h']:.2f} -> {medians[1]['xi_h']:.2f} (Section 6, Table 4)")
         return [note]
 
-    RECORD_DAMPING_TRIALS = (0.005, 0.02)
-    """Floor damping ratios tried by the record-level form of the floor without an accelerometer."""
-
     @classmethod
     def record_default(cls, result):
         """The measured floor when the record has a floor acceleration; else None (the modal floor only when asked)."""
@@ -373,45 +369,16 @@ class FloorMode(Effect):
         """
         if not self.modal or self.known:
             return []
-        from ..person.diagnose import innovation_line
-
         low, high = self.frequency_range
         if self.frequency:
             frequencies = [self.frequency]
         else:
             count = int(np.ceil(np.log(high / low) / np.log1p(self.RECORD_FREQUENCY_STEP))) + 1
-            frequencies = [float(np.clip(innovation_line(result), low, high))] + list(np.geomspace(low, high, count))
+            frequencies = [float(np.clip(result.innovation_line(), low, high))] + list(np.geomspace(low, high, count))
         d_lo, d_hi = self.damping_range
         m_lo, m_hi = self.mass_ratio_range
         xi_f, mu = float(np.clip(0.01, d_lo, d_hi)), float(np.clip(0.01, m_lo, m_hi))
         return [{"f_f": f, "xi_f": xi_f, "mass_ratio": mu} for f in frequencies]
-
-    def record_candidate(self, result):
-        """Record level: ``-kappa z''`` with the measured ``z''``, or the floor predicted from the GRF.
-
-        Measured: the leg acts on the motion relative to the floor, so the
-        floor acceleration moves the relative state but is not part of
-        ``GRF / M_h`` (``kappa`` should be 1; 1 parameter). Modal: ``z'' =
-        -mu H_f(s) u''`` from the measured ``u''``, ``H_f = s^2 / (s^2 + 2
-        xi_f w_f s + w_f^2)``, ``f_f`` at the strongest unexplained line of
-        the innovations (the given ``frequency`` if any), ``xi_f`` the better
-        of :data:`RECORD_DAMPING_TRIALS` (3 parameters: ``f_f``, ``xi_f``, ``mu``).
-        """
-        from ..person.diagnose import RecordCandidate, innovation_line, with_regressor
-        from ..person.model import Regressor
-
-        if not self.modal:
-            floor = getattr(result.record, "floor_acc", None)
-            if floor is None:
-                return None
-            term = Regressor("kappa", -np.asarray(floor, dtype=float), "-", observed=False)
-            return RecordCandidate(1, [with_regressor(result, term)], "kappa")
-        model = result.model
-        f_f = self.frequency or innovation_line(result)
-        trials = (self.values["xi_f"],) if self.known else self.RECORD_DAMPING_TRIALS
-        models = [with_regressor(result, Regressor("mu", -_floor_response(model.time, model.y, f_f, xi_f), "-",
-                                                   observed=False)) for xi_f in trials]
-        return RecordCandidate(3, models, "mu", [{"f_f": f_f, "xi_f": xi_f} for xi_f in trials])
 
     @property
     def modal(self) -> bool:
@@ -543,10 +510,3 @@ class FloorMode(Effect):
     def __repr__(self):
         options = "".join(f", {key}={value!r}" for key, value in {**self.given, **self.simulation_given}.items())
         return f"FloorMode(source={self.source!r}{options})"
-
-
-def _floor_response(time, acc, f_f, xi_f):
-    """``H_f(s) acc``: a floor mode's acceleration per unit mass ratio under the GRF of COM acceleration ``acc``."""
-    w = 2.0 * np.pi * f_f
-    _, out, _ = signal.lsim(([1.0, 0.0, 0.0], [1.0, 2.0 * xi_f * w, w * w]), acc, time)
-    return out

@@ -94,12 +94,6 @@ class Harmonics(Effect):
         """Record level: ``count`` more harmonics of the force's template and spread."""
         return self.count
 
-    def record_candidate(self, result):
-        """Record level: ``count`` more force harmonics, template coefficients and a spread each (3 per harmonic)."""
-        from ..person.diagnose import RecordCandidate, with_harmonics
-
-        return RecordCandidate(3 * self.count, [with_harmonics(result, self.count)])
-
     def simulation_truth(self):
         return {"blf": list(self.blf or self.DEFAULT_BLF[:self.count]),
                 "phases": None if self.phases is None else list(self.phases)}

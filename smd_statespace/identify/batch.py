@@ -249,7 +249,7 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
             from ..person import identify_person
 
             person = identify_person(measured, n_harmonics=model.n_harmonics, check=check,
-                                     rate=runner_options.get("rate", RECORD_RATE))
+                                     rate=runner_options.get("rate", RECORD_RATE), effects=model.effects)
             table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
         else:
             runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)

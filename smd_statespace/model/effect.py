@@ -207,18 +207,6 @@ class Effect:
         """
         return []
 
-    def record_candidate(self, result):
-        """How this effect enters the record-level model of ``result``'s record.
-
-        Returns a :class:`~smd_statespace.person.diagnose.RecordCandidate`
-        (extended model(s), number of parameters) or None to skip. Default:
-        the effect's :meth:`score_terms` on the base fit's smoothed path as
-        regressors (:func:`~smd_statespace.person.diagnose.score_term_candidate`).
-        """
-        from ..person.diagnose import score_term_candidate
-
-        return score_term_candidate(result, self)
-
     def score_terms(self, model: "SMDModel", x, t, inputs: CycleInputs) -> dict:
         """The terms this effect would add to ``u''``, one per unknown coefficient (m/s^2 per unit).
 

@@ -170,7 +170,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     effects = check_effects(effects, result.record)
     model = effect_model(result, effects)
     fitted = fit_model(model, _start(model, result, effects), quick=model.approximate)
-    linearisations = 0
+    linearisations, settled = 0, True
     with tqdm(total=NOMINAL_ITERATIONS, desc="effects (record)", unit="fit", disable=not progress or not
               model.approximate, leave=False) as bar:
         while model.approximate and linearisations < NOMINAL_ITERATIONS:
@@ -190,12 +190,13 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     if not fitted["converged"]:
         raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
                        f"did not converge ({fitted['message']})")
-    notes = list(result.notes)
+    notes, warnings = list(result.notes), list(result.record_warnings)
     if model.approximate:
-        settled = "" if linearisations < NOMINAL_ITERATIONS else (
-            f"; the path had not settled after {NOMINAL_ITERATIONS} (read the effect's estimate with care)")
         notes.append(f"the likelihood is approximate: {', '.join(e.name for e in effects)} linearised about the "
-                     f"smoothed path, {linearisations} time(s) (an iterated extended Kalman smoother){settled}")
+                     f"smoothed path, {linearisations} time(s) (an iterated extended Kalman smoother)")
+        if not settled:
+            warnings.append(f"the path of {', '.join(e.name for e in effects)} had not settled after "
+                            f"{NOMINAL_ITERATIONS} linearisations: its estimates are approximate")
     return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
-                         comparison=result.comparison, record_warnings=result.record_warnings, notes=notes,
+                         comparison=result.comparison, record_warnings=warnings, notes=notes,
                          before=result, effects=tuple(effects), linearisations=linearisations)

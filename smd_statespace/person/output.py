@@ -51,7 +51,9 @@ def write_person(directory, result, options: dict, truth=None) -> list:
     directory = Path(directory)
     person = result.to_dict()
     if truth:
-        person["truth"] = {k: truth[k] for k in ("f_h", "xi_h") if k in truth}
+        shown = ("f_h", "xi_h", *(f"blf_{i}" for i in range(1, result.model.n_harmonics + 1)),
+                 *result.model.effect_parameters)
+        person["truth"] = {k: truth[k] for k in shown if k in truth}
     cycles = directory / "results.csv"
     table = result.cycles.copy()
     table.insert(0, "status", np.where(table["whole"], "ok", "partial"))

@@ -21,6 +21,8 @@ from functools import cached_property
 import numpy as np
 import pandas as pd
 
+from scipy import stats
+
 from ..io import G
 from .model import RecordModel
 
@@ -182,6 +184,54 @@ class PersonResult:
         names = [r.name for r in self.model.regressors]
         return pd.DataFrame({"value": delta[start:], "sd": np.sqrt(np.diag(cov)[start:])}, index=names)
 
+    def effect_estimates(self) -> pd.DataFrame:
+        """The effects' parameters: value, sd, interval at :attr:`level`, search range, on a bound (SI units)."""
+        slots = {slot.name: slot for slot in self.model.dynamics.parameters}
+        rows = []
+        for name in self.model.effect_parameters:
+            which = self.model.param_names.index(name)
+            low, high = self.model.bounds[which]
+            rows.append({"parameter": name, "unit": slots[name].unit, "value": float(self.params[which]),
+                         "sd": float(self.se[which]), "low": float(self.intervals[name][0]),
+                         "high": float(self.intervals[name][1]), "range_low": low, "range_high": high,
+                         "on_bound": self.model.at_bound(self.params, which)})
+        columns = ["parameter", "unit", "value", "sd", "low", "high", "range_low", "range_high", "on_bound"]
+        return pd.DataFrame(rows, columns=columns).set_index("parameter")
+
+    def effect_test(self) -> dict:
+        """Likelihood ratio of the effects against :attr:`before` (the same person without them).
+
+        ``df`` counts every added unknown: the effects' parameters, variances
+        and concentrated linear unknowns (template coefficients of extra
+        harmonics, a floor's initial state). With ``df`` 0 (a measured floor:
+        nothing is estimated) the two models are not nested and ``p`` is NaN;
+        compare the log-likelihoods (equal parameter counts: AIC alike).
+        Empty without effects.
+        """
+        if self.before is None:
+            return {}
+        lr = 2.0 * (self.loglike - self.before.loglike)
+        df = (len(self.params) - len(self.before.params)) + (
+            len(self.model.delta_names) - len(self.before.model.delta_names))
+        p = float(stats.chi2.sf(max(lr, 0.0), df)) if df > 0 else float("nan")
+        return {"lr": float(lr), "lr_df": int(df), "lr_p": p}
+
+    def innovation_line(self) -> float:
+        """Frequency (Hz) of the strongest line of the innovations' spectrum away from the bouncing harmonics.
+
+        Where an unexplained resonance (a floor mode) would show; the
+        harmonics of the median ``f_b`` (within 0.15 Hz) are left out.
+        """
+        from scipy import signal
+
+        innov = self.standardized_innovations()
+        fs = self.record.fs
+        freq, power = signal.welch(innov, fs=fs, nperseg=min(innov.size, int(8 * fs)))
+        f_b = float(np.median(self.model.timing.f_b))
+        harmonic = np.abs(freq / f_b - np.round(freq / f_b)) * f_b < 0.15
+        usable = (freq > 1.0) & (freq < 0.4 * fs) & ~harmonic
+        return float(freq[usable][np.argmax(power[usable])])
+
     def determined(self, name) -> bool:
         """True when the standard error of ``f_h`` or ``xi_h`` is below :data:`DETERMINED_FRACTION` of its yardstick,
         the estimate is not at a search bound and (``f_h``, smooth variation) not at the bouncing frequency
@@ -299,12 +349,19 @@ class PersonResult:
                            f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
         if self.xi_h > 1.0:
             out.append(f"xi_h = {self.xi_h:.2f} > 1 (over-damped): outside what bouncing people show (0.1-0.6)")
+        for name, row in self.effect_estimates().iterrows():
+            if row["on_bound"]:
+                out.append(f"{name} = {row['value']:.4g} {row['unit']} sits on its search bound ({row['range_low']:g}-"
+                           f"{row['range_high']:g}): not an estimate; the record does not show this effect as "
+                           "modelled")
+            elif not np.isfinite(row["sd"]) or row["sd"] > 0.25 * (row["range_high"] - row["range_low"]):
+                out.append(f"{name} is not determined by this record (sd {row['sd']:.3g} {row['unit']} against its "
+                           f"range {row['range_low']:g}-{row['range_high']:g})")
         tests = self.test_pvalues()
         if tests["ljung_box_p"] < WHITENESS_ALPHA:
             out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): the model "
                        "misses something, and f_h, xi_h and their intervals may be biased; run "
-                       f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g} "
-                       "--estimator record`")
+                       f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g}`")
         return out
 
     def to_dict(self) -> dict:
@@ -341,6 +398,19 @@ class PersonResult:
         out["n_samples"] = int(self.model.y.size)
         out.update(self.test_pvalues())
         out["fs"] = self.record.fs
+        if self.effects:
+            out["effects"] = [effect.spec for effect in self.effects]
+            for name, row in self.effect_estimates().iterrows():
+                out[name], out[f"{name}_sd"] = row["value"], row["sd"]
+                out[f"{name}_low"], out[f"{name}_high"] = row["low"], row["high"]
+                out[f"{name}_on_bound"] = bool(row["on_bound"])
+            out.update(self.effect_test())
+            out["likelihood"] = "approximate" if self.model.approximate else "exact"
+            out["linearisations"] = self.linearisations
+            before = self.before.to_dict()
+            out["before"] = {key: before[key] for key in ("f_h", "f_h_sd", "f_h_low", "f_h_high", "xi_h", "xi_h_sd",
+                                                          "xi_h_low", "xi_h_high", "log_likelihood", "noise_sd",
+                                                          "ljung_box_p")}
         out["warnings"] = self.warnings
         out["notes"] = list(self.notes)
         out["variation_models"] = self.comparison
@@ -383,6 +453,16 @@ class PersonResult:
             f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
             f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
         ]
+        if self.effects:
+            lines[0] = lines[0][:-1] + f" with {', '.join(e.spec for e in self.effects)}:"
+            for name, row in self.effect_estimates().iterrows():
+                lines.append(f"  {name} = {row['value']:.4g} {row['unit']}  (sd {row['sd']:.3g}; {pct} % interval "
+                             f"{row['low']:.4g}-{row['high']:.4g})")
+            before, test = d["before"], self.effect_test()
+            p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
+            lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
+                         f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}; "
+                         f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})")
         lines += [f"note: {n}" for n in d["notes"]]
         lines += [f"warning: {w}" for w in d["warnings"]]
         return "\n".join(lines)
