@@ -216,12 +216,14 @@ def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects,
         return
     assert result.missing[0] == expected
     row = result.table().loc[expected]
-    assert row["noise_change_%"] < 0
+    assert row["noise_change_%"] < 0 and row["likelihood"] == "exact"
     assert row["f_h"] == pytest.approx(2.5, rel=0.03)
-    if expected == "harmonics":  # the 5th harmonic's amplitude comes back
-        assert row["estimate"] == pytest.approx(0.04, rel=0.15)
-    else:  # the leg acts on the motion relative to the measured floor: coupling gain 1
-        assert row["estimate"] == pytest.approx(1.0, abs=3 * row["estimate_sd"])
+    fitted = result.fits[expected]
+    if expected == "harmonics":  # the 5th harmonic's amplitude comes back, with 4 template coefficients and 2 spreads
+        assert row["df"] == 6
+        assert fitted.template_blf().loc[5, "blf"] == pytest.approx(0.04, rel=0.15)
+    else:  # the measured floor: nothing to estimate, the exact model of the leg on a moving floor
+        assert row["df"] == 0 and row["lr"] > 20
 
 
 @pytest.mark.slow

@@ -127,7 +127,10 @@ def test_diagnose_ranks_the_users_effect_first_and_the_error_falls(quadratic_dam
     base = identify_person(sim.record)
     result = diagnose_person(base)
     table = result.table()
-    print(table[["n_params", "lr", "p_value", "noise_change_%", "estimate", "estimate_sd"]])
+    print(table[["df", "lr", "p_value", "noise_change_%", "f_h_before", "f_h", "parameters"]])
     assert result.missing[0] == "quadratic_damping"
     row = table.loc["quadratic_damping"]
-    assert row["noise_change_%"] < 0 and row["estimate"] > 2 * row["estimate_sd"]
+    assert row["noise_change_%"] < 0 and row["df"] == 1 and row["likelihood"] == "approximate"
+    assert abs(row["f_h"] / 2.5 - 1) <= abs(row["f_h_before"] / 2.5 - 1) + 0.01  # the person's error does not grow
+    c_q = result.fits["quadratic_damping"].effect_estimates().loc["c_q"]
+    assert c_q["value"] > 2 * c_q["sd"] and c_q["low"] <= 8.0 <= c_q["high"]  # the truth: c_q 8 1/m
