@@ -377,16 +377,19 @@ class RecordModel:
         lin = self.dynamics.linearise(float(params[0]), float(params[1]),
                                       {name: named[name] for name in self.effect_parameters}, self.nominal)
         dt = self.dt
-        phi, integral = exponentials(lin.A, dt)  # exact over a step with A held (Eq. 2 and the effects)
-        g0 = np.einsum("kij,kj->ki", integral, lin.b)  # constant force: W b
+        A, b = lin.A, lin.b
+        if A.shape[0] > 1:  # a path-linearised effect: each step from k holds A, b at the step's midpoint
+            A, b = 0.5 * (A + np.concatenate([A[1:], A[-1:]])), 0.5 * (b + np.vstack([b[1:], b[-1:]]))
+        phi, integral = exponentials(A, dt)  # exact over a step with A held (Eq. 2 and the effects)
+        g0 = np.einsum("kij,kj->ki", integral, b)  # constant force: W b
         cycle, _, rate, reset = self._phase
         orders = np.arange(1, self.n_harmonics + 1)
-        if lin.A.shape[0] == 1:  # one gain per cycle rate and order, rotated to each sample
+        if A.shape[0] == 1:  # one gain per cycle rate and order, rotated to each sample
             nu = self.timing_rates()[:, None] * orders  # (J, n)
-            per_sample = harmonic_gains(lin.A, phi, lin.b, nu, dt)[cycle] * self._rotation[..., None]
+            per_sample = harmonic_gains(A, phi, b, nu, dt)[cycle] * self._rotation[..., None]
         else:  # a nonlinear effect: every sample has its own A
             nu = self.timing_rates()[cycle][:, None] * orders
-            per_sample = harmonic_gains(lin.A, phi, lin.b, nu, dt) * self._rotation[..., None]
+            per_sample = harmonic_gains(A, phi, b, nu, dt) * self._rotation[..., None]
         nx = self.n_dynamic
         gam = np.empty((self.time.size, nx, self.n_coefficients))
         gam[:, :, 0] = g0
@@ -399,7 +402,7 @@ class RecordModel:
             H = np.hstack([H, h_timing])
             gam = np.concatenate([gam, g0[:, :, None] * step_values[:, None, :]], axis=2)
         D, E, S, w = self._variances(params)
-        qx = w * _integrated_white_noise(lin.A.mean(axis=0), lin.b.mean(axis=0), dt) if w > 0 else np.zeros((nx, nx))
+        qx = w * _integrated_white_noise(A.mean(axis=0), b.mean(axis=0), dt) if w > 0 else np.zeros((nx, nx))
         smooth = matern32_step(np.exp(named["log_smooth_time"]), dt) if "log_smooth_time" in named else (
             np.zeros((2, 2)),) * 3
         dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
