@@ -1,24 +1,29 @@
-"""Hidden-effect study of the record-level ``diagnose`` (:func:`smd_statespace.person.diagnose.diagnose_person`).
+"""Hidden-effect study of the record-level loop: ``diagnose`` names the effect, ``identify --effect`` adds it.
 
 Simulated people bounce for 30 s at 100 Hz (1 % BW noise) with one hidden
-physical effect, at a small and a large size, or with none; each record is
-identified as a user would (``identify_person`` with its defaults) and
-diagnosed with the default candidates. Counted: how often the true effect is
-ranked first (and significant), false alarms on clean records, the residual
-(innovation sd) and the person's errors before and after the top candidate
-is added::
+physical effect, or with none, under **both** generators of cycle-to-cycle
+force variation (``jumps`` and ``smooth``). Each record is identified as a
+user would (``identify_person`` with its defaults), diagnosed with the
+candidates (:func:`smd_statespace.person.diagnose.diagnose_person`: every
+registered effect, the user's quadratic damper of docs/effects.md, and the
+estimated floor mode when the record has no floor accelerometer), and
+identified with the *true* effect added (``identify_person(record,
+effects=[...])``, what ``identify --effect`` runs). Counted per row: how often
+the true effect is ranked first (and significant), false alarms on clean
+records, the person's ``f_h`` and ``xi_h`` errors without and with the true
+effect, how often adding it made ``f_h`` worse, the effect parameter's error and
+interval coverage, the Ljung-Box pass rate after, and the seconds per record::
 
-    python benchmarks/person_effects.py --jobs 2          # 8 records per kind and size, 16 clean
-    python benchmarks/person_effects.py --records 2       # a smoke run
+    python benchmarks/person_effects.py --jobs 2              # 8 records per kind, size and generator
+    python benchmarks/person_effects.py --records 2 --sizes large   # a smaller run
 
 Effects (:data:`KINDS`): extra harmonics 5-6 (``harmonics``), a cubic spring
 (``cubic_stiffness``), a floor mode with the floor acceleration measured
-(kind ``floor_measured``: the record's ``floor_acc`` kept, so the candidate
-``floor_mode`` takes the measured floor) and without it (the same records, ``floor_acc`` dropped:
-only ``harmonics`` and ``cubic_stiffness`` can be proposed, so a correct
-answer is "no candidate fits", which is what is counted). The effect's size
-is measured on every record as the RMS of the GRF difference it makes
-(same seed, noise-free, with and without the effect) over the noise sd.
+(``floor_measured``: the record's ``floor_acc`` kept) and without it
+(``floor_unmeasured``: dropped, the candidate ``floor_mode:source=modal``),
+the user's quadratic damper (``quadratic_damping``). The effect's size is
+measured on every record as the RMS of the GRF difference it makes (same
+seed, noise-free, with and without the effect) over the noise sd.
 
 Everything random comes from ``numpy.random.SeedSequence(--seed)`` (one
 child per record, fresh seeds: not those of the tests or of
@@ -38,12 +43,14 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
+from smd_statespace.effects import EFFECTS, load_effects_file
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
 from smd_statespace.person.diagnose import diagnose_person
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
 
 REPO = Path(__file__).resolve().parents[1]
+USER_EFFECT = Path(__file__).resolve().parent / "quadratic_damping.py"
 DURATION, FS, NOISE = 30.0, 100.0, 0.01
 
 KINDS = {
@@ -52,36 +59,56 @@ KINDS = {
     "cubic_stiffness": [{"cubic_stiffness": {"beta_3": 450.0}}, {"cubic_stiffness": {"beta_3": 1500.0}}],
     "floor_measured": [{"floor_mode": {"modal_mass": 2000.0}}, {"floor_mode": {"modal_mass": 700.0}}],
     "floor_unmeasured": [{"floor_mode": {"modal_mass": 2000.0}}, {"floor_mode": {"modal_mass": 700.0}}],
+    "quadratic_damping": [{"quadratic_damping": {"c_q": 4.0}}, {"quadratic_damping": {"c_q": 12.0}}],
 }
 """Hidden effects at a small and a large size (about 2x and 5x the noise on a typical record)."""
 
 EXPECTED = {"clean": None, "harmonics": "harmonics", "cubic_stiffness": "cubic_stiffness",
-            "floor_measured": "floor_mode", "floor_unmeasured": None}
+            "floor_measured": "floor_mode", "floor_unmeasured": "floor_mode", "quadratic_damping": "quadratic_damping"}
 """The right answer of ``diagnose`` per kind (None: nothing proposed)."""
 
+FITTED = {"harmonics": "harmonics:count=2", "cubic_stiffness": "cubic_stiffness", "floor_measured": "floor_mode",
+          "floor_unmeasured": "floor_mode:source=modal", "quadratic_damping": "quadratic_damping"}
+"""The true effect as ``identify --effect`` adds it."""
 
-def tasks(records: int, seed: int) -> list:
-    """``(kind, size, index, person, sim_seed)`` for every record; clean records twice as many."""
+TRUE_PARAMETER = {"cubic_stiffness": ("beta_3", "beta_3"), "quadratic_damping": ("c_q", "c_q"),
+                  "floor_unmeasured": ("f_f", "frequency")}
+"""The effect parameter whose error is counted: ``(estimated name, key of the simulation's truth)``."""
+
+GENERATORS = ("jumps", "smooth")
+
+
+def _load_user_effect():
+    if "quadratic_damping" not in EFFECTS:
+        load_effects_file(USER_EFFECT)
+
+
+def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATORS) -> list:
+    """``(kind, size, generator, index, person, sim_seed, effects)`` for every record; clean records twice as many."""
     out = []
     children = iter(np.random.SeedSequence(seed).spawn(10_000))
-    for kind, sizes in KINDS.items():
-        for size, effects in enumerate(sizes):
-            for i in range(records * (2 if kind == "clean" else 1)):
-                rng = np.random.default_rng(next(children))
-                person = {"f_b": rng.uniform(1.5, 3.5), "f_h": rng.uniform(1.8, 4.2), "xi_h": rng.uniform(0.1, 0.5),
-                          "mass": rng.uniform(50.0, 90.0),
-                          "blf": tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))}
-                out.append((kind, size, i, person, int(rng.integers(2**31)), effects))
+    for generator in GENERATORS:
+        for kind, kind_sizes in KINDS.items():
+            for size, effects in enumerate(kind_sizes):
+                for i in range(records * (2 if kind == "clean" else 1)):
+                    rng = np.random.default_rng(next(children))  # drawn whatever is run: seeds do not shift
+                    person = {"f_b": rng.uniform(1.5, 3.5), "f_h": rng.uniform(1.8, 4.2),
+                              "xi_h": rng.uniform(0.1, 0.5), "mass": rng.uniform(50.0, 90.0),
+                              "blf": tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))}
+                    label = ("small", "large")[size] if effects else "-"
+                    if generator in generators and (effects is None or label in sizes):
+                        out.append((kind, label, generator, i, person, int(rng.integers(2**31)), effects))
     return out
 
 
 def one(task) -> dict:
-    """Simulate, identify and diagnose one record; never raises."""
-    kind, size, index, person, sim_seed, effects = task
-    row = {"kind": kind, "size": ("small", "large")[size] if effects else "-", "index": index, **{
-        k: v for k, v in person.items() if k != "blf"}}
+    """Simulate, identify, diagnose and identify with the true effect one record; never raises."""
+    _load_user_effect()
+    kind, size, generator, index, person, sim_seed, effects = task
+    row = {"kind": kind, "size": size, "generator": generator, "index": index,
+           **{k: v for k, v in person.items() if k != "blf"}}
     common = dict(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], duration=DURATION,
-                  fs=FS, blf=person["blf"], seed=sim_seed)
+                  fs=FS, blf=person["blf"], seed=sim_seed, variation=generator)
     started = time.perf_counter()
     try:
         sim = simulate_bouncing(noise=NOISE, effects=effects, **common)
@@ -93,52 +120,75 @@ def one(task) -> dict:
             forced = simulate_bouncing(noise=0.0, effects=effects, **common).record.force
             row["effect_size"] = float(np.sqrt(np.mean((forced - plain) ** 2)) / (NOISE * person["mass"] * G))
         base = identify_person(record)
-        diagnosis = diagnose_person(base)
-        table = diagnosis.table()
+        candidates = [cls.record_default(base) for cls in EFFECTS.values()]
+        candidates = [c for c in candidates if c is not None]
+        if record.floor_acc is None:
+            candidates.append("floor_mode:source=modal")
+        diagnosis = diagnose_person(base, candidates=candidates)
+        row["diagnose_seconds"] = time.perf_counter() - started
+        top = diagnosis.missing[0] if diagnosis.missing else None
+        row.update(proposed=top or "", variation=base.model.variation, f_h_before=base.f_h, xi_h_before=base.xi_h,
+                   ljung_box_before=base.test_pvalues()["ljung_box_p"])
+        if kind in FITTED:
+            moment = time.perf_counter()
+            fitted = identify_person(record, effects=[FITTED[kind]])
+            row["identify_effect_seconds"] = time.perf_counter() - moment
+            row.update(f_h_after=fitted.f_h, xi_h_after=fitted.xi_h,
+                       ljung_box_after=fitted.test_pvalues()["ljung_box_p"],
+                       f_h_covered=bool(fitted.intervals["f_h"][0] <= person["f_h"] <= fitted.intervals["f_h"][1]))
+            if kind in TRUE_PARAMETER:
+                name, key = TRUE_PARAMETER[kind]
+                truth = sim.truth["effects"][next(iter(effects))][key]
+                estimate = fitted.effect_estimates().loc[name]
+                row.update(parameter=name, parameter_truth=truth, parameter_estimate=estimate["value"],
+                           parameter_covered=bool(estimate["low"] <= truth <= estimate["high"]))
     except Exception as exc:  # noqa: BLE001 - one record must never kill the study
         row.update(error=f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}",
                    seconds=time.perf_counter() - started)
         return row
-    top = diagnosis.missing[0] if diagnosis.missing else None
-    row.update(error="", seconds=time.perf_counter() - started, proposed=top or "", variation=base.model.variation,
-               base_warned=any("serially correlated" in w for w in base.warnings),
-               f_h_before=base.f_h, xi_h_before=base.xi_h, sigma_before=base.sigma)
-    if top is not None:
-        chosen = table.loc[top]
-        row.update(f_h_after=float(chosen["f_h"]), xi_h_after=float(chosen["xi_h"]),
-                   noise_change_pct=float(chosen["noise_change_%"]), lr=float(chosen["lr"]),
-                   estimate=float(chosen["estimate"]))
-    else:
-        row.update(f_h_after=base.f_h, xi_h_after=base.xi_h, noise_change_pct=0.0)
+    row.update(error="", seconds=time.perf_counter() - started)
     row["correct"] = (top == EXPECTED[kind])
     return row
 
 
 def summary(frame: pd.DataFrame) -> list:
-    """Markdown table: one row per kind and size."""
-    lines = ["| hidden effect | size | records (failed) | effect size / noise, median | right answer | "
-             "ranked first | Ljung-Box warning before | |f_h error| before -> after, median | "
-             "|xi_h error| before -> after, median | innovation sd change, median |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for (kind, size), rows in frame.groupby(["kind", "size"], sort=False):
+    """Markdown table: one row per kind, size and generator."""
+    lines = ["| hidden effect | size | generator | records (failed) | effect / noise | ranked first | "
+             "what came first | \\|f_h error\\| without -> with the true effect | f_h worse with it | "
+             "\\|xi_h error\\| without -> with | effect parameter error, covered | Ljung-Box passes before -> after | "
+             "s per record (diagnose, identify --effect) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for (kind, size, generator), rows in frame.groupby(["kind", "size", "generator"], sort=False):
         ok = rows[rows["error"] == ""]
         n = len(ok)
         if n == 0:
-            lines.append(f"| {kind} | {size} | {len(rows)} ({len(rows)}) | | | | | | | |")
+            lines.append(f"| {kind} | {size} | {generator} | {len(rows)} ({len(rows)}) |" + " |" * 9)
             continue
-        expected = EXPECTED[kind] or "nothing"
-        firsts = ", ".join(f"{k or 'nothing'} {v}" for k, v in ok["proposed"].replace("", None).fillna(
-            "nothing").value_counts().items())
-        f_before = (100 * (ok["f_h_before"] / ok["f_h"] - 1)).abs().median()
-        f_after = (100 * (ok["f_h_after"] / ok["f_h"] - 1)).abs().median()
-        x_before = (ok["xi_h_before"] - ok["xi_h"]).abs().median()
-        x_after = (ok["xi_h_after"] - ok["xi_h"]).abs().median()
-        size_text = f"{ok['effect_size'].median():.1f}" if "effect_size" in ok and ok["effect_size"].notna().any() \
-            else "-"
-        lines.append(f"| {kind} | {size} | {len(rows)} ({len(rows) - n}) | {size_text} | "
-                     f"{int(ok['correct'].sum())}/{n} ({expected}) | {firsts} | {int(ok['base_warned'].sum())}/{n} | "
-                     f"{f_before:.1f} % -> {f_after:.1f} % | {x_before:.3f} -> {x_after:.3f} | "
-                     f"{ok['noise_change_pct'].median():+.1f} % |")
+        firsts = ", ".join(f"{k} {v}" for k, v in ok["proposed"].replace("", "nothing").value_counts().items())
+        effect = f"{ok['effect_size'].median():.1f}" if "effect_size" in ok and ok["effect_size"].notna().any() else "-"
+        passes_before = int((ok["ljung_box_before"] >= 0.01).sum())
+        if kind in FITTED:
+            before = (100 * (ok["f_h_before"] / ok["f_h"] - 1)).abs()
+            after = (100 * (ok["f_h_after"] / ok["f_h"] - 1)).abs()
+            f_text = f"{before.median():.1f} % -> {after.median():.1f} %"
+            worse = f"{int((after > before).sum())}/{n}"
+            x_text = (f"{(ok['xi_h_before'] - ok['xi_h']).abs().median():.3f} -> "
+                      f"{(ok['xi_h_after'] - ok['xi_h']).abs().median():.3f}")
+            passes = f"{passes_before}/{n} -> {int((ok['ljung_box_after'] >= 0.01).sum())}/{n}"
+        else:
+            f_text = f"{(100 * (ok['f_h_before'] / ok['f_h'] - 1)).abs().median():.1f} %"
+            worse, x_text, passes = "-", f"{(ok['xi_h_before'] - ok['xi_h']).abs().median():.3f}", f"{passes_before}/{n}"
+        if "parameter" in ok and ok["parameter"].notna().any():
+            error = (100 * (ok["parameter_estimate"] / ok["parameter_truth"] - 1)).abs().median()
+            parameter = f"{ok['parameter'].iloc[0]} {error:.0f} %, {int(ok['parameter_covered'].sum())}/{n}"
+        else:
+            parameter = "-"
+        seconds = f"{ok['diagnose_seconds'].median():.0f}"
+        if "identify_effect_seconds" in ok and ok["identify_effect_seconds"].notna().any():
+            seconds += f", {ok['identify_effect_seconds'].median():.0f}"
+        lines.append(f"| {kind} | {size} | {generator} | {len(rows)} ({len(rows) - n}) | {effect} | "
+                     f"{int(ok['correct'].sum())}/{n} ({EXPECTED[kind] or 'nothing'}) | {firsts} | {f_text} | "
+                     f"{worse} | {x_text} | {parameter} | {passes} | {seconds} |")
     return lines
 
 
@@ -148,8 +198,10 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=77, help="root of the SeedSequence (default 77)")
     parser.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
     parser.add_argument("--csv", type=Path, default=None, help="also write every record's row here")
+    parser.add_argument("--sizes", default="small,large", help="effect sizes to run (default small,large)")
+    parser.add_argument("--generators", default=",".join(GENERATORS), help="generators of force variation")
     args = parser.parse_args(argv)
-    work = tasks(args.records, args.seed)
+    work = tasks(args.records, args.seed, tuple(args.sizes.split(",")), tuple(args.generators.split(",")))
     started = time.perf_counter()
     rows = []
     with tqdm(total=len(work), desc="records", unit="record", file=sys.stderr) as bar:
@@ -168,7 +220,7 @@ def main(argv=None):
     print("\n".join(summary(frame)))
     failed = frame[frame["error"] != ""]
     for _, row in failed.iterrows():
-        print(f"failed: {row['kind']} {row['size']} #{row['index']}: {row['error']}")
+        print(f"failed: {row['kind']} {row['size']} {row['generator']} #{row['index']}: {row['error']}")
     print(f"\n{len(frame)} records, {(time.perf_counter() - started) / 60:.1f} min, {args.jobs} process(es)")
 
 

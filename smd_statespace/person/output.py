@@ -46,7 +46,11 @@ def write_person(directory, result, options: dict, truth=None) -> list:
     -------
     list of pathlib.Path
         ``person.json``, ``results.csv`` (one row per force cycle),
-        ``run.json``, ``person_fit.png``, ``person_diagnostics.png``.
+        ``run.json``, ``person_fit.png``, ``person_diagnostics.png``,
+        ``person_spectrum.png`` (innovations' spectrum), ``person_compare.png``
+        (free-run simulation against the measurement, with the fit without the
+        effects when there is one) and, with a ``floor_acc`` column,
+        ``person_floor.png`` (innovations against the floor acceleration).
     """
     directory = Path(directory)
     person = result.to_dict()
@@ -62,9 +66,16 @@ def write_person(directory, result, options: dict, truth=None) -> list:
     atomic_write_text(run, json.dumps({"version": __version__, "command": "identify", "estimator": "record",
                                        "record": str(result.record.source), "mass": result.record.mass,
                                        "options": options}, indent=2))
-    fit_png, diag_png = directory / "person_fit.png", directory / "person_diagnostics.png"
-    result.plot_fit(fit_png)
-    result.plot_diagnostics(diag_png)
+    from ..plotting.person import plot_compare, plot_floor_correlation, plot_spectrum
+
+    figures = [directory / f"person_{name}.png" for name in ("fit", "diagnostics", "spectrum", "compare")]
+    result.plot_fit(figures[0], truth=person.get("truth"))
+    result.plot_diagnostics(figures[1])
+    plot_spectrum(result, figures[2])
+    plot_compare(result, figures[3])
+    if getattr(result.record, "floor_acc", None) is not None:
+        figures.append(directory / "person_floor.png")
+        plot_floor_correlation(result, figures[-1])
     path = directory / "person.json"
     atomic_write_text(path, json.dumps(_plain(person), indent=2))
-    return [path, cycles, run, fit_png, diag_png]
+    return [path, cycles, run, *figures]

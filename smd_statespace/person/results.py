@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import shlex
 from dataclasses import dataclass, field
+from pathlib import Path
 from functools import cached_property
 
 import numpy as np
@@ -471,13 +472,19 @@ class PersonResult:
     def plot_diagnostics(self, path=None, lags=None):
         """statsmodels' four-panel residual diagnostics of the standardised innovations; saved as PNG if ``path``."""
         fig = self.statespace_results.plot_diagnostics(lags=lags or min(self.default_lags(), 40), figsize=(10, 7))
-        fig.suptitle(f"record-level model: innovations of GRF/M - g ({self.record.source})")
+        fig.suptitle(f"{Path(str(self.record.source)).name}: innovations of GRF/M - g (record-level model)")
         if path is not None:
             fig.savefig(path, dpi=110)
         return fig
 
-    def plot_fit(self, path=None, seconds=4.0):
-        """Measured against one-step predicted ``GRF / M_h - g`` over a window, and every cycle's BLFs."""
+    def plot_fit(self, path=None, seconds=4.0, truth=None):
+        """Measured against one-step predicted ``GRF / M_h - g`` over a window, and every cycle's BLFs.
+
+        ``truth`` (flat keys ``f_h``, ``xi_h``, ``blf_1``, ..., as
+        :func:`~smd_statespace.io.truth_values` gives them) is drawn as dashed
+        lines and named in the title.
+        """
+        truth = dict(truth or {})
         from matplotlib.figure import Figure
 
         _, raw = self.model.innovations(self.params, self.filtered)
@@ -492,8 +499,10 @@ class PersonResult:
         for b in self.model.timing.boundaries:
             if start <= b <= start + seconds:
                 ax.axvline(b, color="0.8", lw=0.6, zorder=0)
+        known = (f" (truth {truth['f_h']:.2f} Hz, {truth['xi_h']:.2f})" if {"f_h", "xi_h"} <= set(truth) else "")
         ax.set(xlabel="time (s)", ylabel="GRF/M - g (m/s$^2$)",
-               title=f"f_h {self.f_h:.2f} Hz, xi_h {self.xi_h:.2f}; grey lines: estimated force-cycle starts")
+               title=f"{Path(str(self.record.source)).name}: f_h {self.f_h:.2f} Hz, xi_h {self.xi_h:.2f}{known}; "
+                     "grey lines: estimated force-cycle starts")
         ax.legend(loc="upper right", fontsize=8, ncol=3)
         cycles = self.cycles
         blf = self.template_blf()
@@ -501,7 +510,10 @@ class PersonResult:
             bx.errorbar(cycles["t_start"], cycles[f"blf_{i}"], yerr=cycles[f"blf_{i}_sd"], fmt="o", ms=3,
                         color=f"C{i - 1}", label=f"BLF{i}")
             bx.axhline(blf.loc[i, "blf"], color=f"C{i - 1}", lw=0.8)
-        bx.set(xlabel="cycle start (s)", ylabel="BLF (g)", title="every cycle's load factors (smoother); lines: template")
+            if f"blf_{i}" in truth:
+                bx.axhline(truth[f"blf_{i}"], color=f"C{i - 1}", lw=1.0, ls="--")
+        bx.set(xlabel="cycle start (s)", ylabel="BLF (g)", title="every cycle's load factors (smoother); lines: template"
+               + ("; dashed: truth" if any(k.startswith("blf_") for k in truth) else ""))
         bx.legend(loc="upper right", fontsize=8, ncol=4)
         if path is not None:
             fig.savefig(path, dpi=110)
