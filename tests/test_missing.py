@@ -112,7 +112,8 @@ def test_diagnose_cli_json_and_before_after(tmp_path, capsys):
     assert main(["simulate", "--out", str(rec), "--mass", "70", "--fb", "2.2", "--fh", "2.6", "--xi", "0.3",
                  "--duration", "10", "--seed", "5", "--effect", "harmonics"]) == 0
     report_path = tmp_path / "report.json"
-    assert main(["diagnose", str(rec), "--mass", "70", "--max-passes", "2", "--quiet", "--out", str(tmp_path / "d"),
+    assert main(["diagnose", str(rec), "--mass", "70", "--estimator", "ekf", "--max-passes", "2", "--quiet", "--out",
+                 str(tmp_path / "d"),
                  "--json", str(report_path)]) == 0
     report = json.loads(report_path.read_text())
     assert set(report) == {"fit_percent", "residual_rms", "whiteness_pvalue", "effects_in_model", "adequate",
@@ -120,7 +121,8 @@ def test_diagnose_cli_json_and_before_after(tmp_path, capsys):
     assert report["adequate"] is False and report["missing_effects"][0]["effect"] == "harmonics"
     assert (tmp_path / "d" / "diagnostics.png").exists() and (tmp_path / "d" / "fit.png").exists()
     capsys.readouterr()
-    assert main(["diagnose", str(rec), "--mass", "70", "--max-passes", "2", "--quiet", "--out", str(tmp_path / "e"),
+    assert main(["diagnose", str(rec), "--mass", "70", "--estimator", "ekf", "--max-passes", "2", "--quiet", "--out",
+                 str(tmp_path / "e"),
                  "--effect", "harmonics"]) == 0
     printed = capsys.readouterr().out
     assert "fit without and with harmonics" in printed

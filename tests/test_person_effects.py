@@ -224,3 +224,24 @@ def test_identify_with_the_measured_floor_from_the_command_line(floor_record, tm
     assert person["effects"] == ["floor_mode"] and person["likelihood"] == "exact" and person["lr_df"] == 0
     assert person["log_likelihood"] > person["before"]["log_likelihood"] + 10
     assert abs(person["f_h"] / 2.4 - 1) < 0.05 and person["truth"]["f_h"] == 2.4
+
+
+@pytest.mark.slow
+def test_diagnose_prints_the_identify_command_that_adds_the_effect_and_it_runs(tmp_path, capsys, monkeypatch):
+    """diagnose (record-level by default) names the hidden extra harmonics, prints the identify command that adds
+    them; that command runs as printed and its person has them, with a better likelihood than without."""
+    import shlex
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "--out", "h.csv", "--mass", "70", "--fb", "2.2", "--fh", "2.6", "--xi", "0.3",
+                 "--duration", "20", "--seed", "5", "--effect", "harmonics:blf=0.05/0.04"]) == 0
+    capsys.readouterr()
+    assert main(["diagnose", "h.csv", "--mass", "70", "--effect", "harmonics", "--quiet", "--out", "d"]) == 0
+    printed = capsys.readouterr().out
+    assert "verdict: missing effect 'harmonics'" in printed
+    command = next(line for line in printed.splitlines() if line.startswith("next: ")).removeprefix("next: ")
+    assert command.startswith("smd-statespace identify h.csv --mass 70 --effect harmonics:count=2")
+    assert main(shlex.split(command)[1:] + ["--quiet", "--out", "with"]) == 0
+    person = json.loads((tmp_path / "with" / "person.json").read_text())
+    assert person["n_harmonics"] == 6 and person["lr_df"] == 6 and person["lr_p"] < 1e-6
+    assert abs(person["f_h"] / 2.6 - 1) <= abs(person["before"]["f_h"] / 2.6 - 1) + 0.01
