@@ -5,7 +5,8 @@ physical effect, or with none, under **both** generators of cycle-to-cycle
 force variation (``jumps`` and ``smooth``). Each record is identified as a
 user would (``identify_person`` with its defaults), diagnosed with the
 candidates (:func:`smd_statespace.person.diagnose.diagnose_person`: every
-registered effect, the user's quadratic damper of docs/effects.md, and the
+registered effect, the user's quadratic damper of docs/effects.md (its
+``my_effects.py`` block, read from the page), and the
 estimated floor mode when the record has no floor accelerometer), and
 identified with the *true* effect added (``identify_person(record,
 effects=[...])``, what ``identify --effect`` runs). Counted per row: how often
@@ -50,7 +51,8 @@ from smd_statespace.person.diagnose import diagnose_person
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
 
 REPO = Path(__file__).resolve().parents[1]
-USER_EFFECT = Path(__file__).resolve().parent / "quadratic_damping.py"
+USER_EFFECT_PAGE = REPO / "docs" / "effects.md"
+"""The user's effect is the ``my_effects.py`` block of this page, exactly as a user writes it from there."""
 DURATION, FS, NOISE = 30.0, 100.0, 0.01
 
 KINDS = {
@@ -79,8 +81,18 @@ GENERATORS = ("jumps", "smooth")
 
 
 def _load_user_effect():
-    if "quadratic_damping" not in EFFECTS:
-        load_effects_file(USER_EFFECT)
+    """Register the quadratic damper of docs/effects.md (its ``file=my_effects.py`` block) in this process."""
+    import re
+    import tempfile
+
+    if "quadratic_damping" in EFFECTS:
+        return
+    text = USER_EFFECT_PAGE.read_text(encoding="utf-8")
+    code = re.search(r"```python file=my_effects.py\n(.*?)```", text, re.S).group(1)
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "my_effects.py"
+        path.write_text(code, encoding="utf-8")
+        load_effects_file(path)
 
 
 def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATORS) -> list:
