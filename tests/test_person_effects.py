@@ -245,3 +245,53 @@ def test_diagnose_prints_the_identify_command_that_adds_the_effect_and_it_runs(t
     person = json.loads((tmp_path / "with" / "person.json").read_text())
     assert person["n_harmonics"] == 6 and person["lr_df"] == 6 and person["lr_p"] < 1e-6
     assert abs(person["f_h"] / 2.6 - 1) <= abs(person["before"]["f_h"] / 2.6 - 1) + 0.01
+
+
+class KnownDisturbance:
+    """A test effect: a known disturbance ``c sin(2 pi 7.3 t)`` (m/s^2) on the COM with an unknown gain ``c``."""
+
+    @staticmethod
+    def build():
+        from smd_statespace.model import Effect, Slot
+
+        class Disturbance(Effect):
+            name = "known_disturbance"
+
+            def slots(self, model):
+                return (Slot("c_d", "parameter", "m/s^2", -5.0, 5.0, nominal=1.0, description="gain"),)
+
+            def acceleration(self, model, x, t, inputs):
+                return model.value(x, "c_d") * np.sin(2 * np.pi * 7.3 * np.asarray(t))
+
+        return Disturbance()
+
+
+@pytest.mark.slow
+def test_the_likelihood_ratio_of_an_absent_effect_is_chi_square_with_its_degrees_of_freedom():
+    """On clean records, adding an effect of one parameter that is not there gives a likelihood ratio distributed
+    as chi-square(1) (40 records: mean near 1, Kolmogorov-Smirnov not rejected); where the disturbance is there,
+    its gain comes back."""
+    from scipy import stats
+
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.extend import fit_effects
+    from smd_statespace.simulation import simulate_bouncing
+
+    effect = KnownDisturbance.build()
+    ratios = []
+    for seed in np.random.SeedSequence(2026).generate_state(40):
+        sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=10, seed=int(seed))
+        base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
+        fitted = fit_effects(base, [effect], intervals="wald")
+        test = fitted.effect_test()
+        assert test["lr_df"] == 1 and not fitted.model.approximate
+        ratios.append(test["lr"])
+    ratios = np.array(ratios)
+    print(np.round(np.sort(ratios), 2))
+    assert 0.5 < ratios.mean() < 1.6
+    assert stats.kstest(ratios, stats.chi2(1).cdf).pvalue > 0.01
+    sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=10, seed=7,
+                            effects=[effect.with_values(c_d=0.3)])
+    base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
+    gain = fit_effects(base, [effect], intervals="wald").effect_estimates().loc["c_d"]
+    assert abs(gain["value"] - 0.3) < 3 * gain["sd"] and gain["value"] > 5 * gain["sd"]

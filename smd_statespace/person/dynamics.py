@@ -105,7 +105,6 @@ class PersonDynamics:
                            and model.index(slot.name) not in (F_H, XI_H)]
         self._a0 = model.index("a0")
         self.linear = self._is_linear()
-        self.time_varying_input = bool(model.requires)
 
     @property
     def n_dynamic(self) -> int:
@@ -168,12 +167,12 @@ class PersonDynamics:
         if self.linear:
             at = self._states(f_h, xi_h, values, None, 1)
             jac = model.rate_jacobian(at, self.time[:1], self.inputs)
-            if self.time_varying_input:
+            c = d = None
+            if model.effects:  # terms an effect adds at rest: a measured input, a known function of time
                 rest = self._states(f_h, xi_h, values, None, self.time.size)
-                c = model.rate(rest, self.time, self.inputs)[:, dyn]
-                d = c[:, dyn.index(U_DOT)]
-            else:
-                c = d = None
+                known = model.rate(rest, self.time, self.inputs)[:, dyn]
+                if np.any(known != 0.0):
+                    c, d = known, known[:, dyn.index(U_DOT)]
         else:
             if nominal is None:
                 raise OptionError("a nonlinear effect needs a nominal path to be linearised about")

@@ -251,10 +251,12 @@ class PersonResult:
 
     def derived(self) -> dict:
         """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds."""
+        from ..model import c_h, k_h
+
         mass, f_h, xi_h = self.record.mass, self.f_h, self.xi_h
         cov = self.cov[:2, :2]
-        k = mass * (2 * np.pi * f_h) ** 2  # Eq. 17
-        c = 2 * xi_h * mass * 2 * np.pi * f_h  # Eq. 18
+        k = float(k_h(f_h, mass))  # Eq. 17
+        c = float(c_h(xi_h, f_h, mass))  # Eq. 18
         gk = np.array([2 * k / f_h, 0.0])
         gc = np.array([c / f_h, c / xi_h])
         return {"k_h": k, "k_h_sd": float(np.sqrt(gk @ cov @ gk)), "c_h": c, "c_h_sd": float(np.sqrt(gc @ cov @ gc))}

@@ -59,6 +59,7 @@ import pandas as pd
 from .. import article
 from ..errors import OptionError
 from ..io import G, check_mass, make_record
+from ..model import c_h, k_h
 
 __all__ = ["FloorModel", "system_matrices", "coupled_frf", "batch_response", "coupled_response", "simulate_on_floor"]
 
@@ -266,11 +267,9 @@ def coupled_frf(frequency, mass, f_h, xi_h, floor: FloorModel | None = None):
     omega = 2.0 * np.pi * np.atleast_1d(np.asarray(frequency, dtype=float))
     r = floor.n_modes
     phi = np.asarray(floor.shape)
-    w_h = 2.0 * np.pi * f_h
-    k_h, c_h = mass * w_h**2, 2.0 * xi_h * mass * w_h  # Eq. 17-18
     coupling = np.concatenate([[1.0], -phi])  # u - z = coupling . (u, q)
-    stiffness = k_h * np.outer(coupling, coupling)
-    damping = c_h * np.outer(coupling, coupling)
+    stiffness = k_h(f_h, mass) * np.outer(coupling, coupling)  # Eq. 17
+    damping = c_h(xi_h, f_h, mass) * np.outer(coupling, coupling)  # Eq. 18
     masses = np.diag(np.concatenate([[mass], floor.modal_mass]))
     for k in range(r):
         w_k = 2.0 * np.pi * floor.frequency[k]
