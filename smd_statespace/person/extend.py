@@ -30,6 +30,9 @@ How an effect enters:
 
 from __future__ import annotations
 
+import itertools
+from dataclasses import replace
+
 import numpy as np
 from tqdm.auto import tqdm
 
@@ -129,8 +132,6 @@ def effect_model(result, effects) -> RecordModel:
 def _start(model: RecordModel, result, effects) -> np.ndarray:
     """Start of the search: the fit without the effects by name, the best of the effects' own trial starts
     (:meth:`Effect.record_starts <smd_statespace.model.Effect.record_starts>`) by likelihood, else the model's."""
-    import itertools
-
     named = dict(zip(result.model.param_names, result.params))
     default = model.start_params(result.f_h, result.xi_h)
     low, high = np.asarray(model.bounds).T
@@ -175,10 +176,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
               model.approximate, leave=False) as bar:
         while model.approximate and linearisations < NOMINAL_ITERATIONS:
             linearisations += 1
-            moved = RecordModel(model.time, model.y, model.timing, model.n_harmonics, model.variation,
-                                model.process_noise, drift=model.drift, regressors=model.regressors,
-                                phase_template=model.phase_template, dynamics=model.dynamics,
-                                nominal=_smoothed_path(model, fitted["params"]))
+            moved = replace(model, nominal=_smoothed_path(model, fitted["params"]))
             again = fit_model(moved, fitted["params"], quick=True)
             bar.update()
             settled = abs(again["loglike"] - fitted["loglike"]) < NOMINAL_TOLERANCE
