@@ -269,7 +269,7 @@ class KnownDisturbance:
 @pytest.mark.slow
 def test_the_likelihood_ratio_of_an_absent_effect_is_chi_square_with_its_degrees_of_freedom():
     """On clean records, adding an effect of one parameter that is not there gives a likelihood ratio distributed
-    as chi-square(1) (40 records: mean near 1, Kolmogorov-Smirnov not rejected); where the disturbance is there,
+    as chi-square(1) (30 records: mean near 1, Kolmogorov-Smirnov not rejected); where the disturbance is there,
     its gain comes back."""
     from scipy import stats
 
@@ -279,8 +279,8 @@ def test_the_likelihood_ratio_of_an_absent_effect_is_chi_square_with_its_degrees
 
     effect = KnownDisturbance.build()
     ratios = []
-    for seed in np.random.SeedSequence(2026).generate_state(40):
-        sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=10, seed=int(seed))
+    for seed in np.random.SeedSequence(2026).generate_state(30):
+        sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=8, seed=int(seed))
         base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
         fitted = fit_effects(base, [effect], intervals="wald")
         test = fitted.effect_test()
