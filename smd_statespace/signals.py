@@ -1022,6 +1022,18 @@ class Preprocessed:
             ax.grid(True, lw=0.4, alpha=0.5)
 
 
+def motion(acceleration, fs, cutoff=0.5, order=4, *, padding="predict") -> tuple:
+    """High-passed acceleration, velocity and displacement of a measured acceleration (SI units).
+
+    The acceleration is high-passed and integrated twice by :func:`highpass`
+    and :func:`integrate` with the same filter, as :func:`preprocess` does for
+    the COM (Eq. 3) and for a floor accelerometer.
+    """
+    acc = highpass(acceleration, fs, cutoff, order, padding=padding)
+    vel = integrate(acc, fs, cutoff, order, padding=padding)
+    return acc, vel, integrate(vel, fs, cutoff, order, padding=padding)
+
+
 def preprocess(record: Record, cutoff=0.5, fb_range=SUPPORTED_FB, *, order=4, padding="predict",
                edge_margin=2.0) -> Preprocessed:
     """Run the whole pre-processing pipeline on one record.
@@ -1072,14 +1084,10 @@ def preprocess(record: Record, cutoff=0.5, fb_range=SUPPORTED_FB, *, order=4, pa
     peaks, cycles = find_cycles(time, force, fb_range, source=source)
     try:
         acc_raw = com_acceleration(force, record.mass)  # Eq. 3
-        acc = highpass(acc_raw, fs, cutoff, order, padding=padding)
-        vel = integrate(acc, fs, cutoff, order, padding=padding)
-        disp = integrate(vel, fs, cutoff, order, padding=padding)
+        acc, vel, disp = motion(acc_raw, fs, cutoff, order, padding=padding)
         floor_acc = floor_vel = floor_disp = None
         if record.floor_acc is not None:
-            floor_acc = highpass(record.floor_acc, fs, cutoff, order, padding=padding)
-            floor_vel = integrate(floor_acc, fs, cutoff, order, padding=padding)
-            floor_disp = integrate(floor_vel, fs, cutoff, order, padding=padding)
+            floor_acc, floor_vel, floor_disp = motion(record.floor_acc, fs, cutoff, order, padding=padding)
     except (OptionError, MassError, RecordError) as exc:
         raise type(exc)(f"{source}: {exc}") from None
 

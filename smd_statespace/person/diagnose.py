@@ -172,8 +172,7 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     out = {"effects": [first, second], "loglike": both.loglike}
     for name, other in ((first, second), (second, first)):
         lr = 2.0 * (both.loglike - fits[other].loglike)
-        df = max(len(both.params) - len(fits[other].params)
-                 + len(both.model.delta_names) - len(fits[other].model.delta_names), 1)
+        df = max(both.added_unknowns(fits[other]), 1)
         out[name] = {"lr": float(lr), "p_value": float(stats.chi2.sf(max(lr, 0.0), df))}
     keeps = [name for name in (first, second) if out[name]["p_value"] < level]
     if len(keeps) == 1:

@@ -90,14 +90,13 @@ def record_signals(record, model: SMDModel) -> dict:
     """
     if not model.requires:
         return {}
-    from ..signals import highpass, integrate
+    from ..signals import motion
 
     if record.floor_acc is None:
         raise OptionError(f"{record.source}: the effects {', '.join(e.name for e in model.effects)} need the "
                           "column floor_acc, which the record does not have")
-    acc = highpass(record.floor_acc, record.fs)
-    vel = integrate(acc, record.fs)
-    return {"floor_acc": acc, "floor_vel": vel, "floor_disp": integrate(vel, record.fs)}
+    acc, vel, disp = motion(record.floor_acc, record.fs)
+    return {"floor_acc": acc, "floor_vel": vel, "floor_disp": disp}
 
 
 def _smoothed_path(model: RecordModel, params) -> np.ndarray:

@@ -379,7 +379,7 @@ class RecordModel:
         dt = self.dt
         A, b = lin.A, lin.b
         if A.shape[0] > 1:  # a path-linearised effect: each step from k holds A, b at the step's midpoint
-            A, b = 0.5 * (A + np.concatenate([A[1:], A[-1:]])), 0.5 * (b + np.vstack([b[1:], b[-1:]]))
+            A, b = _step_mean(A), _step_mean(b)
         phi, integral = exponentials(A, dt)  # exact over a step with A held (Eq. 2 and the effects)
         g0 = np.einsum("kij,kj->ki", integral, b)  # constant force: W b
         cycle, _, rate, reset = self._phase
@@ -408,7 +408,7 @@ class RecordModel:
         dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
         x_tr = _regressor_steps(g0, self._X * dynamic)
         offset = np.zeros((self.time.size, nx)) if lin.c is None else np.einsum(
-            "kij,kj->ki", integral, 0.5 * (lin.c + np.vstack([lin.c[1:], lin.c[-1:]])))
+            "kij,kj->ki", integral, _step_mean(lin.c))
         return {
             "hx": np.ascontiguousarray(lin.hx),
             "H": H,
@@ -519,6 +519,11 @@ def _integrated_white_noise(a_c, b, dt):
     return phi @ e[:n, n:]
 
 
+def _step_mean(values):
+    """Mean of each sample's value and the next one's (the last held): a value over the step from each sample."""
+    return 0.5 * (values + np.concatenate([values[1:], values[-1:]]))
+
+
 def _regressor_steps(g0, x_obs):
     """Effect of the regressors' acceleration terms on the dynamic states over a step (trapezoidal hold).
 
@@ -527,5 +532,4 @@ def _regressor_steps(g0, x_obs):
     """
     if x_obs.shape[1] == 0:
         return np.zeros((x_obs.shape[0], g0.shape[1], 0))
-    nxt = np.vstack([x_obs[1:], x_obs[-1:]])
-    return (0.5 * (x_obs + nxt))[:, None, :] * g0[:, :, None]
+    return _step_mean(x_obs)[:, None, :] * g0[:, :, None]

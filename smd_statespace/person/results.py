@@ -199,6 +199,11 @@ class PersonResult:
         columns = ["parameter", "unit", "value", "sd", "low", "high", "range_low", "range_high", "on_bound"]
         return pd.DataFrame(rows, columns=columns).set_index("parameter")
 
+    def added_unknowns(self, other) -> int:
+        """How many more unknowns this fit estimates than ``other``: searched parameters and concentrated ones."""
+        return (len(self.params) - len(other.params)) + (
+            len(self.model.delta_names) - len(other.model.delta_names))
+
     def effect_test(self) -> dict:
         """Likelihood ratio of the effects against :attr:`before` (the same person without them).
 
@@ -212,8 +217,7 @@ class PersonResult:
         if self.before is None:
             return {}
         lr = 2.0 * (self.loglike - self.before.loglike)
-        df = (len(self.params) - len(self.before.params)) + (
-            len(self.model.delta_names) - len(self.before.model.delta_names))
+        df = self.added_unknowns(self.before)
         p = float(stats.chi2.sf(max(lr, 0.0), df)) if df > 0 else float("nan")
         return {"lr": float(lr), "lr_df": int(df), "lr_p": p}
 
