@@ -109,6 +109,36 @@ def c_h(xi_h, f_h, mass):
     return 2.0 * np.asarray(xi_h) * np.asarray(mass) * TWO_PI * np.asarray(f_h)
 
 
+def smd_acceleration(u, u_dot, f_h, xi_h, force_g):
+    """COM acceleration of the SMD, Eq. 2: the one place the equation is written.
+
+    ``u'' = -omega_h^2 u - 2 xi_h omega_h u' + g F``, ``omega_h = 2 pi f_h``.
+    :meth:`SMDModel.acceleration` (every estimator), the record-level model
+    (through the model's rates) and the simulator
+    (:mod:`smd_statespace.simulation.dynamics`; relative to the floor in
+    :mod:`smd_statespace.simulation.floor`) all call it; only the compiled
+    particle-filter kernel keeps a tested twin.
+
+    Parameters
+    ----------
+    u, u_dot : float or ndarray
+        COM displacement (m) and velocity (m/s).
+    f_h : float or ndarray
+        SMD natural frequency (Hz).
+    xi_h : float or ndarray
+        SMD damping ratio (-).
+    force_g : float or ndarray
+        The force per unit mass ``F_bio / M_h = g F`` (m/s^2). Arrays broadcast.
+
+    Returns
+    -------
+    ndarray
+        ``u''`` (m/s^2).
+    """
+    omega = TWO_PI * np.asarray(f_h)
+    return -omega**2 * u - 2.0 * np.asarray(xi_h) * omega * u_dot + force_g  # Eq. 2
+
+
 def acceleration_frf(frequency, f_h, xi_h):
     """Frequency response of Eq. 2 from force (in g) to COM acceleration (in g).
 
@@ -563,9 +593,7 @@ class SMDModel:
         """
         x = np.asarray(x, dtype=float)
         u, v = x[..., U], x[..., U_DOT]
-        omega = TWO_PI * x[..., F_H]
-        xi = x[..., XI_H]
-        acc = -omega**2 * u - 2.0 * xi * omega * v + self.force(x, t, inputs)  # Eq. 2, Eq. 10
+        acc = smd_acceleration(u, v, x[..., F_H], x[..., XI_H], self.force(x, t, inputs))  # Eq. 2, Eq. 10
         for effect in self.effects:
             acc = acc + effect.acceleration(self, x, t, inputs)
         return acc

@@ -22,7 +22,7 @@ from scipy.integrate import solve_ivp
 from ..effects import build_effect, make_effect
 from ..errors import OptionError
 from ..io import G, check_mass
-from ..model import CycleInputs, SMDModel
+from ..model import CycleInputs, SMDModel, smd_acceleration
 
 __all__ = ["RTOL", "ATOL", "integrate_response", "ambient_floor_excitation",
            "ambient_line_count"]
@@ -124,7 +124,7 @@ class _System:
     """
 
     def __init__(self, f_h, xi_h, effects=()):
-        self.omega_h = 2.0 * np.pi * float(f_h)
+        self.f_h = float(f_h)
         self.xi_h = float(xi_h)
         self.effects = tuple(effects)
         self.model = SMDModel(n_harmonics=1, effects=self.effects) if self.effects else None
@@ -145,8 +145,7 @@ class _System:
 
     def rates(self, x, force_g, t):
         """``(dx/dt, u'')`` for states ``x`` (shape (n_state, ...)) under input ``g F`` at time(s) ``t``."""
-        w2, c = self.omega_h**2, 2.0 * self.xi_h * self.omega_h
-        acc = -w2 * x[0] - c * x[1] + force_g  # Eq. 2
+        acc = smd_acceleration(x[0], x[1], self.f_h, self.xi_h, force_g)  # Eq. 2
         if self.model is None:
             return np.stack(np.broadcast_arrays(x[1], acc)), acc
         x = np.asarray(x, dtype=float)
@@ -163,7 +162,7 @@ class _System:
     def rhs(self, t, x, force):
         """Time derivative of the state ``x`` (shape (n_state,)) at time ``t`` (s)."""
         u, v = x[0], x[1]
-        acc = -(self.omega_h**2) * u - 2.0 * self.xi_h * self.omega_h * v + G * force.scalar(t)  # Eq. 2
+        acc = smd_acceleration(u, v, self.f_h, self.xi_h, G * force.scalar(t))  # Eq. 2
         if self.model is None:  # the fast path of the base model
             return np.array([v, acc])
         full = self.template.copy()

@@ -59,7 +59,7 @@ import pandas as pd
 from .. import article
 from ..errors import OptionError
 from ..io import G, check_mass, make_record
-from ..model import c_h, k_h
+from ..model import c_h, k_h, smd_acceleration
 
 __all__ = ["FloorModel", "system_matrices", "coupled_frf", "batch_response", "coupled_response", "simulate_on_floor"]
 
@@ -220,13 +220,14 @@ def system_matrices(mass, f_h, xi_h, floor: FloorModel | None = None):
     """
     floor = FloorModel() if floor is None else floor
     n = floor.n_state
-    w_h = 2.0 * np.pi * float(f_h)
     a_matrix, b_vector = np.zeros((n, n)), np.zeros(n)
     phi = np.asarray(floor.shape)
-    # person row: u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + g F, z = sum phi_k q_k
+    # person row: Eq. 2 on the motion relative to the floor, u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + g F,
+    # z = sum phi_k q_k; its coefficients are Eq. 2's derivatives
+    stiffness_row, damping_row = smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0), smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0)
     person = np.zeros(n)
-    person[0], person[1] = -(w_h**2), -2.0 * xi_h * w_h
-    person[2::2], person[3::2] = w_h**2 * phi, 2.0 * xi_h * w_h * phi
+    person[0], person[1] = stiffness_row, damping_row
+    person[2::2], person[3::2] = -stiffness_row * phi, -damping_row * phi
     a_matrix[0, 1] = 1.0
     a_matrix[1] = person
     b_vector[1] = 1.0
