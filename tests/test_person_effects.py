@@ -236,7 +236,7 @@ def test_diagnose_prints_the_identify_command_that_adds_the_effect_and_it_runs(t
     assert main(["simulate", "--out", "h.csv", "--mass", "70", "--fb", "2.2", "--fh", "2.6", "--xi", "0.3",
                  "--duration", "20", "--seed", "5", "--effect", "harmonics:blf=0.05/0.04"]) == 0
     capsys.readouterr()
-    assert main(["diagnose", "h.csv", "--mass", "70", "--effect", "harmonics", "--quiet", "--out", "d"]) == 0
+    assert main(["diagnose", "h.csv", "--mass", "70", "--candidate", "harmonics", "--quiet", "--out", "d"]) == 0
     printed = capsys.readouterr().out
     assert "verdict: missing effect 'harmonics'" in printed
     command = next(line for line in printed.splitlines() if line.startswith("next: ")).removeprefix("next: ")
@@ -295,3 +295,33 @@ def test_the_likelihood_ratio_of_an_absent_effect_is_chi_square_with_its_degrees
     base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
     gain = fit_effects(base, [effect], intervals="wald").effect_estimates().loc["c_d"]
     assert abs(gain["value"] - 0.3) < 3 * gain["sd"] and gain["value"] > 5 * gain["sd"]
+
+
+def test_an_effect_added_on_top_of_another_is_tested_against_the_person_with_the_first():
+    """diagnose REC --effect A: candidates are fitted on top of A. Adding B to the person with A reaches the same
+    likelihood as adding A and B together, its test counts only B's unknowns, and A cannot be added twice."""
+    from smd_statespace.errors import OptionError
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.diagnose import diagnose_person
+    from smd_statespace.person.extend import fit_effects
+    from smd_statespace.simulation import simulate_bouncing
+
+    disturbance = KnownDisturbance.build()
+    sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=10, seed=7,
+                            effects=[disturbance.with_values(c_d=0.3), "harmonics:blf=0.05"])
+    base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
+    with_a = fit_effects(base, [disturbance], intervals="wald")
+    on_top = fit_effects(with_a, ["harmonics:count=1"], intervals="wald")
+    together = fit_effects(base, [disturbance, "harmonics:count=1"], intervals="wald")
+    assert on_top.before is with_a and [e.name for e in on_top.effects] == ["known_disturbance", "harmonics"]
+    assert on_top.loglike == pytest.approx(together.loglike, abs=0.05)
+    assert on_top.effect_test()["lr_df"] == together.effect_test()["lr_df"] - with_a.effect_test()["lr_df"]
+    assert on_top.effect_test()["lr"] == pytest.approx(2 * (on_top.loglike - with_a.loglike))
+    assert on_top.effect_estimates().loc["c_d", "value"] == pytest.approx(0.3, abs=4 * on_top.effect_estimates()
+                                                                             .loc["c_d", "sd"])
+    with pytest.raises(OptionError, match="in the model already"):
+        fit_effects(with_a, [disturbance])
+    diagnosis = diagnose_person(with_a, candidates=["harmonics:count=1"])
+    assert diagnosis.missing == ["harmonics"]
+    assert "--effect harmonics:count=1" in diagnosis.command("rec.csv", 70)
+    assert diagnosis.command("rec.csv", 70).count("--effect") == 2

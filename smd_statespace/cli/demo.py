@@ -213,7 +213,7 @@ def demo_next_steps(out_dir=DEMO_OUT) -> str:
         (f"smd-statespace identify {rec} --mass 70", "the person (person.json)"),
         (f"smd-statespace compare {rec} --mass 70 --truth {truth} --estimators ekf,ukf",
          "estimators side by side"),
-        (f"smd-statespace diagnose {rec} --mass 70 --effect harmonics",
+        (f"smd-statespace diagnose {rec} --mass 70 --candidate harmonics",
          "is an effect missing? (the person identified with it, tested by likelihood ratio)"),
         (f"smd-statespace stats {results} --bootstrap 20", "Section 5 on the demo's cycles"),
         ("smd-statespace crowd --people 50 --fb 2.5 --out crowd.csv", "crowd loads drawn from Table 2 (30 s)"),

@@ -23,18 +23,22 @@ def add_diagnose(subparsers):
                      "test its innovations, then identify it again with each candidate effect (every registered "
                      "effect, a user's too) and test each by likelihood ratio: the table shows f_h, xi_h, the "
                      "effect's parameters, the noise and the Ljung-Box p before and after, and the verdict prints "
-                     "the 'identify --effect' command that adds the missing effect. --effect names the candidates "
-                     "to try. With a per-cycle --estimator (the article's method), each cycle is refitted with "
+                     "the 'identify --effect' command that adds the missing effect. --effect adds an effect to "
+                     "the model (the candidates are then tried on top of it); --candidate names the candidates to "
+                     "try. With a per-cycle --estimator (the article's method), each cycle is refitted with "
                      "every candidate and the fits compared (free simulation, residual tests)."),
     )
     add_record_arguments(parser)
     parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default="record",
                         help="estimator for every fit (default record: the record-level model, each candidate "
                              f"identified with the person); a per-cycle one ({DEFAULT_ESTIMATOR}, ...) refits "
-                             "every cycle with each candidate; there --effect adds effects to the model")
+                             "every cycle with each candidate")
     add_rate_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
+    parser.add_argument("--candidate", action="append", default=[], metavar="NAME[:key=value,...]",
+                        help="a candidate effect to try, repeatable (default: every registered effect not in the "
+                             "model; floor_mode:source=modal only when named here)")
     parser.add_argument("--json", metavar="FILE", help="write the report as JSON")
     parser.add_argument("--alpha", type=float, default=0.01, metavar="P",
                         help="significance level of the candidates' F-tests (default 0.01, Bonferroni-corrected)")
@@ -42,6 +46,11 @@ def add_diagnose(subparsers):
                         help="where each cycle's free simulation starts: 'estimate' (least-squares fit to the "
                              "cycle, as MATLAB's compare) or 'filtered' (the filter at the first sample)")
     return parser
+
+
+SHARED_COLUMNS = ("df", "lr", "p_value", "significant", "f_h_before", "f_h", "xi_h_before", "xi_h",
+                  "ljung_box_p_before", "ljung_box_p", "parameters")
+"""The candidates' table columns both diagnoses print (record-level and per-cycle: one vocabulary)."""
 
 
 def _fit_line(check) -> str:
@@ -62,6 +71,21 @@ def before_after(before, after) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _effects_and_candidates(args) -> tuple:
+    """``(effects added to the model, candidates or None)`` of ``--effect`` and ``--candidate``, checked."""
+    from ..effects import make_effect
+    from ..errors import OptionError
+
+    added = list(build_model(args).effects)
+    candidates = [make_effect(spec) for spec in args.candidate] or None
+    present = {effect.name for effect in added}
+    both = [effect.name for effect in candidates or [] if effect.name in present]
+    if both:
+        raise OptionError(f"--candidate {both[0]!r} is also given as --effect: an effect is either in the model "
+                          "(--effect) or a candidate to try on top of it (--candidate)")
+    return added, candidates
+
+
 def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..io import read_record
@@ -69,14 +93,13 @@ def run_person_diagnose(args) -> int:
     from ..person.diagnose import diagnose_person
     from ..person.extend import check_effects
 
-    candidates = [e for e in build_model(args).effects] or None  # a bad --effect: one line, nothing read
+    added, candidates = _effects_and_candidates(args)  # a bad --effect or --candidate: one line, nothing read
     record = read_record(args.record, args.mass)
-    if candidates:
-        check_effects(candidates, record)
+    check_effects(added + (candidates or []), record)
     directory = out_dir(args.out)
     base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args),
-                           progress=not args.quiet)
-    print(f"{record.source}: record-level model")
+                           progress=not args.quiet, effects=added)
+    print(f"{record.source}: record-level model" + (f" with {', '.join(e.spec for e in added)}" if added else ""))
     print(base.summary())
     result = diagnose_person(base, candidates=candidates, alpha=args.alpha, progress=not args.quiet)
     table = result.table()
@@ -84,8 +107,7 @@ def run_person_diagnose(args) -> int:
     if table.empty:
         print("  none could be fitted")
     else:
-        columns = ["df", "lr", "p_value", "significant", "f_h_before", "f_h", "xi_h_before", "xi_h",
-                   "noise_change_%", "ljung_box_p_before", "ljung_box_p", "parameters"]
+        columns = list(SHARED_COLUMNS[:-1]) + ["noise_change_%", "parameters"]
         with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 200,
                                "display.max_colwidth", 60):
             print(table[columns].to_string())
@@ -122,11 +144,13 @@ def run_diagnose(args) -> int:
     from ..plotting.cycles import plot_before_after
 
     directory = out_dir(args.out)
+    _, candidates = _effects_and_candidates(args)
     model = build_model(args)
     record, preprocessed = prepare_record(args)
     options = dict(max_passes=args.max_passes, seed=args.seed, progress=not args.quiet,
                    initial_state=args.initial_state, **estimator_options(args.estimator, args))
-    result = diagnose(preprocessed, model, estimator=args.estimator, alpha=args.alpha, **options)
+    result = diagnose(preprocessed, model, estimator=args.estimator, candidates=candidates, alpha=args.alpha,
+                      **options)
     base = result.base
     print(f"{record.source}: {args.estimator} on {model}")
     print(_fit_line(base))
@@ -142,16 +166,17 @@ def run_diagnose(args) -> int:
     if table.empty:
         print("  none left to try: every registered effect is in the model")
     else:
-        with pd.option_context("display.float_format", "{:.3g}".format, "display.width", 140):
-            print(table.to_string())
+        with pd.option_context("display.float_format", "{:.3g}".format, "display.width", 200,
+                               "display.max_colwidth", 60):
+            print(table[list(SHARED_COLUMNS[:-1]) + ["score", "rms_fall_%", "parameters"]].to_string())
     if result.adequate:
         print("\nverdict: the model is adequate for this record (no candidate effect is a significant improvement)")
     else:
-        best = result.missing[0]
+        best = result.best
         print(f"\nverdict: missing effect '{best.name}': {best.evidence}")
-        print(f"next: smd-statespace diagnose {shlex.quote(str(args.record))} --mass {args.mass:g} "
-              f"--effect {shlex.quote(best.effect.spec)}")
-    for note in result.notes:
+        extra = "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
+        print("next: " + result.command(args.record, args.mass, args.estimator, extra))
+    for note in result.notes():
         print(f"note: {note}")
     base.plot_diagnostics(directory / "diagnostics.png")
     base.plot_fit(directory / "fit.png")
@@ -160,7 +185,7 @@ def run_diagnose(args) -> int:
         written.append(directory / "before_after.png")
     if args.json:
         with open(args.json, "w", encoding="utf-8") as handle:
-            json.dump(result.report(), handle, indent=2)
+            json.dump(result.report(), handle, indent=2, default=float)
         written.append(args.json)
     print("wrote " + ", ".join(str(path) for path in written))
     return 0

@@ -61,6 +61,7 @@ how the identified ``f_h`` and ``xi_h`` move when the floor is modelled
 
 from __future__ import annotations
 
+import shlex
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -97,18 +98,38 @@ class Candidate:
 
 @dataclass
 class Diagnosis:
-    """The base model's check and every candidate's refit, ranked best first."""
+    """The base model's check and every candidate's refit, ranked best first.
+
+    The same vocabulary as the record-level diagnosis
+    (:class:`~smd_statespace.person.diagnose.PersonDiagnosis`): :attr:`missing`
+    names the significant candidates, best first; :meth:`table` has one row per
+    candidate with ``significant``, ``df``, ``lr``, ``p_value``, ``f_h_before``,
+    ``f_h``, ``xi_h_before``, ``xi_h`` (here the medians over the cycles),
+    ``ljung_box_p_before``, ``ljung_box_p`` and ``parameters``, then this
+    path's own evidence; :meth:`notes`, :meth:`command` and :meth:`report` as
+    there. The Ljung-Box p-values here are of the free-simulation residual,
+    per cycle and combined (:meth:`ModelCheck.test_serial_correlation
+    <smd_statespace.diagnostics.check.ModelCheck.test_serial_correlation>`:
+    lags a quarter of a cycle, since each cycle is its own series); the
+    record-level ones are of the one-step innovations over the whole record
+    with one cycle's lags.
+    """
 
     base: ModelCheck
     candidates: list = field(default_factory=list)
     alpha: float = 0.01
     min_improvement: float = 0.10
-    notes: list = field(default_factory=list)
+    effect_notes: list = field(default_factory=list)
 
     @property
     def missing(self) -> list:
-        """Candidates judged missing, best first."""
-        return [c for c in self.candidates if c.significant]
+        """Names of the candidates judged missing, best first."""
+        return [c.name for c in self.candidates if c.significant]
+
+    @property
+    def best(self):
+        """The most likely missing :class:`Candidate` (its refit, evidence), or None when adequate."""
+        return next((c for c in self.candidates if c.significant), None)
 
     @property
     def adequate(self) -> bool:
@@ -116,34 +137,70 @@ class Diagnosis:
         return not self.missing
 
     def table(self) -> pd.DataFrame:
-        """One row per candidate: residual RMS, fit, nested-model test, score, verdict."""
+        """One row per candidate, best first: the shared columns of both diagnoses, then the per-cycle evidence."""
         rows = []
+        base_cycles = _cycle_medians(self.base)
+        base_whiteness = self.base.whiteness_pvalue(series="residual")
         for c in self.candidates:
+            cycles = _cycle_medians(c.check)
+            parameters = _effect_parameters(c.check)
             rows.append({
-                "effect": c.name, "missing": c.significant, "score": c.score,
-                "residual_rms_bw_%": c.check.residual_rms_bw, "rms_fall_%": 100.0 * c.rms_fall,
-                "fit_%": c.check.fit_percent, "F": c.f_statistic, "lr_stat": c.lr_statistic,
-                "df": c.extra_parameters, "lr_pvalue": c.lr_pvalue, "filter_lr": c.filter_lr,
+                "effect": c.name, "spec": c.effect.spec, "significant": c.significant, "df": c.extra_parameters,
+                "lr": c.lr_statistic, "p_value": c.lr_pvalue, "f_h_before": base_cycles["f_h"],
+                "f_h": cycles["f_h"], "xi_h_before": base_cycles["xi_h"], "xi_h": cycles["xi_h"],
+                "ljung_box_p_before": base_whiteness, "ljung_box_p": c.check.whiteness_pvalue(series="residual"),
+                "parameters": "; ".join(f"{name} {value:.4g}" for name, value in parameters.items()) or "none",
+                "score": c.score, "residual_rms_bw_%": c.check.residual_rms_bw, "rms_fall_%": 100.0 * c.rms_fall,
+                "fit_%": c.check.fit_percent, "F": c.f_statistic, "filter_lr": c.filter_lr,
                 "serial_ratio": c.check.serial_correlation_ratio(),
             })
         return pd.DataFrame(rows).set_index("effect") if rows else pd.DataFrame()
 
+    def notes(self) -> list:
+        """Plain-word notes of the effects that were not found (what the residual cannot show)."""
+        return list(self.effect_notes)
+
+    def command(self, record: str, mass: float, estimator: str = "ekf", extra: str = "") -> str:
+        """The ``diagnose`` command that adds the best candidate to the model and compares the fits with and
+        without it, on this per-cycle estimator (runs as printed); empty when adequate."""
+        if self.adequate:
+            return ""
+        specs = [effect.spec for effect in self.base.model.effects] + [self.best.effect.spec]
+        effects = " ".join(f"--effect {shlex.quote(spec)}" for spec in specs)
+        return (f"smd-statespace {extra}diagnose {shlex.quote(str(record))} --mass {mass:g} --estimator {estimator} "
+                f"{effects}")
+
     def report(self) -> dict:
-        """The JSON report of ``smd-statespace diagnose --json``."""
+        """The JSON report of ``smd-statespace diagnose --estimator ekf --json``.
+
+        The keys of the record-level report (``missing``, ``adequate``,
+        ``alpha``, ``candidates``, ``notes``) plus this path's fit of the base
+        model and, per missing effect, its evidence and identified values.
+        """
+        table = self.table()
         return {
+            "missing": self.missing,
+            "adequate": bool(self.adequate),
+            "alpha": self.alpha,
+            "candidates": table.reset_index().to_dict(orient="records") if not table.empty else [],
+            "notes": self.notes(),
             "fit_percent": float(self.base.fit_percent),
             "residual_rms": float(self.base.residual_rms),
             "whiteness_pvalue": float(self.base.whiteness_pvalue(series="residual")),
             "effects_in_model": [effect.name for effect in self.base.model.effects],
-            "adequate": bool(self.adequate),
             "missing_effects": [
                 {"effect": c.name, "spec": c.effect.spec, "score": float(c.score),
                  "fit_percent_with": float(c.check.fit_percent), "residual_rms_with": float(c.check.residual_rms),
                  "evidence": c.evidence, "params": _effect_parameters(c.check)}
-                for c in self.missing
+                for c in self.candidates if c.significant
             ],
-            "notes": list(self.notes),
         }
+
+
+def _cycle_medians(check: ModelCheck) -> dict:
+    """Median ``f_h`` and ``xi_h`` over the cycles the check identified."""
+    ok = check.table[check.table["status"] == "ok"]
+    return {name: float(ok[name].median()) if name in ok and len(ok) else float("nan") for name in ("f_h", "xi_h")}
 
 
 def _effect_parameters(check: ModelCheck) -> dict:

@@ -36,7 +36,7 @@ import pandas as pd
 from scipy import stats
 
 from ..effects import EFFECTS, make_effect
-from ..errors import SMDInputError
+from ..errors import OptionError, SMDInputError
 from .extend import fit_effects
 
 __all__ = ["PersonDiagnosis", "diagnose_person", "candidate_row"]
@@ -52,17 +52,20 @@ def candidate_row(base, fitted, level: float) -> dict:
     before_tests, after_tests = base.test_pvalues(), fitted.test_pvalues()
     person_on_bound = fitted.model.person_at_bound(fitted.params)
     effect_on_bound = bool(estimates["on_bound"].any()) if len(estimates) else False
-    row = {"effect": fitted.effects[0].name if len(fitted.effects) == 1 else "+".join(e.name for e in fitted.effects),
+    added = fitted.effects[len(base.effects):]  # the candidate, on top of the effects already in the model
+    row = {"effect": "+".join(e.name for e in added),
            "spec": " ".join(e.spec for e in fitted.effects), "df": df, "lr": lr, "p_value": math.exp(log_p),
            "log_p": log_p, "f_h_before": base.f_h, "f_h": fitted.f_h, "xi_h_before": base.xi_h,
            "xi_h": fitted.xi_h, "noise_change_%": 100.0 * (fitted.sigma / base.sigma - 1.0),
            "ljung_box_p_before": before_tests["ljung_box_p"], "ljung_box_p": after_tests["ljung_box_p"],
            "parameters": _parameters_text(base, fitted, estimates),
            "likelihood": "approximate" if fitted.model.approximate else "exact",
-           "on_bound": person_on_bound or effect_on_bound}
+           "on_bound": person_on_bound or effect_on_bound, "settled": bool(fitted.settled)}
     # a refit that runs f_h, xi_h or the effect's parameter to a search bound has not found the effect:
     # the term and the person's resonance together imitate the residual
-    row["significant"] = bool(log_p < math.log(level)) and not row["on_bound"] and lr > 0
+    # a nonlinear term whose path never settles follows the data, not the physics: its likelihood ratio is no
+    # evidence (on clean records such a runaway gave a cubic spring LR 184, f_h 2.30 -> 1.40 Hz)
+    row["significant"] = bool(log_p < math.log(level)) and not row["on_bound"] and row["settled"] and lr > 0
     return row
 
 
@@ -143,6 +146,10 @@ class PersonDiagnosis:
                            f"{table.loc[name, 'f_h']:.3g} Hz, xi_h {table.loc[name, 'xi_h']:.3g}; "
                            f"{table.loc[name, 'parameters']}): the term and the person's resonance together "
                            "imitate the residual, so it is not proposed")
+            for name in table.index[~table["settled"].astype(bool)]:
+                out.append(f"{name}: its linearised path had not settled after the last linearisation (the "
+                           f"approximate likelihood kept rising, LR {table.loc[name, 'lr']:.1f}, as the path "
+                           "followed the data): not evidence, so it is not proposed")
             approximate = list(table.index[table["likelihood"] == "approximate"])
             if approximate:
                 out.append(f"{', '.join(approximate)}: nonlinear, so its likelihood is approximate (linearised about "
@@ -168,7 +175,8 @@ class PersonDiagnosis:
 def _joint(base, fits: dict, names: list, level: float) -> dict:
     """Fit the two best candidates together and test each on top of the other."""
     first, second = names[:2]
-    both = fit_effects(base, list(fits[first].effects) + list(fits[second].effects))
+    present = len(base.effects)
+    both = fit_effects(base, list(fits[first].effects[present:]) + list(fits[second].effects[present:]))
     out = {"effects": [first, second], "loglike": both.loglike}
     for name, other in ((first, second), (second, first)):
         lr = 2.0 * (both.loglike - fits[other].loglike)
@@ -191,10 +199,11 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     Parameters
     ----------
     result : PersonResult
-        The fit without any effect (:func:`~smd_statespace.person.fit.identify_person`).
+        The fit to diagnose (:func:`~smd_statespace.person.fit.identify_person`), with or without effects:
+        each candidate is added on top of those it has.
     candidates : sequence of str or Effect, optional
-        Effects to try (names, ``NAME:key=value`` specs or objects). Default:
-        every registered effect as its class configures itself for this
+        Effects to try (names, ``NAME:key=value`` specs or objects), none of them in ``result`` already.
+        Default: every registered effect not in ``result`` as its class configures itself for this
         record (:meth:`Effect.record_default <smd_statespace.model.Effect.record_default>`).
     alpha : float
         Family-wise significance level; each candidate is tested at
@@ -208,10 +217,16 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     """
     from tqdm.auto import tqdm
 
+    present = {effect.name for effect in result.effects}
     if candidates is None:
-        effects = [effect for effect in (cls.record_default(result) for cls in EFFECTS.values()) if effect is not None]
+        effects = [effect for name, cls in EFFECTS.items() if name not in present
+                   for effect in [cls.record_default(result)] if effect is not None]
     else:
         effects = [make_effect(candidate) for candidate in candidates]
+        already = [effect.name for effect in effects if effect.name in present]
+        if already:
+            raise OptionError(f"candidate {already[0]!r} is in the model already; candidates are effects to try on "
+                              f"top of it ({', '.join(sorted(present))})")
     level = alpha / max(len(effects), 1)
     fits, rows, failed = {}, [], {}
     for effect in tqdm(effects, desc="diagnose (record)", unit="effect", disable=not progress, leave=False):

@@ -107,19 +107,22 @@ def _smoothed_path(model: RecordModel, params) -> np.ndarray:
     return RecordStateSpace(model, delta).smooth(params, cov_type="none").smoothed_state[:model.n_dynamic].T
 
 
-def effect_model(result, effects) -> RecordModel:
+def effect_model(result, effects, path=None) -> RecordModel:
     """The record-level model of ``result`` (its timing, variation, regressors) with ``effects`` added.
 
-    A nonlinear effect's first nominal path is ``result``'s smoothed ``u``,
-    ``u'`` (an effect's own dynamic states start at zero).
+    ``result`` is a fit without effects. A nonlinear effect's first nominal
+    path is the smoothed dynamic states of ``path`` (default ``result``: its
+    ``u``, ``u'``; a fit with some of ``effects`` already in, those first, gives
+    theirs too); the states it does not have start at zero.
     """
     base = result.model
+    path = result if path is None else path
     n_harmonics, smd = split_effects(effects, base.n_harmonics)
     dynamics = PersonDynamics(smd, base.time, record_signals(result.record, smd))
     nominal = None
     if not dynamics.linear:
         nominal = np.zeros((base.time.size, dynamics.n_dynamic))
-        nominal[:, :base.n_dynamic] = _smoothed_path(base, result.params)
+        nominal[:, :path.model.n_dynamic] = _smoothed_path(path.model, path.params)
     template = base.phase_template
     if template is not None and n_harmonics > base.n_harmonics:
         template = np.r_[template, np.zeros(2 * (n_harmonics - base.n_harmonics))]
@@ -128,21 +131,34 @@ def effect_model(result, effects) -> RecordModel:
                        nominal=nominal)
 
 
-def _start(model: RecordModel, result, effects) -> np.ndarray:
-    """Start of the search: the fit without the effects by name, the best of the effects' own trial starts
-    (:meth:`Effect.record_starts <smd_statespace.model.Effect.record_starts>`) by likelihood, else the model's."""
-    named = dict(zip(result.model.param_names, result.params))
+def _starts(model: RecordModel, result, root, effects) -> list:
+    """Starts of the search, one per fit the model could grow from.
+
+    From ``result`` (the fit the effects are added to) by name, the best of
+    the added effects' own trial starts (:meth:`Effect.record_starts
+    <smd_statespace.model.Effect.record_starts>`) by likelihood, else the
+    model's. When ``result`` holds effects already, a second start from
+    ``root`` (the fit without any) with ``result``'s effect parameters: a
+    variance that an earlier effect's fit drove to zero sits on a flat
+    plateau of the likelihood that a search started there does not leave.
+    """
     default = model.start_params(result.f_h, result.xi_h)
     low, high = np.asarray(model.bounds).T
     trials = [effect.record_starts(result) or [{}] for effect in effects]
-    starts = []
-    for combination in itertools.product(*trials):
-        values = dict(named)
-        for part in combination:
-            values.update(part)
-        starts.append(np.clip([values.get(name, value) for name, value in zip(model.param_names, default)],
-                              low, high))
-    return starts[0] if len(starts) == 1 else max(starts, key=model.loglike)
+    origins = [dict(zip(result.model.param_names, result.params))]
+    if root is not result:
+        origins.append({**origins[0], **dict(zip(root.model.param_names, root.params))})
+    out = []
+    for named in origins:
+        starts = []
+        for combination in itertools.product(*trials):
+            values = dict(named)
+            for part in combination:
+                values.update(part)
+            starts.append(np.clip([values.get(name, value) for name, value in zip(model.param_names, default)],
+                                  low, high))
+        out.append(starts[0] if len(starts) == 1 else max(starts, key=model.loglike))
+    return out
 
 
 def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", progress=False):
@@ -151,9 +167,12 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     Parameters
     ----------
     result : PersonResult
-        The fit without the effects (its variation model and cycle timing are kept).
+        The fit to extend (its variation model and cycle timing are kept). It
+        may hold effects already (``result.effects``): the new ones are added
+        on top of them, and the comparison (``before``, the likelihood ratio)
+        is with ``result``.
     effects : sequence of Effect or str
-        The effects to add.
+        The effects to add (not already in ``result``).
     intervals, cov_type : str
         As :func:`~smd_statespace.person.fit.identify_person`.
     progress : bool
@@ -167,9 +186,19 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     """
     from .fit import FitError, fit_model, person_result
 
-    effects = check_effects(effects, result.record)
-    model = effect_model(result, effects)
-    fitted = fit_model(model, _start(model, result, effects), quick=model.approximate)
+    present = tuple(result.effects)
+    added = check_effects(effects, result.record)
+    already = sorted({e.name for e in present} & {e.name for e in added})
+    if already:
+        raise OptionError(f"{result.record.source}: the effect {already[0]!r} is in the model already "
+                          f"(it has {', '.join(e.spec for e in present)})")
+    effects = present + added
+    root = result
+    while root.effects:  # the fit without any effect: the model's structure
+        root = root.before
+    model = effect_model(root, effects, path=result)
+    fitted = max((fit_model(model, start, quick=model.approximate) for start in _starts(model, result, root, added)),
+                 key=lambda fit: fit["loglike"])
     linearisations, settled = 0, True
     with tqdm(total=NOMINAL_ITERATIONS, desc="effects (record)", unit="fit", disable=not progress or not
               model.approximate, leave=False) as bar:
@@ -187,7 +216,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     if not fitted["converged"]:
         raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
                        f"did not converge ({fitted['message']})")
-    notes, warnings = list(result.notes), list(result.record_warnings)
+    notes, warnings = list(root.notes), list(root.record_warnings)
     if model.approximate:
         notes.append(f"the likelihood is approximate: {', '.join(e.name for e in effects)} linearised about the "
                      f"smoothed path, {linearisations} time(s) (an iterated extended Kalman smoother)")
@@ -196,4 +225,5 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
                             f"{NOMINAL_ITERATIONS} linearisations: its estimates are approximate")
     return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
                          comparison=result.comparison, record_warnings=warnings, notes=notes,
-                         before=result, effects=tuple(effects), linearisations=linearisations)
+                         before=result, effects=tuple(effects), linearisations=linearisations,
+                         settled=settled)

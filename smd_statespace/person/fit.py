@@ -570,7 +570,7 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     The covariance of the estimates (:func:`information`), the intervals of
     ``f_h`` and ``xi_h`` (calibrated Wald, Wald or profile, see
     :func:`identify_person`) and Wald intervals of the effects' parameters.
-    ``extra`` goes to the result (``before``, ``effects``, ``linearisations``).
+    ``extra`` goes to the result (``before``, ``effects``, ``linearisations``, ``settled``).
     """
     from .results import PersonResult
 

@@ -84,11 +84,16 @@ class PersonResult:
     notes : list of str
         What was done to the record before the fit (decimation), in words.
     before : PersonResult or None
-        With effects: the same person identified without them (the comparison's "before").
+        With effects: the fit they were added to, the comparison's "before" (the same person without them, or
+        with only the effects added earlier).
     effects : tuple of Effect
         The effects in the model (their parameters are in :attr:`params`, last).
     linearisations : int
         How many paths a nonlinear effect was linearised about (0: the likelihood is exact).
+    settled : bool
+        False when a nonlinear effect's path was still moving after the last linearisation: the
+        approximate likelihood kept rising as the path followed the data, so its likelihood ratio is
+        not evidence (``diagnose`` does not propose such an effect).
     """
 
     record: object
@@ -107,6 +112,7 @@ class PersonResult:
     before: "PersonResult | None" = None
     effects: tuple = ()
     linearisations: int = 0
+    settled: bool = True
 
     # ------------------------------------------------------------------ estimates
     @cached_property
@@ -414,6 +420,7 @@ class PersonResult:
             out.update(self.effect_test())
             out["likelihood"] = "approximate" if self.model.approximate else "exact"
             out["linearisations"] = self.linearisations
+            out["settled"] = self.settled
             before = self.before.to_dict()
             out["before"] = {key: before[key] for key in ("f_h", "f_h_sd", "f_h_low", "f_h_high", "xi_h", "xi_h_sd",
                                                           "xi_h_low", "xi_h_high", "log_likelihood", "noise_sd",
