@@ -7,7 +7,9 @@ comparison), then the record-level model is rebuilt from
 ``SMDModel(n_harmonics, effects=[...])`` (:mod:`smd_statespace.person.dynamics`)
 and every static parameter — ``f_h``, ``xi_h``, the effects' parameters, the
 variation and noise variances — is estimated again by maximum likelihood
-over the whole record.
+over the whole record. A fit that has effects already can take more
+(``diagnose REC --effect A`` tries each candidate on top of ``A``): the
+comparison is then with the fit that has ``A``.
 
 How an effect enters:
 
