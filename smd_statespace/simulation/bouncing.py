@@ -72,6 +72,7 @@ from ..io import G, Record, check_mass, make_record, write_record
 from ..model import SMDModel, c_h, k_h
 from ..model import acceleration_frf
 from .dynamics import _cycle_states, _number, _simulation_effects, _System, _vector
+from .generators import GENERATORS, TEMPO_MAX_FB_VARIATION, _check_pulses
 from .variation import (SMOOTH_CORRELATION_CYCLES, TRUNCATION_SD, VARIATIONS, _cycles_frame, _draw_cycles,
                         _smooth_cycles, _smooth_force, _smooth_geometry, _smooth_run_in, _smooth_states)
 
@@ -309,6 +310,9 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
         raise OptionError(
             f"simulate_bouncing: variation must be one of {', '.join(map(repr, VARIATIONS))}, got {variation!r}"
         )
+    if variation == "tempo" and fb_variation > TEMPO_MAX_FB_VARIATION:
+        raise OptionError(f"simulate_bouncing: fb_variation must be 0-{TEMPO_MAX_FB_VARIATION:g} with "
+                          f"variation='tempo', got {fb_variation!r}")
     if duration < 1.0 / f_b:
         raise OptionError(
             f"simulate_bouncing: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)"
@@ -329,6 +333,7 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
             f"({highest:g} Hz), i.e. >= {4 * highest:g} Hz"
         )
     default_base, default_extra = default_phases(blf, f_b, f_h, xi_h, extra_blf)
+    phases_given = phases is not None
     if phases is None:
         phases = default_base
     else:
@@ -339,13 +344,16 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
     if any(given is not None for given in given_extra):
         extra_phases = np.concatenate([default_extra[:len(pair[0])] if given is None else np.asarray(given, float)
                                        for pair, given in zip(extra, given_extra)])
-    return SimpleNamespace(
+    settings = SimpleNamespace(
         mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=duration, fs=fs, blf=blf, phases=phases, a0=a0,
         fb_variation=fb_variation, coef_variation=coef_variation, noise=noise, effects=effects, system=system,
-        extra_phases=extra_phases,
+        extra_phases=extra_phases, phases_given=phases_given,
         variation=variation, all_blf=np.concatenate([blf, extra_blf]),
         all_phases=np.concatenate([phases, extra_phases]),
     )
+    if variation == "pulses":
+        _check_pulses(settings)
+    return settings
 
 
 def _draw_blocks(rng, n_rows, n_base, n_extra, n_samples):
@@ -421,10 +429,15 @@ def _effects_truth(settings):
     return out
 
 
-def _truth(settings, seed_record, n_cycles):
-    """The JSON-serialisable truth of :attr:`SyntheticRecord.truth`."""
+def _truth(settings, seed_record, n_cycles, generator=None):
+    """The JSON-serialisable truth of :attr:`SyntheticRecord.truth`.
+
+    ``generator`` (the generators of :mod:`.generators`) holds the truth's
+    ``variations`` and, for ``"pulses"``, its ``blf`` and ``phases``.
+    """
     s = settings
-    variations = {
+    generator = generator or {}
+    variations = generator.get("variations") or {
         "fb_variation": s.fb_variation,
         "coef_variation": s.coef_variation,
         "phase_jitter_rad": s.coef_variation,
@@ -444,8 +457,8 @@ def _truth(settings, seed_record, n_cycles):
         "C_h": float(c_h(s.xi_h, s.f_h, s.mass)),  # Eq. 18
         "n_harmonics": int(s.blf.size),
         "n_force_harmonics": int(s.all_blf.size),
-        "blf": [float(v) for v in s.blf],
-        "phases": [float(v) for v in s.phases],
+        "blf": generator.get("blf", [float(v) for v in s.blf]),
+        "phases": generator.get("phases", [float(v) for v in s.phases]),
         "a0": s.a0,
         "effects": _effects_truth(s),
         "seed": seed_record,
@@ -600,18 +613,25 @@ def simulate_bouncing(
     n_samples = int(np.floor(s.duration * s.fs + 1e-9)) + 1
     time = np.arange(n_samples) / s.fs
     # Fixed-size blocks in a fixed order (see the module docstring).
-    if s.variation == "jumps":
+    if s.variation != "smooth":
         shortest = 1.0 / (s.f_b * (1.0 + TRUNCATION_SD * s.fb_variation))
         longest = 1.0 / (s.f_b * (1.0 - TRUNCATION_SD * s.fb_variation))
         n_rows = int(np.ceil((s.duration + longest) / shortest)) + 2
     else:
         geometry = _smooth_geometry(s.duration, s.f_b, s.fb_variation)
         n_rows = geometry[1]
-    rng_blocks, grf_noise, floor_noise = _draw_blocks(rng, n_rows, s.blf.size, s.all_blf.size - s.blf.size,
-                                                      n_samples)
+    if s.variation in GENERATORS:  # the generators of .generators: their own blocks, then the noise
+        draw, make = GENERATORS[s.variation]
+        rng_blocks, grf_noise, floor_noise = draw(rng, s, n_rows, n_samples)
+    else:
+        rng_blocks, grf_noise, floor_noise = _draw_blocks(rng, n_rows, s.blf.size, s.all_blf.size - s.blf.size,
+                                                          n_samples)
     for effect in s.effects:  # drawn last, so that they leave every other random number unchanged
         effect.draw_simulation_inputs(rng, s.duration)
-    if s.variation == "jumps":
+    generator = None
+    if s.variation in GENERATORS:
+        cycles, states, generator = make(s, rng_blocks, time)
+    elif s.variation == "jumps":
         cycles, states = _jump_record(s, rng_blocks, time)
     else:
         # Drawn last: the run-in's length depends on the effects; the record's processes do not use them.
@@ -620,7 +640,8 @@ def simulate_bouncing(
                                TRUNCATION_SD)
         cycles, states = _smooth_record(s, rng_blocks, run_in_knots, geometry, time)
     record = _measured_record(s, states, grf_noise, floor_noise)
-    return SyntheticRecord(record=record, truth=_truth(s, seed_record, len(cycles)), states=states, cycles=cycles)
+    return SyntheticRecord(record=record, truth=_truth(s, seed_record, len(cycles), generator), states=states,
+                           cycles=cycles)
 
 
 # ---------------------------------------------------------------------------

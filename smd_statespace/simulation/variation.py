@@ -25,7 +25,7 @@ __all__ = ["TRUNCATION_SD", "VARIATIONS", "SMOOTH_CORRELATION_CYCLES", "SMOOTH_G
 TRUNCATION_SD = 3.0
 """Cycle-to-cycle variations are normal, truncated at this many standard deviations."""
 
-VARIATIONS = ("jumps", "smooth")
+VARIATIONS = ("jumps", "smooth", "coefficients", "pulses", "tempo")
 """Generators of the cycle-to-cycle force variation (``variation`` of :func:`simulate_bouncing`).
 
 ``"jumps"``
