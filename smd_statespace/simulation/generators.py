@@ -200,7 +200,11 @@ def _pulse_coefficients(start, width, height, a0, n):
 
 
 def _pulse_shape(tau, start, width, height, a0):
-    """Force (g) at cycle phase ``tau`` in [0, 1): ``a0 + h (sin^2(pi x) - r / 2)``, ``x = (tau - start) / r`` in (0, 1)."""
+    """Force (g) at cycle phase ``tau`` in [0, 1): ``a0 + h (sin^2(pi x) - r / 2)``, ``x = (tau - start) / r``.
+
+    ``sin^2(pi x)`` is 0 outside the pulse (``x`` not in (0, 1)); ``r`` is
+    ``width``, ``h`` ``height`` (g).
+    """
     x = (tau - start) / width
     pulse = np.where((x > 0.0) & (x < 1.0), np.sin(np.pi * np.clip(x, 0.0, 1.0)) ** 2, 0.0)
     return a0 + height * (pulse - 0.5 * width)
