@@ -39,8 +39,12 @@ def add_simulate(subparsers):
                         help="cycle-to-cycle relative SD of the force harmonics (default 0.10)")
     parser.add_argument("--variation", choices=VARIATIONS, default=VARIATIONS[0],
                         help="how the force varies from cycle to cycle: jumps (each cycle its own frequency and "
-                             "harmonics, jumping at the boundaries; default) or smooth (frequency and harmonics "
-                             "drift continuously, correlated over about 2.5 cycles)")
+                             "harmonics, jumping at the boundaries; default), smooth (frequency and harmonics "
+                             "drift continuously, correlated over about 2.5 cycles), coefficients (each Fourier "
+                             "coefficient jittered on its own per cycle, the person starting from rest), pulses "
+                             "(one squared-sine pulse per cycle, its width, height and timing jittered; the truth "
+                             "holds the mean pulse's harmonics) or tempo (a fixed shape under a tempo that ramps "
+                             "and wanders by a few --fb-variation over the record; --coef-variation unused)")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="physical effect, repeatable: any registered effect (floor_mode, harmonics, "
                              "cubic_stiffness, a user's); keys are its options or its parameters' true values "
@@ -87,7 +91,7 @@ def run_simulate(args) -> int:
     csv_path, truth_path = synthetic.write(out, truth)
     record, info = synthetic.record, synthetic.truth
     extra = f", effects {', '.join(names)}" if effects else ""
-    extra += ", smooth variation" if args.variation == "smooth" else ""
+    extra += f", {args.variation} variation"
     seed = f"seed {info['seed']}" if args.seed is not None else "random seed (in the truth file)"
     print(
         f"wrote {csv_path}: {record.duration:.2f} s at {record.fs:g} Hz, {info['n_cycles']} force cycles "

@@ -9,6 +9,7 @@ module              what it holds
 :mod:`.dynamics`    the equations of motion with the effects' own terms and
                     their integration, :func:`integrate_response`
 :mod:`.variation`   cycle-to-cycle variation of the force: jumps or smooth
+:mod:`.generators`  more generators of it: coefficients, pulses, tempo
 :mod:`.population`  :func:`sample_population`: people drawn from Table 2
 :mod:`.crowd`       :func:`~.crowd.simulate_crowd`: many people bouncing together
 :mod:`.floor`       :class:`~.floor.FloorModel` and the exact coupled

@@ -14,10 +14,13 @@ discretisation:
 - Eq. 4, the biomechanical force in units of g,
   ``F = a0 + sum_i [a_i cos(i phi) + b_i sin(i phi)]`` with a bouncing phase
   ``phi`` that advances by 2 pi per force cycle, with cycle-to-cycle variation
-  of two kinds (:data:`~.variation.VARIATIONS`): every cycle has its own frequency and
+  of five kinds (:data:`~.variation.VARIATIONS`): every cycle has its own frequency and
   coefficients, jumping at the cycle boundaries (``"jumps"``), or the
   frequency and coefficients drift smoothly in time (``"smooth"``,
-  :mod:`.variation`);
+  :mod:`.variation`); every coefficient jittered on its own from a start at
+  rest (``"coefficients"``), one smooth pulse per cycle instead of a Fourier
+  series (``"pulses"``), or a fixed shape under a wandering tempo
+  (``"tempo"``, :mod:`.generators`);
 - Eq. 3, ``GRF = M_h (g + u'')``, plus white measurement noise;
 - optional physical effects beyond the base model, any registered effect
   (:mod:`smd_statespace.effects`: a vibrating floor mode, force harmonics
@@ -44,7 +47,7 @@ Phase convention: harmonic ``i`` of a cycle is
 ``a_i cos(i theta) + b_i sin(i theta) = BLF_i cos(i theta - psi_i)`` with
 ``theta = 2 pi f_b (t - t_start)``, i.e. ``a_i = BLF_i cos psi_i`` and
 ``b_i = BLF_i sin psi_i``; ``phases`` are the ``psi_i`` (rad). With
-``variation="smooth"`` ``theta(t)`` is the continuous phase
+``variation="smooth"`` or ``"tempo"`` ``theta(t)`` is the continuous phase
 ``2 pi int f_b(t) dt``, a multiple of 2 pi at every cycle start.
 
 Random numbers come only from a :class:`numpy.random.Generator` built with
@@ -52,7 +55,8 @@ Random numbers come only from a :class:`numpy.random.Generator` built with
 fixed order of fixed-size blocks, so switching an effect on or off does not
 change the random numbers used by the rest of the record (with
 ``variation="smooth"`` the knots of the smooth processes take the place of the
-cycles, and the knots of the run-in before the record come last).
+cycles, and the knots of the run-in before the record come last; the
+generators of :mod:`.generators` draw their own blocks first, then the noise).
 """
 
 from __future__ import annotations
@@ -72,6 +76,7 @@ from ..io import G, Record, check_mass, make_record, write_record
 from ..model import SMDModel, c_h, k_h
 from ..model import acceleration_frf
 from .dynamics import _cycle_states, _number, _simulation_effects, _System, _vector
+from .generators import GENERATORS, TEMPO_MAX_FB_VARIATION, _check_pulses
 from .variation import (SMOOTH_CORRELATION_CYCLES, TRUNCATION_SD, VARIATIONS, _cycles_frame, _draw_cycles,
                         _smooth_cycles, _smooth_force, _smooth_geometry, _smooth_run_in, _smooth_states)
 
@@ -309,6 +314,9 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
         raise OptionError(
             f"simulate_bouncing: variation must be one of {', '.join(map(repr, VARIATIONS))}, got {variation!r}"
         )
+    if variation == "tempo" and fb_variation > TEMPO_MAX_FB_VARIATION:
+        raise OptionError(f"simulate_bouncing: fb_variation must be 0-{TEMPO_MAX_FB_VARIATION:g} with "
+                          f"variation='tempo', got {fb_variation!r}")
     if duration < 1.0 / f_b:
         raise OptionError(
             f"simulate_bouncing: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)"
@@ -329,6 +337,7 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
             f"({highest:g} Hz), i.e. >= {4 * highest:g} Hz"
         )
     default_base, default_extra = default_phases(blf, f_b, f_h, xi_h, extra_blf)
+    phases_given = phases is not None
     if phases is None:
         phases = default_base
     else:
@@ -339,13 +348,16 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
     if any(given is not None for given in given_extra):
         extra_phases = np.concatenate([default_extra[:len(pair[0])] if given is None else np.asarray(given, float)
                                        for pair, given in zip(extra, given_extra)])
-    return SimpleNamespace(
+    settings = SimpleNamespace(
         mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=duration, fs=fs, blf=blf, phases=phases, a0=a0,
         fb_variation=fb_variation, coef_variation=coef_variation, noise=noise, effects=effects, system=system,
-        extra_phases=extra_phases,
+        extra_phases=extra_phases, phases_given=phases_given,
         variation=variation, all_blf=np.concatenate([blf, extra_blf]),
         all_phases=np.concatenate([phases, extra_phases]),
     )
+    if variation == "pulses":
+        _check_pulses(settings)
+    return settings
 
 
 def _draw_blocks(rng, n_rows, n_base, n_extra, n_samples):
@@ -421,10 +433,15 @@ def _effects_truth(settings):
     return out
 
 
-def _truth(settings, seed_record, n_cycles):
-    """The JSON-serialisable truth of :attr:`SyntheticRecord.truth`."""
+def _truth(settings, seed_record, n_cycles, generator=None):
+    """The JSON-serialisable truth of :attr:`SyntheticRecord.truth`.
+
+    ``generator`` (the generators of :mod:`.generators`) holds the truth's
+    ``variations`` and, for ``"pulses"``, its ``blf`` and ``phases``.
+    """
     s = settings
-    variations = {
+    generator = generator or {}
+    variations = generator.get("variations") or {
         "fb_variation": s.fb_variation,
         "coef_variation": s.coef_variation,
         "phase_jitter_rad": s.coef_variation,
@@ -444,8 +461,8 @@ def _truth(settings, seed_record, n_cycles):
         "C_h": float(c_h(s.xi_h, s.f_h, s.mass)),  # Eq. 18
         "n_harmonics": int(s.blf.size),
         "n_force_harmonics": int(s.all_blf.size),
-        "blf": [float(v) for v in s.blf],
-        "phases": [float(v) for v in s.phases],
+        "blf": generator.get("blf", [float(v) for v in s.blf]),
+        "phases": generator.get("phases", [float(v) for v in s.phases]),
         "a0": s.a0,
         "effects": _effects_truth(s),
         "seed": seed_record,
@@ -486,7 +503,7 @@ def simulate_bouncing(
 
     The COM obeys Eq. 2 under the biomechanical force of Eq. 4, integrated
     accurately (DOP853, ``rtol`` :data:`RTOL`), and the GRF is Eq. 3 plus
-    noise. The force varies from cycle to cycle in one of two ways
+    noise. The force varies from cycle to cycle in one of five ways
     (:data:`VARIATIONS`):
 
     ``variation="jumps"`` (default)
@@ -516,6 +533,57 @@ def simulate_bouncing(
         smooth cycle also averages the frequency over its length), and
         neighbouring cycles are alike (correlation about 0.85). One
         integration covers the run-in and the record.
+    ``variation="coefficients"``
+        Each cycle ``j`` has its own frequency ``f_b (1 + eps_j)`` as with
+        ``"jumps"``, and each Fourier coefficient is jittered on its own:
+        ``a_ij = a_i (1 + coef_variation N)``, ``b_ij = b_i (1 +
+        coef_variation N)``, ``a_i = BLF_i cos psi_i``, ``b_i = BLF_i sin
+        psi_i``, independent standard normals truncated at
+        :data:`TRUNCATION_SD` (extra harmonics alike). The phase is
+        continuous across cycle boundaries, the coefficients jump there. Cycle 0
+        starts at ``t = 0`` with the person at rest (``u = u' = 0`` and every
+        dynamic slot of the effects 0): no periodic steady state, the first
+        cycles carry the start-up transient.
+    ``variation="pulses"``
+        No Fourier series: cycle ``j`` (frequency ``f_b (1 + eps_j)``) holds one
+        squared-sine pulse on a baseline, ``F = a0 + h_j (sin^2(pi x) - r_j /
+        2)``, ``x = (tau - s_j) / r_j`` within the pulse (``0 < x < 1``, else
+        ``sin^2`` is 0), ``tau`` the cycle phase (0 to 1). Its width ``r_j =
+        r (1 + c N)`` (:data:`~.generators.PULSE_CONTACT_RATIO` ``r``,
+        clipped to 0.05-1), height ``h_j = h (1 + c N)`` and start ``s_j = (1 -
+        r_j) / 2 + c N / (2 pi)`` (the first harmonic's phase jitters by ``c
+        N`` rad; clipped to keep the pulse in its cycle) vary per cycle, ``c
+        = coef_variation``. The force's mean over every cycle is ``a0`` (body
+        weight carried) and ``1 + F`` stays above 0: an OptionError says
+        when ``blf`` or ``coef_variation`` is too large for that, or when the
+        GRF would fall below zero. The mean pulse cycle is a cycle's force
+        averaged over the jitter of width, height and timing (quadrature
+        over the truncated normals; without variation the centred pulse of
+        width ``r``, height ``h``); its Fourier coefficients are the expected
+        coefficients of a cycle, what a force template estimates. ``h`` makes
+        its first-harmonic amplitude ``blf[0]``; its higher harmonics follow
+        from the pulse shape (ratios about 1 : 0.66 : 0.29 : 0.05, a little
+        less for the higher ones with jitter), the rest of ``blf`` sets only
+        how many harmonics the truth and the cycles table hold. The truth's
+        ``blf`` and ``phases`` are the Fourier coefficients (Eq. 4, the phase
+        convention above) of the mean pulse cycle, the cycles table's each
+        cycle's own (plus ``pulse_start``, ``pulse_width`` as fractions of
+        the cycle and ``pulse_height`` in g), both computed numerically
+        (FFT, :data:`~.generators.PULSE_GRID` points per cycle), so
+        identified BLFs can be compared with them. ``phases`` must be None
+        and the ``harmonics`` effect cannot be used.
+    ``variation="tempo"``
+        The force's shape is fixed (``blf``, ``phases``; no coefficient
+        jitter, ``coef_variation`` unused) and the tempo wanders slowly, as
+        a person following music: ``f_b(t) = f_b (1 + fb_variation e(t))``,
+        ``e(t)`` a linear ramp of :data:`~.generators.TEMPO_RAMP` over the
+        record (up or down at random) plus a random Fourier series of
+        standard deviation 1 with periods of
+        :data:`~.generators.TEMPO_WANDER_PERIOD` s and longer; the phase
+        ``theta(t) = 2 pi int f_b(t) dt`` is exact and continuous.
+        ``fb_variation`` at most 0.1. Cycles, the start and the run-in are
+        as with ``"smooth"`` (``a_i``, ``b_i`` of every cycle are the fixed
+        ones).
 
     ``a0`` is the same at all times. The record starts at a random point of
     the first cycle without a start-up transient: with ``"jumps"`` in the
@@ -526,7 +594,10 @@ def simulate_bouncing(
     :data:`SMOOTH_RUN_IN_MAX`), in the periodic steady state of the
     averaged coefficients of the cycle there, so that the mismatch has
     decayed by ``t = 0``. Every registered effect works with both
-    variations (extra harmonics vary like the base ones).
+    variations (extra harmonics vary like the base ones). ``"pulses"``
+    and ``"tempo"`` start like ``"jumps"`` and ``"smooth"`` respectively,
+    ``"coefficients"`` from rest at ``t = 0``; every effect works with
+    them, except ``harmonics`` with ``"pulses"``.
 
     Parameters
     ----------
@@ -552,10 +623,14 @@ def simulate_bouncing(
     a0 : float
         Constant term of Eq. 4 (g).
     fb_variation : float
-        Relative standard deviation of the cycle frequency, 0-0.2.
+        Relative standard deviation of the cycle frequency, 0-0.2; with
+        ``"tempo"`` the scale of the ramp and the wander, 0-0.1.
     coef_variation : float
         Relative standard deviation of the harmonic amplitudes (and standard
-        deviation of the phase jitter, rad), 0-1.
+        deviation of the phase jitter, rad), 0-1; with ``"coefficients"`` of
+        each ``a_i`` and ``b_i``, with ``"pulses"`` of the pulse's width and
+        height (and its timing jitter, rad of the first harmonic); unused
+        with ``"tempo"``.
     noise : float
         GRF noise standard deviation as a fraction of body weight
         ``M_h g``; also the default floor-acceleration noise (fraction of
@@ -578,10 +653,14 @@ def simulate_bouncing(
         record; with ``"smooth"`` the knots take the place of the cycles in
         the fixed order of blocks, so effects still leave the other random
         numbers unchanged.
-    variation : {"jumps", "smooth"}
+    variation : {"jumps", "smooth", "coefficients", "pulses", "tempo"}
         Generator of the cycle-to-cycle variation (see above); the truth's
-        ``variations["generator"]`` records it (with ``"smooth"`` also
-        ``correlation_cycles`` and ``correlation_time_s``).
+        ``variations["generator"]`` records it with its settings (with
+        ``"smooth"`` also ``correlation_cycles`` and
+        ``correlation_time_s``; ``"coefficients"``: ``initial_state``;
+        ``"pulses"``: ``contact_ratio``, ``pulse_height_g``,
+        ``requested_blf``, ...; ``"tempo"``: ``ramp``, ``ramp_direction``,
+        ``wander_sd``, ``run_in_s``, ...).
 
     Returns
     -------
@@ -600,18 +679,25 @@ def simulate_bouncing(
     n_samples = int(np.floor(s.duration * s.fs + 1e-9)) + 1
     time = np.arange(n_samples) / s.fs
     # Fixed-size blocks in a fixed order (see the module docstring).
-    if s.variation == "jumps":
+    if s.variation != "smooth":
         shortest = 1.0 / (s.f_b * (1.0 + TRUNCATION_SD * s.fb_variation))
         longest = 1.0 / (s.f_b * (1.0 - TRUNCATION_SD * s.fb_variation))
         n_rows = int(np.ceil((s.duration + longest) / shortest)) + 2
     else:
         geometry = _smooth_geometry(s.duration, s.f_b, s.fb_variation)
         n_rows = geometry[1]
-    rng_blocks, grf_noise, floor_noise = _draw_blocks(rng, n_rows, s.blf.size, s.all_blf.size - s.blf.size,
-                                                      n_samples)
+    if s.variation in GENERATORS:  # the generators of .generators: their own blocks, then the noise
+        draw, make = GENERATORS[s.variation]
+        rng_blocks, grf_noise, floor_noise = draw(rng, s, n_rows, n_samples)
+    else:
+        rng_blocks, grf_noise, floor_noise = _draw_blocks(rng, n_rows, s.blf.size, s.all_blf.size - s.blf.size,
+                                                          n_samples)
     for effect in s.effects:  # drawn last, so that they leave every other random number unchanged
         effect.draw_simulation_inputs(rng, s.duration)
-    if s.variation == "jumps":
+    generator = None
+    if s.variation in GENERATORS:
+        cycles, states, generator = make(s, rng_blocks, time)
+    elif s.variation == "jumps":
         cycles, states = _jump_record(s, rng_blocks, time)
     else:
         # Drawn last: the run-in's length depends on the effects; the record's processes do not use them.
@@ -620,7 +706,8 @@ def simulate_bouncing(
                                TRUNCATION_SD)
         cycles, states = _smooth_record(s, rng_blocks, run_in_knots, geometry, time)
     record = _measured_record(s, states, grf_noise, floor_noise)
-    return SyntheticRecord(record=record, truth=_truth(s, seed_record, len(cycles)), states=states, cycles=cycles)
+    return SyntheticRecord(record=record, truth=_truth(s, seed_record, len(cycles), generator), states=states,
+                           cycles=cycles)
 
 
 # ---------------------------------------------------------------------------

@@ -452,7 +452,16 @@ def _cycle_states(system, cycles, time, state=None):
     forces = [_CycleForce(t_start[j], f_b[j], a0[j], a[j], b[j]) for j in range(len(cycles))]
     if state is None:
         state = _periodic_state(system, forces[0], 1.0 / f_b[0], t_start[0])
+    return _forces_states(system, forces, t_start, t_end, time, state)
 
+
+def _forces_states(system, forces, t_start, t_end, time, state):
+    """The states table under one force object per cycle, integrated cycle by cycle from ``state``.
+
+    ``forces[j]`` (anything with ``scalar(t)`` and ``__call__(t)``, in g)
+    acts from ``t_start[j]`` to ``t_end[j]``; the integration restarts at
+    every boundary, so the force may jump there.
+    """
     bounds = np.searchsorted(time, t_start, side="left")
     bounds = np.append(bounds, time.size)
     states = np.empty((system.n_state, time.size))

@@ -1,4 +1,4 @@
-"""Cycle-to-cycle variation of the biomechanical force: the two generators of :data:`VARIATIONS`.
+"""Cycle-to-cycle variation of the biomechanical force: the first two generators of :data:`VARIATIONS`.
 
 ``"jumps"``: every cycle its own frequency and harmonics, drawn as
 truncated normals (:func:`_draw_cycles`). ``"smooth"``: the frequency and
@@ -6,6 +6,8 @@ harmonics are smooth random processes of time (:class:`_SmoothForce`, made
 as :data:`SMOOTH_CORRELATION_CYCLES` describes), integrated through a run-in
 before the record. The random numbers come from the simulator
 (:func:`~smd_statespace.simulation.simulate_bouncing`) in its fixed order of blocks.
+The other three generators (``"coefficients"``, ``"pulses"``, ``"tempo"``)
+are in :mod:`.generators`.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ __all__ = ["TRUNCATION_SD", "VARIATIONS", "SMOOTH_CORRELATION_CYCLES", "SMOOTH_G
 TRUNCATION_SD = 3.0
 """Cycle-to-cycle variations are normal, truncated at this many standard deviations."""
 
-VARIATIONS = ("jumps", "smooth")
+VARIATIONS = ("jumps", "smooth", "coefficients", "pulses", "tempo")
 """Generators of the cycle-to-cycle force variation (``variation`` of :func:`simulate_bouncing`).
 
 ``"jumps"``
@@ -37,6 +39,25 @@ VARIATIONS = ("jumps", "smooth")
     ``eta_i(t)`` are smooth random processes of time with the same standard
     deviations, correlated over :data:`SMOOTH_CORRELATION_CYCLES` cycles: the
     force has no jump anywhere.
+``"coefficients"``
+    Each cycle ``j`` has its own frequency ``f_b (1 + eps_j)`` and every
+    Fourier coefficient is jittered on its own, ``a_ij = a_i (1 + c N)``,
+    ``b_ij = b_i (1 + c N)`` (``c = coef_variation``, independent truncated
+    normals); the person starts from rest at ``t = 0``, so the first cycles
+    carry the start-up transient.
+``"pulses"``
+    No Fourier series: one squared-sine pulse per cycle on a constant
+    baseline, mean force ``a0`` over every cycle, the pulse's width, height
+    and timing jittered per cycle (:data:`~.generators.PULSE_CONTACT_RATIO`).
+    The truth's ``blf`` and ``phases`` are the mean pulse's Fourier
+    coefficients; ``blf[0]`` sets the pulse height, the higher harmonics
+    follow from its shape.
+``"tempo"``
+    The fixed Fourier shape of ``blf`` and ``phases`` under a slowly wandering
+    tempo: ``f_b(t)`` ramps by :data:`~.generators.TEMPO_RAMP` ``fb_variation``
+    over the record plus a slow random wander of standard deviation
+    ``fb_variation`` (periods of :data:`~.generators.TEMPO_WANDER_PERIOD` s
+    and longer); no coefficient jitter.
 """
 
 SMOOTH_CORRELATION_CYCLES = 2.5
