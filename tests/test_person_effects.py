@@ -111,13 +111,13 @@ def params_of(model, **named):
 
 
 def relinearised_loglike(time, y, truth, beta, times=8):
-    """The record-level log-likelihood at ``beta`` after re-linearising about the smoothed path ``times`` times."""
-    from smd_statespace.person.extend import _smoothed_path
+    """The record-level log-likelihood at ``beta`` after re-linearising about the predicted path ``times`` times."""
+    from smd_statespace.person.extend import nominal_path
 
     model = cubic_model(time, y, nominal=np.zeros((time.size, 2)))
     params = params_of(model, f_h=truth["f_h"], xi_h=truth["xi_h"], beta_3=beta)
     for _ in range(times):
-        model = cubic_model(time, y, nominal=_smoothed_path(model, params))
+        model = cubic_model(time, y, nominal=nominal_path(model, params))
     return model.loglike(params)
 
 
@@ -160,7 +160,7 @@ def test_a_nonlinear_effect_at_zero_is_the_base_model(cubic_record):
 
 @pytest.mark.slow
 def test_the_linearised_likelihood_of_a_cubic_spring_matches_the_exact_one(cubic_record):
-    """Re-linearised about its own smoothed path, the likelihood of a deterministic record with a cubic spring
+    """Re-linearised about its own predicted path, the likelihood of a deterministic record with a cubic spring
     (stiffness 16 % higher at the 2 cm extremes) agrees with the exact nonlinear least-squares one, and both
     put beta_3 at the truth: the approximation costs far less than the effect is worth."""
     time, y, truth = cubic_record

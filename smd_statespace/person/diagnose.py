@@ -153,7 +153,7 @@ class PersonDiagnosis:
             approximate = list(table.index[table["likelihood"] == "approximate"])
             if approximate:
                 out.append(f"{', '.join(approximate)}: nonlinear, so its likelihood is approximate (linearised about "
-                           "the smoothed path until it settles)")
+                           "the one-step predicted path until it settles: an extended Kalman filter)")
         for name, why in self.failed.items():
             out.append(f"{name}: not fitted ({why})")
         if self.joint:

@@ -20,9 +20,10 @@ force per unit mass ``F`` (m/s^2):
   accelerometer, Section 6): more rows of ``x`` and of ``A``, exactly;
 - a nonlinear effect (a cubic spring, quadratic damping, a user's): ``A``,
   ``c``, ``h_x``, ``d`` are its first-order expansion about a *nominal path*
-  (the smoothed states of the previous fit), different at every sample; the
-  fit is repeated about the new smoothed path until it settles (an iterated
-  extended Kalman smoother), so the likelihood is approximate and says so.
+  (the one-step predicted states of the previous fit), different at every
+  sample; the fit is repeated about the new predicted path until it settles
+  (at the fixed point, an extended Kalman filter), so the likelihood is
+  approximate and says so.
 
 The effects' parameters (``beta_3``, ``f_f``, ...) are parameters of the
 likelihood search, with the bounds of their slots.

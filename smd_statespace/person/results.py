@@ -48,7 +48,26 @@ drift of that harmonic. On the smooth generator (docs/person-benchmark.md,
 seed 2024) 10 of 50 estimates ended within 5 % of ``f_b`` with a median error
 of 16 % (none of the true values was there; the other 40 records: 7 %); on
 records whose force jumps per cycle this did not happen (1 of 50, error 1 %).
+
+With any variation model, a lightly damped ``f_h`` there (``xi_h`` below
+:data:`XI_H_RESONANCE_MIMIC`) is not determined either: an undamped resonance at
+``f_b`` then stands in for the force's first harmonic (``BLF1`` near 0). On a
+record from a generator outside this project (truth ``f_h`` 2.91 Hz = 1.19
+``f_b``, ``xi_h`` 0.44) both variation models ended at ``f_h`` 2.44-2.52 Hz,
+``xi_h`` 0.001-0.04, ``BLF1`` 0.002-0.007 g against 0.17 g
+(``../shared/findings/person-unseen-records.md``).
 """
+
+VARIATION_DISAGREEMENT = 0.10
+"""Relative difference of ``f_h`` between the variation models (at the final cycle starts) that is reported."""
+
+VARIATION_AIC_CLOSE = 10.0
+"""AIC difference below which a variation model is not ruled out by the record (Burnham & Anderson: above 10,
+essentially no support)."""
+
+XI_H_RESONANCE_MIMIC = 0.08
+"""Below this damping ratio an ``f_h`` within :data:`F_B_COINCIDENCE` of ``f_b`` is not determined, whatever
+the variation model (bouncing people show 0.1-0.6, the article's Table 2)."""
 
 
 @dataclass
@@ -159,16 +178,64 @@ class PersonResult:
                             index=self.model.coefficient_names)
 
     def template_blf(self) -> pd.DataFrame:
-        """Load factors ``BLF_i`` of the template (Eq. 5), sds by the delta method (g)."""
+        """Load factors ``BLF_i`` of the template (Eq. 5) with sds that include the person's uncertainty (g).
+
+        Columns ``blf``, ``sd``, ``sd_given_person`` and ``spread`` (the cycle-to-cycle sd).
+        ``sd_given_person`` is the delta method on the template's own (generalised least-squares)
+        covariance at the estimated ``f_h``, ``xi_h`` and variances: it says how well the force
+        is known *if* the person is right, a few thousandths of g on a 30 s record. But the force
+        is read through Eq. 2, so a wrong ``f_h`` moves the BLFs by far more: ``sd`` adds
+        ``J C J'`` in quadrature, ``J`` the derivatives of the BLFs with respect to ``f_h``,
+        ``xi_h`` and the effects' parameters (central differences of the concentrated template,
+        :attr:`BLF_STEP` sds apart) and ``C`` their covariance as the intervals use it
+        (calibrated, with the model-error floor of ``f_h`` and ``xi_h``). The variances are left
+        out: they weight the template's least squares but hardly move it.
+        """
+        return self._template_blf
+
+    BLF_STEP = 0.1
+    """Step of the central differences of :meth:`template_blf`, in standard errors of each parameter."""
+
+    def _blf_values(self, params) -> np.ndarray:
+        delta = self.model.filter(params)["delta"]
+        ia = self.model.n_dynamic + 2 * np.arange(1, self.model.n_harmonics + 1) - 1
+        return np.hypot(delta[ia], delta[ia + 1])
+
+    def _parameter_cov_for_blf(self) -> np.ndarray:
+        """:attr:`cov` with the model-error floor of ``f_h`` and ``xi_h`` added, as the intervals have it."""
+        from .fit import MODEL_ERROR_FLOOR
+
+        cov = np.array(self.cov, dtype=float)
+        if self.interval_method.startswith("calibrated"):
+            for which, name in enumerate(("f_h", "xi_h")):
+                floor = MODEL_ERROR_FLOOR[name] * (self.f_h if name == "f_h" else 1.0)
+                cov[which, which] += floor**2
+        return cov
+
+    @cached_property
+    def _template_blf(self) -> pd.DataFrame:
         delta, cov = self._delta()
-        rows = []
+        values = self._blf_values(self.params)
+        given = []
         for i in range(1, self.model.n_harmonics + 1):
             ia, ib = self.model.n_dynamic + 2 * i - 1, self.model.n_dynamic + 2 * i
-            a, b = delta[ia], delta[ib]
-            value = float(np.hypot(a, b))
-            grad = np.array([a, b]) / max(value, 1e-12)
-            sd = float(np.sqrt(grad @ cov[np.ix_([ia, ib], [ia, ib])] @ grad))
-            rows.append({"harmonic": i, "blf": value, "sd": sd, "spread": self.spread()[i]})
+            grad = np.array([delta[ia], delta[ib]]) / max(values[i - 1], 1e-12)
+            given.append(float(np.sqrt(grad @ cov[np.ix_([ia, ib], [ia, ib])] @ grad)))
+        param_cov = self._parameter_cov_for_blf()
+        se = np.sqrt(np.diag(param_cov))
+        physical = [0, 1] + [self.model.param_names.index(name) for name in self.model.effect_parameters]
+        index = [k for k in physical if self.free[k] and np.isfinite(se[k]) and se[k] > 0]
+        jac = np.zeros((values.size, len(index)))
+        for column, k in enumerate(index):
+            step = np.zeros(self.params.size)
+            step[k] = self.BLF_STEP * se[k]
+            jac[:, column] = (self._blf_values(self.params + step) - self._blf_values(self.params - step)) / (
+                2.0 * step[k])
+        person = np.einsum("ij,jk,ik->i", jac, param_cov[np.ix_(index, index)], jac) if index else np.zeros_like(values)
+        spread = self.spread()
+        rows = [{"harmonic": i, "blf": float(values[i - 1]),
+                 "sd": float(np.sqrt(given[i - 1] ** 2 + max(person[i - 1], 0.0))),
+                 "sd_given_person": given[i - 1], "spread": spread[i]} for i in range(1, values.size + 1)]
         return pd.DataFrame(rows).set_index("harmonic")
 
     def spread(self, kind="d") -> np.ndarray:
@@ -255,9 +322,12 @@ class PersonResult:
 
     @property
     def at_bouncing_frequency(self) -> bool:
-        """True when a smooth-variation fit put ``f_h`` within :data:`F_B_COINCIDENCE` of the median ``f_b``."""
+        """True when the fit put ``f_h`` within :data:`F_B_COINCIDENCE` of the median ``f_b`` where the record
+        cannot tell a resonance from the force: with the smooth variation, or with ``xi_h`` below
+        :data:`XI_H_RESONANCE_MIMIC` (any variation)."""
         f_b = float(np.median(self.model.timing.f_b))
-        return self.model.variation == "smooth" and abs(self.f_h / f_b - 1.0) < F_B_COINCIDENCE
+        near = abs(self.f_h / f_b - 1.0) < F_B_COINCIDENCE
+        return near and (self.model.variation == "smooth" or self.xi_h < XI_H_RESONANCE_MIMIC)
 
     def derived(self) -> dict:
         """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds."""
@@ -353,6 +423,11 @@ class PersonResult:
             if self.model.at_bound(self.params, which):
                 out.append(f"{name} = {value:.3g} sits on its search bound ({low:g}-{high:g}): not an estimate; "
                            "the model may not fit this record (run diagnose)")
+            elif name == "f_h" and self.at_bouncing_frequency and self.xi_h < XI_H_RESONANCE_MIMIC:
+                out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of the bouncing frequency with "
+                           f"xi_h = {self.xi_h:.2g}: an undamped resonance at f_b stands in for the force's first "
+                           "harmonic (BLF1 near 0), so f_h, xi_h and BLF1 are not determined; bouncing people show "
+                           "xi_h 0.1-0.6")
             elif name == "f_h" and self.at_bouncing_frequency:
                 out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of the bouncing frequency: with a "
                            "smoothly drifting force, a person resonating at f_b and the drift look alike, so f_h is "
@@ -362,6 +437,9 @@ class PersonResult:
                            f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
         if self.xi_h > 1.0:
             out.append(f"xi_h = {self.xi_h:.2f} > 1 (over-damped): outside what bouncing people show (0.1-0.6)")
+        disagreement = self.variation_disagreement()
+        if disagreement:
+            out.append(disagreement)
         for name, row in self.effect_estimates().iterrows():
             if row["on_bound"]:
                 out.append(f"{name} = {row['value']:.4g} {row['unit']} sits on its search bound ({row['range_low']:g}-"
@@ -376,6 +454,24 @@ class PersonResult:
                        "misses something, and f_h, xi_h and their intervals may be biased; run "
                        f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g}`")
         return out
+
+    def variation_disagreement(self) -> str:
+        """In words, when variation models fitted at the final cycle starts that the record cannot rule out (AIC
+        within :data:`VARIATION_AIC_CLOSE` of the best) put ``f_h`` more than :data:`VARIATION_DISAGREEMENT` apart
+        (empty otherwise): the answer then depends on how the force is assumed to vary."""
+        rows = [row for row in self.comparison if row.get("timing") == "re-placed" and row["converged"]
+                and not row["on_bound"]]
+        best = min((row["aic"] for row in rows), default=0.0)
+        rows = [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]  # those the record cannot rule out
+        if len(rows) < 2:
+            return ""
+        values = [row["f_h"] for row in rows]
+        if max(values) <= (1.0 + VARIATION_DISAGREEMENT) * min(values):
+            return ""
+        parts = ", ".join(f"{row['variation']} {row['f_h']:.3g} Hz (AIC {row['aic'] - best:+.1f})" for row in rows)
+        return (f"the variation models disagree on f_h: {parts}; f_h depends on how the force is assumed to vary "
+                f"between cycles, which the record does not settle: read the interval with care, or fix the model "
+                f"with --variation")
 
     def to_dict(self) -> dict:
         """Flat JSON-able summary (the content of ``person.json``)."""
@@ -392,6 +488,10 @@ class PersonResult:
         for i, row in blf.iterrows():
             out[f"blf_{i}"] = float(row["blf"])
             out[f"blf_{i}_sd"] = float(row["sd"])
+            out[f"blf_{i}_low"], out[f"blf_{i}_high"] = (float(v) for v in stats.norm.interval(
+                self.level, row["blf"], max(row["sd"], 1e-300)))
+            out[f"blf_{i}_low"] = max(out[f"blf_{i}_low"], 0.0)
+            out[f"blf_{i}_sd_given_person"] = float(row["sd_given_person"])
             out[f"blf_{i}_spread"] = float(row["spread"])
         walk = self.spread("e")
         for i in range(1, self.model.n_harmonics + 1):
