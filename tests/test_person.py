@@ -342,3 +342,28 @@ def test_calibrated_intervals_add_the_model_error_floor_and_the_sd_stays_the_rec
         assert high == pytest.approx(long_fit.params[which] + half)
         assert low == pytest.approx(max(long_fit.params[which] - half, long_fit.model.bounds[which][0]))
         assert long_fit.determined(name)  # the floor widens the interval, not what the record determines
+
+
+def test_load_factor_sds_carry_the_persons_uncertainty_through_eq2(long_fit):
+    """The force is read through Eq. 2, BLF_i = |acceleration harmonic i| / |H(i f_b)|: the BLFs' sds include
+    dBLF_i/df_h times the sd of f_h, which matches the derivative of |H| (a uncertainty only in f_h)."""
+    import dataclasses
+
+    from smd_statespace.model import acceleration_frf
+
+    result = long_fit
+    blf = result.template_blf()
+    assert (blf["sd"] >= blf["sd_given_person"]).all()
+    sd_f_h = 0.05
+    only_f_h = np.zeros_like(result.cov)
+    only_f_h[0, 0] = sd_f_h**2
+    probe = dataclasses.replace(result, cov=only_f_h, interval_method="wald")  # no model-error floor
+    person_part = np.sqrt(probe.template_blf()["sd"] ** 2 - probe.template_blf()["sd_given_person"] ** 2)
+    f_b, step = float(np.median(result.model.timing.f_b)), 1e-4
+    for i in (1, 2):
+        def blf_at(f_h):
+            return blf.loc[i, "blf"] * abs(acceleration_frf(i * f_b, result.f_h, result.xi_h)) / abs(
+                acceleration_frf(i * f_b, f_h, result.xi_h))
+        slope = (blf_at(result.f_h + step) - blf_at(result.f_h - step)) / (2 * step)
+        assert person_part[i] == pytest.approx(abs(slope) * sd_f_h, rel=0.15)
+    assert result.to_dict()["blf_1_low"] < blf.loc[1, "blf"] < result.to_dict()["blf_1_high"]

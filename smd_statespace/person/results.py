@@ -312,10 +312,12 @@ class PersonResult:
 
     def determined(self, name) -> bool:
         """True when the standard error of ``f_h`` or ``xi_h`` is below :data:`DETERMINED_FRACTION` of its yardstick,
-        the estimate is not at a search bound and (``f_h``, smooth variation) not at the bouncing frequency
-        (:data:`F_B_COINCIDENCE`)."""
+        the estimate is not at a search bound, ``xi_h`` is at most 1 (an over-damped fit has no resonance to
+        determine) and ``f_h`` is not where a resonance mimics the force (:attr:`at_bouncing_frequency`)."""
         which = {"f_h": 0, "xi_h": 1}[name]
         if name == "f_h" and self.at_bouncing_frequency:
+            return False
+        if self.xi_h > 1.0:  # over-damped: no resonance to determine, outside what bouncing people show
             return False
         return bool(np.isfinite(self.se[which]) and self.se[which] < DETERMINED_FRACTION * PRIOR_SD[name]
                     and not self.model.at_bound(self.params, which))
