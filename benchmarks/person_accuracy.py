@@ -581,7 +581,7 @@ TIMING_COLOURS = {"true": "tab:green", "model": "tab:purple", "template": "tab:b
 
 def accuracy_figure(frame: pd.DataFrame, generators, path: Path, intervals: str):
     """Estimated against true f_h and xi_h with the 90 % intervals as error bars, one colour per generator."""
-    fig = Figure(figsize=(11, 5.2), layout="constrained")
+    fig = Figure(figsize=(11, 6.0), layout="constrained")
     axes = fig.subplots(1, 2)
     offsets = {g: (i - (len(generators) - 1) / 2) for i, g in enumerate(generators)}
     truth_range = {name: (float(frame[name].min()), float(frame[name].max())) for name in ("f_h", "xi_h")}
@@ -598,9 +598,9 @@ def accuracy_figure(frame: pd.DataFrame, generators, path: Path, intervals: str)
             covered = ok[f"{name}_covered"].to_numpy()
             ax.errorbar(x, est, yerr=yerr, fmt="none", ecolor=COLOURS.get(generator, "k"), alpha=0.45, lw=1.0)
             ax.plot(x[covered], est[covered], "o", ms=4, color=COLOURS.get(generator, "k"),
-                    label=f"{generator}: {covered.mean() * 100:.0f} % of intervals cover the truth")
-            ax.plot(x[~covered], est[~covered], "o", ms=5, mfc="white", mec=COLOURS.get(generator, "k"),
-                    label=f"{generator}: interval misses the truth")
+                    label=f"{generator}: {covered.mean() * 100:.0f} % cover")
+            ax.plot(x[~covered], est[~covered], "o", ms=5, mfc="white", mec=COLOURS.get(generator, "k"))
+        ax.plot([], [], "o", ms=5, mfc="white", mec="k", label="open: interval misses the truth")
         lims = (spread[0] - 0.08 * width, spread[1] + 0.08 * width)
         ax.plot(lims, lims, "k-", lw=0.8)
         if name == "f_h":
@@ -624,7 +624,7 @@ def accuracy_figure(frame: pd.DataFrame, generators, path: Path, intervals: str)
         ax.set_title(f"{name}: estimate and {LEVEL:.0%} {intervals} interval\n(timing={DEFAULT_TIMING}; "
                      "bars cut at the frame)", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper left")
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)  # below: off the points
     fig.suptitle(f"Record-level identification on simulated {DURATION:g} s records at {FS:g} Hz "
                  f"(f_b {RANGES['f_b'][0]}-{RANGES['f_b'][1]} Hz, noise {NOISE:.0%} BW)")
     fig.savefig(path, dpi=110)
@@ -861,7 +861,9 @@ def main(argv=None):
         frame.to_csv(args.csv, index=False)
     figure_dir = args.out.parent / "figures"
     figure_dir.mkdir(parents=True, exist_ok=True)
-    figures = {"figure": figure_dir / "person_accuracy.png", "timing": figure_dir / "person_accuracy_timing.png"}
+    # the documented page keeps its figures' names; any other page gets its own (named after the page)
+    stem = "person_accuracy" if args.out.name == "person-benchmark.md" else f"{args.out.stem}_accuracy"
+    figures = {"figure": figure_dir / f"{stem}.png", "timing": figure_dir / f"{stem}_timing.png"}
     accuracy_figure(frame, generators, figures["figure"], args.intervals)
     if not timing_figure(frame, generators, figures["timing"]):
         figures["timing"] = None
