@@ -325,3 +325,13 @@ def test_an_effect_added_on_top_of_another_is_tested_against_the_person_with_the
     assert diagnosis.missing == ["harmonics"]
     assert "--effect harmonics:count=1" in diagnosis.command("rec.csv", 70)
     assert diagnosis.command("rec.csv", 70).count("--effect") == 2
+
+
+@pytest.mark.parametrize("options, message", [
+    (["--candidate", "floor_modes"], "unknown effect 'floor_modes'"),
+    (["--effect", "harmonics", "--candidate", "harmonics:count=1"], "also given as --effect"),
+    (["--estimator", "ekf", "--candidate", "cubic_stiffness:beta=3"], "beta")])
+def test_diagnose_bad_candidates_are_one_line_errors(floor_record, capsys, options, message):
+    """--effect puts an effect in the model, --candidate names one to try; a bad one is one line, exit 2."""
+    assert main(["diagnose", str(floor_record), "--mass", "70", "--quiet", *options]) == 2
+    assert message in error_line(capsys)
