@@ -162,6 +162,10 @@ def test_result_reports_the_person_with_intervals_and_tests(long_sim, long_fit):
     assert d["n_cycles"] >= 80
     assert d["noise_bw"] >= 0.0019  # estimated, not assumed; template timing adds its misfit (docs/person-benchmark.md)
     assert "f_h" in result.summary().splitlines()[1]
+    # the printout's interval line is short (the interval in Hz); how it was made is one option away
+    line = result.summary().splitlines()[1]
+    assert f"90 % interval {d['f_h_low']:.2f}-{d['f_h_high']:.2f} Hz" in line and "calibrated" not in line
+    assert result.interval_method in result.summary(verbose=True) and d["interval_method"] == result.interval_method
 
 
 def test_too_short_a_record_is_refused_in_one_line():

@@ -1,4 +1,4 @@
-"""``smd-statespace identify``: every cycle of a record, one estimator, the article's repeated passes."""
+"""``smd-statespace identify``: the person from a whole record (default), or every cycle with a per-cycle estimator."""
 
 from __future__ import annotations
 
@@ -24,12 +24,17 @@ def add_identify(subparsers):
     """Declare ``smd-statespace identify``."""
     parser = subparsers.add_parser(
         "identify",
-        help="identify the SMD model cycle by cycle",
-        description=("Split the record into bouncing cycles (GRF peak to peak) and identify f_h, xi_h and the "
-                     "force coefficients of every cycle with repeated passes (Wang et al. 2019, Section 3.2); "
-                     "write DIR/results.csv, DIR/run.json and figures. Given a folder, a glob or --manifest, "
-                     "identify every record, writing each finished one to DIR/parts/ (see --resume); exit "
-                     "status 1 when some records failed (each is named on stderr), 0 when none did."),
+        help="identify the person (f_h, xi_h, the force) from a record; --estimator for the per-cycle method",
+        description=("One record: identify the person from the whole record (the record-level model, the default: "
+                     "one f_h and xi_h with 90 % intervals, the force's load factors, noise levels by maximum "
+                     "likelihood; --effect adds physical effects to it); write DIR/person.json, results.csv and "
+                     "figures. With a per-cycle --estimator (pf, rbpf, ukf, ekf, grid), the article's method: split "
+                     "the record into bouncing cycles (GRF peak to peak) and identify f_h, xi_h and the force "
+                     "coefficients of every cycle with repeated passes (Wang et al. 2019, Section 3.2); write "
+                     "DIR/results.csv, DIR/run.json and figures. Given a folder, a glob or --manifest, identify "
+                     "every record (--estimator record: one person each), writing each finished one to DIR/parts/ "
+                     "(see --resume); exit status 1 when some records failed (each is named on stderr), 0 when "
+                     "none did."),
     )
     parser.add_argument("record", metavar="REC", nargs="?",
                         help="a record CSV (time,force[,floor_acc]), a folder of them, or a quoted glob "
@@ -64,6 +69,8 @@ def add_identify(subparsers):
     parser.add_argument("--cycle", type=int, metavar="K",
                         help="cycle whose convergence over passes is drawn (default: the middle valid cycle)")
     parser.add_argument("--truth", metavar="JSON", help="truth file of a synthetic record, drawn in the figures")
+    parser.add_argument("--verbose", action="store_true",
+                        help="record estimator: also print how the intervals were made (always in person.json)")
     return parser
 
 
@@ -234,7 +241,7 @@ def run_person(args) -> int:
                              progress=not args.quiet, effects=effects)
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
-    print(result.summary())
+    print(result.summary(verbose=args.verbose))
     options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
                "harmonics": args.harmonics, "rate": rate_of(args), "effects": [e.spec for e in effects]}
     written = write_person(directory, result, options, truth=truth)

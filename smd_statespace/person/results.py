@@ -550,25 +550,31 @@ class PersonResult:
         row["model_adequate"] = bool(row["ljung_box_p"] >= WHITENESS_ALPHA)
         return row
 
-    def summary(self) -> str:
-        """The person in a few lines: the answer first, then noise, force, tests, warnings."""
+    def summary(self, verbose=False) -> str:
+        """The person in a few lines: the answer first, then noise, force, tests, warnings.
+
+        ``verbose`` adds how the intervals were made (also in ``person.json``, ``interval_method``).
+        """
         d = self.to_dict()
         pct = int(round(100 * self.level))
         lines = [
             f"person from {d['n_cycles']} cycles (f_b {d['f_b']:.2f} Hz, {self.model.variation} variation, "
             f"{self.model.timing.method} timing):",
-            f"  f_h  = {d['f_h']:.3f} Hz  (sd {d['f_h_sd']:.3f}; {pct} % {self.interval_method} interval "
-            f"{d['f_h_low']:.3f}-{d['f_h_high']:.3f}){'' if d['f_h_determined'] else '  NOT DETERMINED'}",
-            f"  xi_h = {d['xi_h']:.3f}     (sd {d['xi_h_sd']:.3f}; {pct} % {self.interval_method} interval "
-            f"{d['xi_h_low']:.3f}-{d['xi_h_high']:.3f}){'' if d['xi_h_determined'] else '  NOT DETERMINED'}",
+            f"  f_h  = {d['f_h']:.3f} Hz  (sd {d['f_h_sd']:.3f}; {pct} % interval {d['f_h_low']:.2f}-{d['f_h_high']:.2f} "
+            f"Hz){'' if d['f_h_determined'] else '  NOT DETERMINED'}",
+            f"  xi_h = {d['xi_h']:.3f}     (sd {d['xi_h_sd']:.3f}; {pct} % interval {d['xi_h_low']:.2f}-"
+            f"{d['xi_h_high']:.2f}){'' if d['xi_h_determined'] else '  NOT DETERMINED'}",
             f"  K_h  = {d['k_h']:.0f} N/m (sd {d['k_h_sd']:.0f}), C_h = {d['c_h']:.0f} N s/m (sd {d['c_h_sd']:.0f})",
-            "  BLF (g): " + ", ".join(f"{i}: {d[f'blf_{i}']:.3f} +- {d[f'blf_{i}_sd']:.3f} (cycle spread "
+            "  BLF (g): " + ", ".join(f"{i}: {d[f'blf_{i}']:.3f} ± {d[f'blf_{i}_sd']:.3f} (cycle spread "
                                       f"{d[f'blf_{i}_spread']:.3f})" for i in range(1, self.model.n_harmonics + 1)),
             f"  noise sd {d['noise_sd']:.3f} m/s^2 ({100 * d['noise_bw']:.2f} % BW); log-likelihood "
             f"{d['log_likelihood']:.1f}",
             f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
             f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
         ]
+        if verbose:
+            lines.insert(3, f"  intervals: {self.interval_method}; BLF sds with the person's uncertainty "
+                            "(sd_given_person in person.json)")
         if self.effects:
             lines[0] = lines[0][:-1] + f" with {', '.join(e.spec for e in self.effects)}:"
             for name, row in self.effect_estimates().iterrows():
