@@ -93,6 +93,10 @@ def test_demo_reports_the_sample_and_writes_the_figure(tmp_path, capsys):
     assert f"median {f_b:.3f} Hz" in text
     assert ", ".join(smd_statespace.SMDModel().state_names[:4]) in text.replace(" |", ",")
     assert "identify" in text
+    # the answer first: the person from the whole record, against the sample's truth, before the per-cycle method
+    person = json.loads((tmp_path / "fig" / "person" / "person.json").read_text())
+    assert f"f_h          {person['f_h']:.3f} Hz, 90 % interval {person['f_h_low']:.2f}-{person['f_h_high']:.2f} Hz" in text
+    assert text.index("The person, from the whole record") < text.index("Per cycle, the article's method")
     identified = pd.read_csv(tmp_path / "fig" / "results.csv")
     assert f"{int((identified.status == 'ok').sum())} cycles identified" in text
     assert (tmp_path / "fig" / "parameters.png").exists() and (tmp_path / "fig" / "convergence.png").exists()
