@@ -375,7 +375,10 @@ def concentrate(S, s, ee, f, n_obs):
     delta = S_inv @ s
     rss = max(float(ee - s @ delta), 1e-300)
     rank = int(keep.sum())
-    sum_log_f = float(np.sum(np.log(f)))
+    if np.all(f > 0.0) and np.all(np.isfinite(f)):
+        sum_log_f = float(np.sum(np.log(f)))
+    else:  # the pass lost the covariance's positivity (parameters far out, an unstable linearisation): no likelihood
+        sum_log_f = math.inf
     sigma2 = rss / n_obs
     loglike = -0.5 * (n_obs * (math.log(2.0 * math.pi * sigma2) + 1.0) + sum_log_f)
     dof = n_obs - rank
