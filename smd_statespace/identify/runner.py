@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
+from ..progress import tqdm
 
 from ..errors import OptionError
 from ..estimators import ESTIMATORS, EstimatorFailure, FilterResult, cycle_data, get_estimator

@@ -215,7 +215,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     -------
     PersonDiagnosis
     """
-    from tqdm.auto import tqdm
+    from ..progress import tqdm
 
     present = {effect.name for effect in result.effects}
     if candidates is None:

@@ -37,7 +37,7 @@ import itertools
 from dataclasses import replace
 
 import numpy as np
-from tqdm.auto import tqdm
+from ..progress import tqdm
 
 from ..errors import OptionError
 from ..model import SMDModel

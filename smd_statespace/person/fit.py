@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 from scipy import optimize, stats
-from tqdm.auto import tqdm
+from ..progress import tqdm
 
 from ..diagnostics.applicability import check_bouncing
 from ..errors import CycleError, SMDInputError
