@@ -7,6 +7,7 @@ executed, ``!smd-statespace ...`` lines through the command line's entry point (
 required). The pages' own examples are therefore run here, not again by ``test_docs.py``.
 """
 
+import ast
 import importlib.util
 import json
 import os
@@ -64,7 +65,12 @@ def run_cells(path: Path):
             continue
         source = "".join(cell["source"])
         where = f"{path.name}, cell {number}"
-        if source.startswith("!"):
+        if source.startswith("from IPython.display import Image, display"):
+            # a kernel shows the figures inline; here (no IPython needed) each must have been written as a PNG
+            shown = ast.literal_eval(source.split("for figure in ", 1)[1].split(":", 1)[0])
+            for figure in shown:
+                assert Path(figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", f"{where}: {figure} not written"
+        elif source.startswith("!"):
             for line in source.splitlines():
                 words = shlex.split(line[1:])
                 assert words[0] == "smd-statespace", f"{where}: only smd-statespace commands are run"

@@ -3,7 +3,8 @@
 Each ``docs/tutorial-*.md`` becomes ``docs/notebooks/tutorial-*.ipynb`` through jupytext
 (its Markdown format: ```` ```python ```` blocks are code cells, the prose Markdown cells), and
 every ```` ```console ```` block becomes a code cell of ``!smd-statespace ...`` shell lines (the
-shown output lines are left out: the notebook prints its own). The Markdown page stays the
+shown output lines are left out: the notebook prints its own). A code cell that writes figures
+(``"name.png"`` literals) is followed by one that shows them inline. The Markdown page stays the
 source; ``tests/test_notebooks.py`` fails when a notebook is not what this script makes of
 its page, and runs every notebook's cells.
 
@@ -28,6 +29,9 @@ NOTEBOOKS = DOCS / "notebooks"
 
 _CONSOLE = re.compile(r"^```console\n(.*?)^```[ \t]*\n?", flags=re.S | re.M)
 
+_PNG = re.compile(r"""["']([\w./-]+\.png)["']""")
+"""A figure file a code cell writes (a ``.png`` string literal): shown inline in the cell after it."""
+
 
 def tutorials(docs: Path = DOCS) -> list[Path]:
     """The tutorial pages that have notebooks, in name order."""
@@ -44,6 +48,10 @@ def notebook(page: Path):
     for cell in source.cells:
         if cell.cell_type != "markdown":
             cells.append(new_code_cell(cell.source))
+            figures = list(dict.fromkeys(_PNG.findall(cell.source)))
+            if figures:  # the page's code writes them to files; the notebook also shows them, inline
+                cells.append(new_code_cell("from IPython.display import Image, display\n\n"
+                                           f"for figure in {figures!r}:\n    display(Image(figure))"))
             continue
         pieces = _CONSOLE.split(cell.source)
         for k, piece in enumerate(pieces):
