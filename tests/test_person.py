@@ -134,11 +134,12 @@ def test_smoother_recovers_every_cycles_load_factors(long_sim):
 
 @pytest.mark.parametrize("variation, f_h_over_f_b, xi_h, determined", [
     ("smooth", 1.02, 0.25, False), ("smooth", 1.3, 0.25, True), ("independent", 1.02, 0.25, True),
-    ("independent", 1.02, 0.01, False), ("independent", 1.3, 0.01, True)])
+    ("independent", 1.02, 0.01, False), ("independent", 1.3, 0.01, True), ("independent", 1.96, 0.02, False),
+    ("independent", 1.96, 0.25, True)])
 def test_a_fit_at_the_bouncing_frequency_that_mimics_the_force_does_not_determine_f_h(long_sim, variation,
                                                                                       f_h_over_f_b, xi_h, determined):
     """A resonance at f_b imitates a smoothly drifting first harmonic, and an undamped one the first harmonic
-    itself: such an f_h is not presented as determined."""
+    itself (or any other harmonic i f_b): such an f_h is not presented as determined."""
     sim = long_sim
     y = acceleration(sim)
     model = RecordModel(sim.record.time, y, true_timing(sim), variation=variation)

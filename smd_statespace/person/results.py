@@ -49,9 +49,9 @@ seed 2024) 10 of 50 estimates ended within 5 % of ``f_b`` with a median error
 of 16 % (none of the true values was there; the other 40 records: 7 %); on
 records whose force jumps per cycle this did not happen (1 of 50, error 1 %).
 
-With any variation model, a lightly damped ``f_h`` there (``xi_h`` below
-:data:`XI_H_RESONANCE_MIMIC`) is not determined either: an undamped resonance at
-``f_b`` then stands in for the force's first harmonic (``BLF1`` near 0). On a
+With any variation model, a lightly damped ``f_h`` there or at a multiple ``i f_b`` (``xi_h``
+below :data:`XI_H_RESONANCE_MIMIC`) is not determined either: an undamped resonance then
+stands in for the force's harmonic ``i`` (its BLF near 0). On a
 record from a generator outside this project (truth ``f_h`` 2.91 Hz = 1.19
 ``f_b``, ``xi_h`` 0.44) both variation models ended at ``f_h`` 2.44-2.52 Hz,
 ``xi_h`` 0.001-0.04, ``BLF1`` 0.002-0.007 g against 0.17 g
@@ -323,13 +323,29 @@ class PersonResult:
                     and not self.model.at_bound(self.params, which))
 
     @property
+    def mimicked_harmonic(self) -> int:
+        """The force harmonic ``i`` a lightly damped resonance stands in for, 0 when none.
+
+        ``f_h`` within :data:`F_B_COINCIDENCE` of ``i f_b`` (``i`` = 1 ... n) with ``xi_h`` below
+        :data:`XI_H_RESONANCE_MIMIC`: an undamped resonance there replaces the force's ``i``-th
+        harmonic (its template BLF near 0). On a held-out pulse-train record the fit ended at
+        ``f_h`` 4.39 Hz = 1.92 ``f_b``, ``xi_h`` 0.028, template BLF2 0.009 g against 0.16 g
+        (truth ``f_h`` 3.58 Hz, ``xi_h`` 0.26).
+        """
+        if self.xi_h >= XI_H_RESONANCE_MIMIC:
+            return 0
+        ratio = self.f_h / float(np.median(self.model.timing.f_b))
+        order = int(round(ratio))
+        return order if 1 <= order <= self.model.n_harmonics and abs(ratio / order - 1.0) < F_B_COINCIDENCE else 0
+
+    @property
     def at_bouncing_frequency(self) -> bool:
-        """True when the fit put ``f_h`` within :data:`F_B_COINCIDENCE` of the median ``f_b`` where the record
-        cannot tell a resonance from the force: with the smooth variation, or with ``xi_h`` below
-        :data:`XI_H_RESONANCE_MIMIC` (any variation)."""
+        """True when the fit put ``f_h`` where the record cannot tell a resonance from the force: within
+        :data:`F_B_COINCIDENCE` of the median ``f_b`` with the smooth variation, or at any harmonic
+        ``i f_b`` with ``xi_h`` below :data:`XI_H_RESONANCE_MIMIC` (:attr:`mimicked_harmonic`)."""
         f_b = float(np.median(self.model.timing.f_b))
         near = abs(self.f_h / f_b - 1.0) < F_B_COINCIDENCE
-        return near and (self.model.variation == "smooth" or self.xi_h < XI_H_RESONANCE_MIMIC)
+        return (near and self.model.variation == "smooth") or self.mimicked_harmonic > 0
 
     def derived(self) -> dict:
         """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds."""
@@ -425,10 +441,12 @@ class PersonResult:
             if self.model.at_bound(self.params, which):
                 out.append(f"{name} = {value:.3g} sits on its search bound ({low:g}-{high:g}): not an estimate; "
                            "the model may not fit this record (run diagnose)")
-            elif name == "f_h" and self.at_bouncing_frequency and self.xi_h < XI_H_RESONANCE_MIMIC:
-                out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of the bouncing frequency with "
-                           f"xi_h = {self.xi_h:.2g}: an undamped resonance at f_b stands in for the force's first "
-                           "harmonic (BLF1 near 0), so f_h, xi_h and BLF1 are not determined; bouncing people show "
+            elif name == "f_h" and self.mimicked_harmonic:
+                i = self.mimicked_harmonic
+                where = "the bouncing frequency" if i == 1 else f"{i} times the bouncing frequency"
+                out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of {where} with xi_h = "
+                           f"{self.xi_h:.2g}: an undamped resonance there stands in for the force's harmonic {i} "
+                           f"(BLF{i} near 0), so f_h, xi_h and BLF{i} are not determined; bouncing people show "
                            "xi_h 0.1-0.6")
             elif name == "f_h" and self.at_bouncing_frequency:
                 out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of the bouncing frequency: with a "
