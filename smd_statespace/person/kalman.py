@@ -366,6 +366,11 @@ def concentrate(S, s, ee, f, n_obs):
         their maximum), ``loglike_diffuse`` (de Jong's diffuse likelihood with
         the scale at its own maximum) and ``rank`` (numerical rank of ``S``).
     """
+    if not (np.all(np.isfinite(S)) and np.all(np.isfinite(s)) and np.isfinite(ee)):
+        # the pass broke down (parameters far out, an unstable linearisation): no likelihood, nothing estimated
+        q = s.size
+        return {"delta": np.full(q, np.nan), "delta_cov_unscaled": np.full((q, q), np.nan), "sigma2": np.nan,
+                "rss": np.nan, "loglike": -math.inf, "loglike_diffuse": -math.inf, "rank": 0}
     scale = np.sqrt(np.maximum(np.diag(S), 1e-300))
     Sn = S / np.outer(scale, scale)
     w, V = np.linalg.eigh(Sn)

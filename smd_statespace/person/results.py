@@ -225,12 +225,18 @@ class PersonResult:
         se = np.sqrt(np.diag(param_cov))
         physical = [0, 1] + [self.model.param_names.index(name) for name in self.model.effect_parameters]
         index = [k for k in physical if self.free[k] and np.isfinite(se[k]) and se[k] > 0]
-        jac = np.zeros((values.size, len(index)))
+        jac = np.full((values.size, len(index)), np.nan)  # nan where no difference could be taken: sd unknown
         for column, k in enumerate(index):
-            step = np.zeros(self.params.size)
-            step[k] = self.BLF_STEP * se[k]
-            jac[:, column] = (self._blf_values(self.params + step) - self._blf_values(self.params - step)) / (
-                2.0 * step[k])
+            for fraction in (self.BLF_STEP, self.BLF_STEP / 10.0):  # a pass can break down far out: go closer
+                step = np.zeros(self.params.size)
+                step[k] = fraction * se[k]
+                plus, minus = self._blf_values(self.params + step), self._blf_values(self.params - step)
+                if np.all(np.isfinite(plus)) and np.all(np.isfinite(minus)):
+                    jac[:, column] = (plus - minus) / (2.0 * step[k])
+                    break
+                if np.all(np.isfinite(plus)) or np.all(np.isfinite(minus)):  # one side only
+                    jac[:, column] = ((plus - values) if np.all(np.isfinite(plus)) else (values - minus)) / step[k]
+                    break
         person = np.einsum("ij,jk,ik->i", jac, param_cov[np.ix_(index, index)], jac) if index else np.zeros_like(values)
         spread = self.spread()
         rows = [{"harmonic": i, "blf": float(values[i - 1]),
