@@ -36,12 +36,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from ..progress import tqdm
 
 from ..errors import OptionError
 from ..estimators import ESTIMATORS, EstimatorFailure, FilterResult, cycle_data, get_estimator
 from ..io import Record
 from ..model import SMDModel, blf
+from ..progress import tqdm
 from .plausibility import implausible_reasons
 from ..signals import RECORD_RATE, Preprocessed, check_rate, decimate_record, decimation_note, preprocess
 

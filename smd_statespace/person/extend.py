@@ -37,10 +37,10 @@ import itertools
 from dataclasses import replace
 
 import numpy as np
-from ..progress import tqdm
 
 from ..errors import OptionError
 from ..model import SMDModel
+from ..progress import tqdm
 from .dynamics import PersonDynamics
 from .model import RecordModel
 

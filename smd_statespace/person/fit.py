@@ -24,11 +24,11 @@ from dataclasses import replace
 
 import numpy as np
 from scipy import optimize, stats
-from ..progress import tqdm
 
 from ..diagnostics.applicability import check_bouncing
 from ..errors import CycleError, SMDInputError
 from ..io import G, Record
+from ..progress import tqdm
 from ..signals import RECORD_RATE, decimate_record, decimation_note
 from .model import VARIATIONS, Regressor, RecordModel
 from .timing import TIMING_METHODS, CycleTiming, estimate_timing
