@@ -155,7 +155,7 @@ def demo_figure(pre, out_dir) -> Path:
 def demo_person_section(record, out_dir, truth):
     """The answer first: the person from the whole record, with intervals, against the truth when known.
 
-    Returns ``(text, result)``; writes ``person.json`` and the person's figures into ``out_dir/person``.
+    Returns the text; writes ``person.json`` and the person's figures into ``out_dir/person``.
     """
     from ..person import identify_person
     from ..person.output import write_person
@@ -195,7 +195,7 @@ def demo_person_section(record, out_dir, truth):
              f"{seconds:.0f} s", _rows(rows)]
     lines += [f"  warning: {text}" for text in d["warnings"]]
     lines += [f"  wrote {directory / 'person.json'} and {len(written) - 1} more files (person_fit.png, ...)"]
-    return _heading("The person, from the whole record (identify's default)") + "\n" + "\n".join(lines), result
+    return _heading("The person, from the whole record (identify's default)") + "\n" + "\n".join(lines)
 
 
 def demo_identification_section(pre, out_dir, truth, estimator: str = "ekf") -> str:
@@ -292,8 +292,7 @@ def run_demo(args) -> int:
     pre = preprocess(record)
     print("smd-statespace demo: the SMD model of a bouncing person (Wang, Chen & Nagayama 2019), step by step")
     print(demo_record_section(record, truth, where))
-    person_text, _ = demo_person_section(record, out_dir, truth)
-    print("\n" + person_text)
+    print("\n" + demo_person_section(record, out_dir, truth))
     print(_heading("How the article's per-cycle method sees the same record") + "\n  "
           "(the pre-processing, the augmented model and the identification of every cycle)")
     print(demo_cycles_section(pre))

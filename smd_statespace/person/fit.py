@@ -421,6 +421,12 @@ def _fit_timing(model_for, timing, variation, first=None, step=lambda: None):
     return model, fitted
 
 
+def model_error_floor(name: str, f_h: float) -> float:
+    """The sd :data:`MODEL_ERROR_FLOOR` adds to ``name``'s calibrated one: relative for ``f_h`` (Hz), absolute for
+    ``xi_h``."""
+    return MODEL_ERROR_FLOOR[name] * (f_h if name == "f_h" else 1.0)
+
+
 def wald_interval(estimate, standard_error, level, bounds) -> tuple:
     """Estimate +- z * standard error, cut at the parameter's search bounds.
 
@@ -630,7 +636,7 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
             interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
         else:
             # the floor widens the interval, not the sd: the sd says what the record determines
-            floor = 0.0 if intervals == "wald" else MODEL_ERROR_FLOOR[name] * (params[0] if name == "f_h" else 1.0)
+            floor = 0.0 if intervals == "wald" else model_error_floor(name, params[0])
             interval[name] = wald_interval(params[which], float(np.hypot(se[which], floor)), level,
                                            model.bounds[which])
     for name in model.effect_parameters:  # the effects' parameters: Wald intervals from the information

@@ -203,13 +203,12 @@ class PersonResult:
 
     def _parameter_cov_for_blf(self) -> np.ndarray:
         """:attr:`cov` with the model-error floor of ``f_h`` and ``xi_h`` added, as the intervals have it."""
-        from .fit import MODEL_ERROR_FLOOR
+        from .fit import model_error_floor
 
         cov = np.array(self.cov, dtype=float)
         if self.interval_method.startswith("calibrated"):
             for which, name in enumerate(("f_h", "xi_h")):
-                floor = MODEL_ERROR_FLOOR[name] * (self.f_h if name == "f_h" else 1.0)
-                cov[which, which] += floor**2
+                cov[which, which] += model_error_floor(name, self.f_h) ** 2
         return cov
 
     @cached_property

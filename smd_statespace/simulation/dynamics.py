@@ -211,6 +211,21 @@ class _System:
         return 1.0 / rate if rate > 0 else 60.0
 
 
+def fourier_scalar(theta, a0, terms):
+    """Eq. 4 at one phase ``theta`` (rad) in plain floats: ``a0 + sum a_i cos(i theta) + b_i sin(i theta)``.
+
+    ``terms`` are the pairs ``(a_i, b_i)``; ``cos(i theta)``, ``sin(i theta)`` come by rotation from the first
+    (the ODE solver's fast path: no array per call).
+    """
+    cos_1, sin_1 = math.cos(theta), math.sin(theta)
+    cos_i, sin_i = cos_1, sin_1
+    total = a0
+    for a_i, b_i in terms:
+        total += a_i * cos_i + b_i * sin_i
+        cos_i, sin_i = cos_i * cos_1 - sin_i * sin_1, sin_i * cos_1 + cos_i * sin_1
+    return total
+
+
 class _CycleForce:
     """Biomechanical force of one cycle (g), Eq. 4, referred to the cycle start."""
 
@@ -226,14 +241,7 @@ class _CycleForce:
 
     def scalar(self, t):
         """Force (g) at one time ``t`` (s): the fast path for the ODE solver."""
-        theta = self.omega * (t - self.t_start)
-        cos_1, sin_1 = math.cos(theta), math.sin(theta)
-        cos_i, sin_i = cos_1, sin_1
-        total = self.a0
-        for a_i, b_i in self._terms:  # Eq. 4, cos(i theta), sin(i theta) by rotation
-            total += a_i * cos_i + b_i * sin_i
-            cos_i, sin_i = cos_i * cos_1 - sin_i * sin_1, sin_i * cos_1 + cos_i * sin_1
-        return total
+        return fourier_scalar(self.omega * (t - self.t_start), self.a0, self._terms)
 
     def __call__(self, t):
         """Force (g) at times ``t`` (s), any shape."""

@@ -33,8 +33,8 @@ import numpy as np
 
 from ..errors import OptionError
 from ..io import G
-from .dynamics import _cycle_states, _forces_states, _periodic_state
-from .variation import TRUNCATION_SD, _cycles_frame, _smooth_run_in, _smooth_states
+from .dynamics import _cycle_states, _forces_states, _periodic_state, fourier_scalar
+from .variation import TRUNCATION_SD, _cycles_frame, _phase_crossings, _smooth_run_in, _smooth_states
 
 __all__ = ["NEW_VARIATIONS", "PULSE_CONTACT_RATIO", "PULSE_GRID", "TEMPO_MAX_FB_VARIATION", "TEMPO_RAMP",
            "TEMPO_WANDER_PERIOD"]
@@ -342,13 +342,7 @@ class _TempoForce:
             wander += alpha * math.sin(nu * t) + beta * (1.0 - math.cos(nu * t))
         drift = 0.5 * self.slope * t * (t - 2.0 * self._half) + wander
         theta = self.theta_0 + 2.0 * math.pi * self.f_b * (t + self.fb_variation * drift)
-        cos_1, sin_1 = math.cos(theta), math.sin(theta)
-        cos_i, sin_i = cos_1, sin_1
-        total = self.a0
-        for a_i, b_i in self._terms:  # Eq. 4, cos(i theta), sin(i theta) by rotation
-            total += a_i * cos_i + b_i * sin_i
-            cos_i, sin_i = cos_i * cos_1 - sin_i * sin_1, sin_i * cos_1 + cos_i * sin_1
-        return total
+        return fourier_scalar(theta, self.a0, self._terms)  # Eq. 4
 
     def __call__(self, t):
         """Force (g) at times ``t`` (s), any shape."""
@@ -379,12 +373,7 @@ def _tempo_record(s, blocks, time):
                           "lower fb_variation or change the seed")  # pragma: no cover  (beyond 8 SD)
     first = int(np.floor(float(force.theta(-run_in)) / (2.0 * np.pi)))
     last = int(np.floor(float(force.theta(s.duration)) / (2.0 * np.pi))) + 1
-    targets = 2.0 * np.pi * np.arange(first, last + 1)
-    times = np.interp(targets, force.theta(grid), grid)
-    for _ in range(8):
-        times = times - (force.theta(times) - targets) / (2.0 * np.pi * force.frequency(times))
-    if np.abs(force.theta(times) - targets).max() > 1e-8:
-        raise RuntimeError("the cycle boundaries of the tempo variation did not converge")  # pragma: no cover
+    times = _phase_crossings(force, first, last, grid, "tempo")
     t_start, t_end = times[:-1], times[1:]
     frequency = 1.0 / (t_end - t_start)
     keep = slice(-min(first, 0), None)  # cycles 0, 1, ...: the one holding t = 0 and the later ones

@@ -286,6 +286,21 @@ def _smooth_force(rng_blocks, run_in_knots, geometry, f_b, fb_variation, a0, blf
     return _SmoothForce(pieces, 2.0 * np.pi * start_fraction, f_b, fb_variation, a0, blf, phases, coef_variation)
 
 
+def _phase_crossings(force, first, last, grid, name):
+    """Times (s) where ``force.theta`` passes ``2 pi j``, ``j = first .. last``: the cycle boundaries.
+
+    Linear interpolation of ``theta`` on ``grid`` (s, increasing), then
+    Newton's method with the phase rate ``2 pi force.frequency(t)``.
+    """
+    targets = 2.0 * np.pi * np.arange(first, last + 1)
+    times = np.interp(targets, force.theta(grid), grid)
+    for _ in range(8):
+        times = times - (force.theta(times) - targets) / (2.0 * np.pi * force.frequency(times))
+    if np.abs(force.theta(times) - targets).max() > 1e-8:
+        raise RuntimeError(f"the cycle boundaries of the {name} variation did not converge")  # pragma: no cover
+    return times
+
+
 def _smooth_cycles(force, first, duration, nodes=24):
     """Cycles ``first, first + 1, ...`` of a smooth force: ``(t_start, t_end, f_b, a, b)``.
 
@@ -297,13 +312,7 @@ def _smooth_cycles(force, first, duration, nodes=24):
     ``b_i(t)`` (Gauss-Legendre quadrature with ``nodes`` points).
     """
     last = int(np.floor(force.theta(duration) / (2.0 * np.pi))) + 1
-    targets = 2.0 * np.pi * np.arange(first, last + 1)
-    breaks = force.pieces.x
-    times = np.interp(targets, force.theta(breaks), breaks)
-    for _ in range(8):
-        times = times - (force.theta(times) - targets) / (2.0 * np.pi * force.frequency(times))
-    if np.abs(force.theta(times) - targets).max() > 1e-8:
-        raise RuntimeError("the cycle boundaries of the smooth variation did not converge")  # pragma: no cover
+    times = _phase_crossings(force, first, last, force.pieces.x, "smooth")
     t_start, t_end = times[:-1], times[1:]
     points, weights = np.polynomial.legendre.leggauss(nodes)
     inside = 0.5 * (t_start + t_end)[:, None] + 0.5 * (t_end - t_start)[:, None] * points
