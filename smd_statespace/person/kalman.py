@@ -47,7 +47,7 @@ INDEPENDENT, RANDOM_WALK, BOTH, SMOOTH = 0, 1, 2, 3
 """Codes of the variation models in the compiled pass."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
     """Draw the force coefficients again at a cycle boundary (in place); they start at row ``n_free``."""
     m = P.shape[0]
@@ -92,7 +92,7 @@ def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
             P[i, i] = P[j, j] + D[i - o]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def _advance_rows(Phi, G, p, X, work):
     """Rows ``0..n_x-1`` of ``X`` become ``Phi X[:n_x] + G X[n_x:n_x+p]`` (in place): a step's effect on the dynamic states.
 
@@ -124,7 +124,7 @@ def _advance_rows(Phi, G, p, X, work):
             X[r, c] = work[r]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
     """Advance every coefficient's smooth deviation one sample (in place, variation "smooth").
 
@@ -167,7 +167,7 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
         P[r1, r1] += D[i] * smooth_q[1, 1]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                    smooth_phi, smooth_q, smooth_p0):
     """Run the augmented Kalman filter over one record.
@@ -270,12 +270,10 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
     e_out = np.empty(N)
     Ev_out = np.empty((N, q))
     f_out = np.empty(N)
-    S = np.zeros((q, q))
-    s = np.zeros(q)
-    ee = 0.0
     h = np.zeros(m)
     Ph = np.zeros(m)
     Ev = np.zeros(q)
+    n_obs = nx + p  # the observation sees x and alpha only (not the smooth rates nor the random walk's base)
     for k in range(N):
         if k > 0:
             # predict the dynamic rows: x = Phi x + Gam alpha + offset (+ X_tr beta)
@@ -312,39 +310,41 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
             h[nx + i] = H[k, i]
         for c in range(m):
             v = 0.0
-            for i in range(m):
+            for i in range(n_obs):
                 v += P[c, i] * h[i]
             Ph[c] = v
         f = 1.0
         e = y[k]
-        for i in range(m):
+        for i in range(n_obs):
             f += h[i] * Ph[i]
             e -= h[i] * a[i]
         for c in range(q):
-            v = 0.0
-            for i in range(m):
-                v += h[i] * A[i, c]
-            Ev[c] = v
+            Ev[c] = 0.0
+        for i in range(n_obs):
+            hi = h[i]
+            for c in range(q):
+                Ev[c] += hi * A[i, c]
         for j in range(r):
             Ev[nx + n_template + j] += X_obs[k, j]
         inv_f = 1.0 / f
         e_out[k] = e
         f_out[k] = f
-        ee += e * e * inv_f
         for c in range(q):
             Ev_out[k, c] = Ev[c]
-            s[c] += Ev[c] * e * inv_f
-            for d in range(q):
-                S[c, d] += Ev[c] * Ev[d] * inv_f
         for i in range(m):
             K = Ph[i] * inv_f
             a[i] += K * e
             for c in range(q):
                 A[i, c] -= K * Ev[c]
-        for i in range(m):
-            Ki = Ph[i] * inv_f
-            for c in range(m):
-                P[i, c] -= Ki * Ph[c]
+            for c in range(i, m):  # P is symmetric: the upper triangle, mirrored
+                v = P[i, c] - K * Ph[c]
+                P[i, c] = v
+                P[c, i] = v
+    # the sums of the concentrated likelihood, after the pass (one product instead of q^2 per sample)
+    weighted = Ev_out / f_out.reshape((N, 1))
+    S = weighted.T @ Ev_out
+    s = weighted.T @ e_out
+    ee = np.sum(e_out * e_out / f_out)
     return e_out, Ev_out, f_out, S, s, ee
 
 

@@ -95,6 +95,9 @@ the smooth deviations, made nearly white, absorb whatever the model lacks
 LONGEST_SMOOTH_TIME = 100.0
 """Longest length scale ``ell`` (s) of the smooth variation."""
 
+DYNAMICS_CACHE = 4
+"""Discretised dynamics kept per model (the last ``f_h``, ``xi_h`` and effect parameters seen)."""
+
 
 def coefficient_names(n_harmonics):
     """``["a0", "a1", "b1", ..., "an", "bn"]``: the coefficients of Eq. 4."""
@@ -214,6 +217,8 @@ class RecordModel:
         self._H = G * basis
         self._rotation = np.exp(1j * angle)  # (N, n)
         self._timing_columns = self._phase_columns() if self.phase_template is not None else None
+        self._H_all = self._H if self._timing_columns is None else np.hstack([self._H, self._timing_columns[0]])
+        self._smooth_index = self.param_names.index("log_smooth_time") if self.variation == "smooth" else None
         self._X = np.column_stack([r.values for r in self.regressors]) if self.regressors else np.zeros(
             (self.time.size, 0))
         self._X_obs = self._X * np.array([r.observed for r in self.regressors], dtype=float)
@@ -345,21 +350,90 @@ class RecordModel:
     # ------------------------------------------------------------------ system
     def _variances(self, params):
         """``D``, ``E`` (per coefficient) and the process-noise rate from the parameter vector."""
-        named = dict(zip(self.param_names, params))
-        group = np.concatenate([[0], np.repeat(np.arange(1, self.n_harmonics + 1), 2)])
-        D = np.zeros(self.n_coefficients)
-        E = np.zeros(self.n_coefficients)
-        if "log_var_d_0" in named:
-            D = np.exp([named[f"log_var_d_{g}"] for g in group])
-        if "log_var_e_0" in named:
-            E = np.exp([named[f"log_var_e_{g}"] for g in group])
-        S = np.exp([named[f"log_var_s_{g}"] for g in group]) if "log_var_s_0" in named else np.zeros(
-            self.n_coefficients)
-        w = float(np.exp(named["log_var_w"])) if "log_var_w" in named else 0.0
-        if self.phase_template is not None:
-            timing = np.exp([named["log_var_phase"], named["log_var_rate"]])
-            D, E, S = np.r_[D, timing], np.r_[E, 0.0, 0.0], np.r_[S, 0.0, 0.0]
+        params = np.r_[np.asarray(params, dtype=float), -np.inf]  # index -1: a variance of 0
+        index = self._variance_index
+        zeros = np.zeros(self.n_force_states)
+        D, E, S = (np.exp(params[index[name]]) if index[name] is not None else zeros
+                   for name in ("log_var_d", "log_var_e", "log_var_s"))
+        w = float(np.exp(params[index["log_var_w"]])) if index["log_var_w"] is not None else 0.0
         return D, E, S, w
+
+    @property
+    def _variance_index(self) -> dict:
+        """Where each force state's log variance sits in the parameter vector (None: the model has none)."""
+        cached = self.__dict__.get("_variance_index_cache")
+        if cached is not None:
+            return cached
+        names = self.param_names
+        group = np.concatenate([[0], np.repeat(np.arange(1, self.n_harmonics + 1), 2)])
+        index = {}
+        for kind in ("log_var_d", "log_var_e", "log_var_s"):
+            if f"{kind}_0" not in names:
+                index[kind] = None
+                continue
+            rows = [names.index(f"{kind}_{g}") for g in group]
+            if self.phase_template is not None:  # the phase and rate errors: drawn per cycle (D), never walk
+                rows += [names.index("log_var_phase"), names.index("log_var_rate")] if kind == "log_var_d" else [-1, -1]
+            index[kind] = np.array(rows)
+        if self.phase_template is not None and index["log_var_d"] is None:
+            index["log_var_d"] = np.r_[np.full(self.n_coefficients, -1), names.index("log_var_phase"),
+                                       names.index("log_var_rate")]
+        index["log_var_w"] = names.index("log_var_w") if "log_var_w" in names else None
+        self.__dict__["_variance_index_cache"] = index
+        return index
+
+    def _dynamics(self, params) -> dict:
+        """The arrays of :meth:`system` that depend on ``f_h``, ``xi_h`` and the effects' parameters only.
+
+        Kept for the last few parameter vectors (:data:`DYNAMICS_CACHE`): a
+        finite-difference gradient moves the variance ratios one by one, and
+        those leave the discretised dynamics as they are.
+        """
+        named = dict(zip(self.param_names, params))
+        effect_values = {name: named[name] for name in self.effect_parameters}
+        key = (float(params[0]), float(params[1])) + tuple(float(v) for v in effect_values.values())
+        cache = self.__dict__.setdefault("_dynamics_cache", {})
+        if key in cache:
+            return cache[key]
+        lin = self.dynamics.linearise(key[0], key[1], effect_values, self.nominal)
+        dt = self.dt
+        A, b = lin.A, lin.b
+        if A.shape[0] > 1:  # a path-linearised effect: each step from k holds A, b at the step's midpoint
+            A, b = _step_mean(A), _step_mean(b)
+        phi, integral = exponentials(A, dt)  # exact over a step with A held (Eq. 2 and the effects)
+        g0 = np.einsum("kij,kj->ki", integral, b)  # constant force: W b
+        cycle = self._phase[0]
+        orders = np.arange(1, self.n_harmonics + 1)
+        if A.shape[0] == 1:  # one gain per cycle rate and order, rotated to each sample
+            nu = self.timing_rates()[:, None] * orders  # (J, n)
+            per_sample = harmonic_gains(A, phi, b, nu, dt)[cycle] * self._rotation[..., None]
+        else:  # a nonlinear effect: every sample has its own A
+            nu = self.timing_rates()[cycle][:, None] * orders
+            per_sample = harmonic_gains(A, phi, b, nu, dt) * self._rotation[..., None]
+        nx = self.n_dynamic
+        gam = np.empty((self.time.size, nx, self.n_force_states))
+        gam[:, :, 0] = g0
+        gam[:, :, 1:self.n_coefficients:2] = per_sample.real.transpose(0, 2, 1)
+        gam[:, :, 2:self.n_coefficients:2] = per_sample.imag.transpose(0, 2, 1)
+        gam[:, :, :self.n_coefficients] *= G
+        if self._timing_columns is not None:  # (their columns are in g already)
+            gam[:, :, self.n_coefficients:] = g0[:, :, None] * self._timing_columns[1][:, None, :]
+        dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
+        out = {
+            "hx": np.ascontiguousarray(lin.hx),
+            "Phi": np.ascontiguousarray(phi),
+            "Gam": gam,
+            "offset": np.zeros((self.time.size, nx)) if lin.c is None else np.einsum(
+                "kij,kj->ki", integral, _step_mean(lin.c)),
+            "y_known": np.zeros(self.time.size) if lin.d is None else lin.d,
+            "X_tr": _regressor_steps(g0, self._X * dynamic),
+            "noise_A": A.mean(axis=0),
+            "noise_b": b.mean(axis=0),
+        }
+        if len(cache) >= DYNAMICS_CACHE:
+            cache.pop(next(iter(cache)))
+        cache[key] = out
+        return out
 
     def system(self, params) -> dict:
         """The arrays of the compiled pass for a parameter vector.
@@ -373,53 +447,24 @@ class RecordModel:
             and ``y_known``, the known part of the observation (subtracted
             from ``y`` before the pass).
         """
-        named = dict(zip(self.param_names, params))
-        lin = self.dynamics.linearise(float(params[0]), float(params[1]),
-                                      {name: named[name] for name in self.effect_parameters}, self.nominal)
-        dt = self.dt
-        A, b = lin.A, lin.b
-        if A.shape[0] > 1:  # a path-linearised effect: each step from k holds A, b at the step's midpoint
-            A, b = _step_mean(A), _step_mean(b)
-        phi, integral = exponentials(A, dt)  # exact over a step with A held (Eq. 2 and the effects)
-        g0 = np.einsum("kij,kj->ki", integral, b)  # constant force: W b
-        cycle, _, rate, reset = self._phase
-        orders = np.arange(1, self.n_harmonics + 1)
-        if A.shape[0] == 1:  # one gain per cycle rate and order, rotated to each sample
-            nu = self.timing_rates()[:, None] * orders  # (J, n)
-            per_sample = harmonic_gains(A, phi, b, nu, dt)[cycle] * self._rotation[..., None]
-        else:  # a nonlinear effect: every sample has its own A
-            nu = self.timing_rates()[cycle][:, None] * orders
-            per_sample = harmonic_gains(A, phi, b, nu, dt) * self._rotation[..., None]
-        nx = self.n_dynamic
-        gam = np.empty((self.time.size, nx, self.n_coefficients))
-        gam[:, :, 0] = g0
-        gam[:, :, 1::2] = per_sample.real.transpose(0, 2, 1)
-        gam[:, :, 2::2] = per_sample.imag.transpose(0, 2, 1)
-        gam *= G
-        H = self._H
-        if self._timing_columns is not None:
-            h_timing, step_values = self._timing_columns
-            H = np.hstack([H, h_timing])
-            gam = np.concatenate([gam, g0[:, :, None] * step_values[:, None, :]], axis=2)
+        dynamics = self._dynamics(params)
         D, E, S, w = self._variances(params)
-        qx = w * _integrated_white_noise(A.mean(axis=0), b.mean(axis=0), dt) if w > 0 else np.zeros((nx, nx))
-        smooth = matern32_step(np.exp(named["log_smooth_time"]), dt) if "log_smooth_time" in named else (
-            np.zeros((2, 2)),) * 3
-        dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
-        x_tr = _regressor_steps(g0, self._X * dynamic)
-        offset = np.zeros((self.time.size, nx)) if lin.c is None else np.einsum(
-            "kij,kj->ki", integral, _step_mean(lin.c))
+        nx = self.n_dynamic
+        qx = w * _integrated_white_noise(dynamics["noise_A"], dynamics["noise_b"], self.dt) if w > 0 else np.zeros(
+            (nx, nx))
+        where = self._smooth_index
+        smooth = matern32_step(np.exp(params[where]), self.dt) if where is not None else (np.zeros((2, 2)),) * 3
         return {
-            "hx": np.ascontiguousarray(lin.hx),
-            "H": H,
-            "Phi": np.ascontiguousarray(phi),
-            "Gam": gam,
+            "hx": dynamics["hx"],
+            "H": self._H_all,
+            "Phi": dynamics["Phi"],
+            "Gam": dynamics["Gam"],
             "Qx": qx,
-            "offset": offset,
-            "y_known": np.zeros(self.time.size) if lin.d is None else lin.d,
+            "offset": dynamics["offset"],
+            "y_known": dynamics["y_known"],
             "X_obs": self._X_obs,
-            "X_tr": x_tr,
-            "reset": reset,
+            "X_tr": dynamics["X_tr"],
+            "reset": self._phase[3],
             "code": VARIATIONS[self.variation],
             "D": D,
             "E": E,
