@@ -369,15 +369,27 @@ def _choose_again(model_for, model, fitted, fits) -> tuple:
         if first_model.variation == model.variation:
             continue
         other = model_for(model.timing, first_model.variation, model.phase_template)
-        named = {**dict(zip(first_model.param_names, first_fit["params"])),
-                 **{k: v for k, v in shared.items() if k in ("f_h", "xi_h", "log_var_phase", "log_var_rate")}}
+        own = dict(zip(first_model.param_names, first_fit["params"]))
+        timing_variances = {k: v for k, v in shared.items() if k in ("log_var_phase", "log_var_rate")}
         default = other.start_params(fitted["params"][0], fitted["params"][1])
-        start = np.array([named.get(name, value) for name, value in zip(other.param_names, default)])
-        refit = fit_model(other, start)
+
+        def start_with(person):  # the loser's own variances and the winner's timing variances
+            named = {**own, **timing_variances, **person}
+            return np.array([named.get(name, value) for name, value in zip(other.param_names, default)])
+
+        # from its own person or the winner's, whichever the re-placed starts like better
+        starts = [start_with({}), start_with({"f_h": shared["f_h"], "xi_h": shared["xi_h"]})]
+        start = max(starts, key=other.loglike)
+        refit = fit_model(other, start, quick=True)
         rows.append(_comparison_row(other, refit, "re-placed"))
         candidates.append((other, refit))
     eligible = [i for i, row in enumerate(rows) if not row["on_bound"] and row["converged"]] or [0]
     best = min(eligible, key=lambda i: rows[i]["aic"])
+    if best != 0:  # a loser of the first comparison wins: its search is finished to full precision
+        other, refit = candidates[best]
+        refit = fit_model(other, refit["params"])
+        rows[best] = _comparison_row(other, refit, "re-placed")
+        candidates[best] = (other, refit)
     return candidates[best] + (rows,)
 
 
