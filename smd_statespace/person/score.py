@@ -91,7 +91,7 @@ parameters (times ``max(|value|, scale)``, ``scale`` from :attr:`RecordModel.sca
 
 
 # ---------------------------------------------------------------------------------------------- compiled pass
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"contract"})
 def _reset(code, x, P, D, E, p, o, n_template, tau, step):
     """:func:`kalman._reset` on a state mean ``x`` at known ``delta`` (``tau``: the template, or 0 for a derivative).
 
@@ -131,7 +131,7 @@ def _reset(code, x, P, D, E, p, o, n_template, tau, step):
             P[i, i] = P[j, j] + D[i - o]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"contract"})
 def _rows(T, G, X, out):
     """``out = [T, G] X[:n_x + p]`` (shape (n_x, m)): the first ``n_x`` rows of a step's transition times ``X``."""
     nx, p = G.shape
@@ -156,7 +156,7 @@ def _rows(T, G, X, out):
             out[r, c] = v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"contract"})
 def _corner(T, G, Y, r, c):
     """``(Y [T, G]')[r, c]``: row ``r`` of ``Y`` times row ``c`` of the step's transition."""
     nx, p = G.shape
@@ -168,7 +168,7 @@ def _corner(T, G, Y, r, c):
     return v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"contract"})
 def _write_rows(T, G, Y, U, X, corner):
     """``X`` becomes the symmetric matrix whose first ``n_x`` rows are ``Y T'`` (+ the transpose of ``U T'`` in
     the ``n_x x n_x`` corner when ``U`` is given, ``has U``); columns ``0..n_x-1`` mirror the rows.
@@ -191,7 +191,7 @@ def _write_rows(T, G, Y, U, X, corner):
             X[c, r] = Y[r, c]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"contract"})
 def _pairs(X, n_template, r0, r1, f00, f01, f10, f11, columns):
     """Rows (and, with ``columns``, then columns) ``r0 + i``, ``r1 + i`` of ``X`` move by the 2 x 2 ``f``."""
     m = X.shape[1]
@@ -210,7 +210,7 @@ def _pairs(X, n_template, r0, r1, f00, f01, f10, f11, columns):
                 X[c, b] = f10 * x0 + f11 * x1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, fastmath={"contract"})
 def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                      smooth_phi, smooth_q, smooth_p0, delta,
                      dyn, d_hx, d_Phi, d_Gam, d_offset, d_X_tr, d_y,
@@ -267,14 +267,16 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
     x = np.zeros(m)
     P = np.zeros((m, m))
     dx = np.zeros((k, m))
-    dP = np.zeros((k, m, m))
+    dP = np.zeros((m, k, m))  # dP[:, j, :]: the derivative of P w.r.t. parameter j (rows of all j together)
+    km = k * m
+    dPf = dP.reshape((m, km))
     for i in range(nx):
         x[i] = delta[i]
     # the start, as augmented_pass's
     if code == INDEPENDENT:
         _reset(code, x, P, D, E, p, nx, n_template, tau, True)
         for j in range(k):
-            _reset(code, dx[j], dP[j], d_D[j], d_E[j], p, nx, n_template, zero, True)
+            _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, True)
     elif code == RANDOM_WALK:
         for i in range(n_template):
             x[nx + i] = tau[i]
@@ -287,30 +289,34 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
             P[b, a] = D[i] * smooth_p0[1, 0]
             P[b, b] = D[i] * smooth_p0[1, 1]
             for j in range(k):
-                dP[j, a, a] = d_D[j, i] * smooth_p0[0, 0] + D[i] * d_sp0[j, 0, 0]
-                dP[j, a, b] = d_D[j, i] * smooth_p0[0, 1] + D[i] * d_sp0[j, 0, 1]
-                dP[j, b, a] = d_D[j, i] * smooth_p0[1, 0] + D[i] * d_sp0[j, 1, 0]
-                dP[j, b, b] = d_D[j, i] * smooth_p0[1, 1] + D[i] * d_sp0[j, 1, 1]
+                dP[a, j, a] = d_D[j, i] * smooth_p0[0, 0] + D[i] * d_sp0[j, 0, 0]
+                dP[a, j, b] = d_D[j, i] * smooth_p0[0, 1] + D[i] * d_sp0[j, 0, 1]
+                dP[b, j, a] = d_D[j, i] * smooth_p0[1, 0] + D[i] * d_sp0[j, 1, 0]
+                dP[b, j, b] = d_D[j, i] * smooth_p0[1, 1] + D[i] * d_sp0[j, 1, 1]
         _reset(code, x, P, D, E, p, nx, n_template, tau, True)
         for j in range(k):
-            _reset(code, dx[j], dP[j], d_D[j], d_E[j], p, nx, n_template, zero, True)
+            _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, True)
     else:
         for i in range(n_template):
             x[nx + p + i] = tau[i]
         _reset(code, x, P, D, E, p, nx, n_template, tau, False)
         for j in range(k):
-            _reset(code, dx[j], dP[j], d_D[j], d_E[j], p, nx, n_template, zero, False)
+            _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, False)
     v_out = np.empty(N)
     f_out = np.empty(N)
     dv_out = np.empty((N, k))
     df_out = np.empty((N, k))
-    Y = np.zeros((nx, m))
+    Y = np.zeros((nx, k, m))
+    Yf = Y.reshape((nx, km))
     U = np.zeros((nx, m))
+    Z = np.zeros((nx, nx))
+    Yb = np.zeros((nx, m))
     xn = np.zeros(nx)
     h = np.zeros(m)
     s = np.zeros(m)
-    t = np.zeros(m)
-    g = np.zeros(m)
+    tf = np.zeros(km)
+    tk = tf.reshape((k, m))
+    gk = np.zeros((k, m))
     ds = np.zeros(m)
     dh = np.zeros(nx)
     Vs = np.zeros((m, m))
@@ -322,16 +328,23 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
             if varying:
                 T = Phi[kk - 1]
             # ---- predict the dynamic rows; derivatives first (they need the old x, P)
+            # rows 0..n_x-1 of T dP for every parameter at once: Y = [Phi, Gam] dP[:n_x + p]
+            for a in range(nx):
+                for c in range(km):
+                    Yf[a, c] = 0.0
+                for i in range(nx + p):
+                    coef = T[a, i] if i < nx else G[a, i - nx]
+                    for c in range(km):
+                        Yf[a, c] += coef * dPf[i, c]
             for j in range(k):
                 d = dyn[j]
-                _rows(T, G, dP[j], Y)
-                if d >= 0:
+                if d >= 0:  # the transition moves too: + dT P (rows) and its transpose
                     dT = d_Phi[d, kk - 1] if varying else d_Phi[d, 0]
                     dG = d_Gam[d, kk - 1]
                     _rows(dT, dG, P, U)
                     for a in range(nx):
                         for c in range(m):
-                            Y[a, c] += U[a, c]
+                            Y[a, j, c] += U[a, c]
                     # the mean: T dx + dT x + d offset + d X_tr beta
                     for a in range(nx):
                         v = d_offset[d, kk - 1, a]
@@ -342,7 +355,6 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                         for i in range(r):
                             v += d_X_tr[d, kk - 1, a, i] * beta[i]
                         xn[a] = v
-                    _write_rows(T, G, Y, U, dP[j], True)
                 else:
                     for a in range(nx):
                         v = 0.0
@@ -351,13 +363,29 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                         for i in range(p):
                             v += G[a, i] * dx[j, nx + i]
                         xn[a] = v
-                    _write_rows(T, G, Y, U, dP[j], False)
+                # the n_x x n_x corner: (Y T')[a, b] (+ (U T')[b, a]) + dQx
+                for a in range(nx):
+                    for b in range(nx):
+                        v = d_Qx[j, a, b]
+                        for c in range(nx):
+                            v += Y[a, j, c] * T[b, c]
+                        for i in range(p):
+                            v += Y[a, j, nx + i] * G[b, i]
+                        if d >= 0:
+                            for c in range(nx):
+                                v += U[b, c] * T[a, c]
+                            for i in range(p):
+                                v += U[b, nx + i] * G[a, i]
+                        Z[a, b] = v
                 for a in range(nx):
                     dx[j, a] = xn[a]
-                    for c in range(nx):
-                        dP[j, a, c] += d_Qx[j, a, c]
-            _rows(T, G, P, Y)
-            _write_rows(T, G, Y, U, P, False)
+                    for b in range(nx):
+                        dP[a, j, b] = Z[a, b]
+                    for c in range(nx, m):
+                        dP[a, j, c] = Y[a, j, c]
+                        dP[c, j, a] = Y[a, j, c]
+            _rows(T, G, P, Yb)
+            _write_rows(T, G, Yb, U, P, False)
             for a in range(nx):
                 for c in range(nx):
                     P[a, c] += Qx[a, c]
@@ -384,12 +412,12 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                                 Vs[a, c] = e00 * P[a, c] + e01 * P[b, c]
                                 Vs[b, c] = e10 * P[a, c] + e11 * P[b, c]
                         _pairs(Vs.T, n_template, nx, nx + p, f00, f01, f10, f11, False)  # (dS P) S'
-                    _pairs(dP[j], n_template, nx, nx + p, f00, f01, f10, f11, True)
+                    _pairs(dP[:, j, :], n_template, nx, nx + p, f00, f01, f10, f11, True)
                     _pairs(dx[j].reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
                     if has_smooth_d[j]:
                         for a in range(m):
                             for c in range(m):
-                                dP[j, a, c] += Vs[a, c] + Vs[c, a]
+                                dP[a, j, c] += Vs[a, c] + Vs[c, a]
                         for i in range(n_template):
                             a, b = nx + i, nx + p + i
                             x0, x1 = x[a], x[b]
@@ -397,10 +425,10 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                             dx[j, b] += e10 * x0 + e11 * x1 - e10 * tau[i]
                     for i in range(n_template):
                         a, b = nx + i, nx + p + i
-                        dP[j, a, a] += d_D[j, i] * smooth_q[0, 0] + D[i] * d_sq[j, 0, 0]
-                        dP[j, a, b] += d_D[j, i] * smooth_q[0, 1] + D[i] * d_sq[j, 0, 1]
-                        dP[j, b, a] += d_D[j, i] * smooth_q[1, 0] + D[i] * d_sq[j, 1, 0]
-                        dP[j, b, b] += d_D[j, i] * smooth_q[1, 1] + D[i] * d_sq[j, 1, 1]
+                        dP[a, j, a] += d_D[j, i] * smooth_q[0, 0] + D[i] * d_sq[j, 0, 0]
+                        dP[a, j, b] += d_D[j, i] * smooth_q[0, 1] + D[i] * d_sq[j, 0, 1]
+                        dP[b, j, a] += d_D[j, i] * smooth_q[1, 0] + D[i] * d_sq[j, 1, 0]
+                        dP[b, j, b] += d_D[j, i] * smooth_q[1, 1] + D[i] * d_sq[j, 1, 1]
                 _pairs(P, n_template, nx, nx + p, f00, f01, f10, f11, True)
                 _pairs(x.reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
                 for i in range(n_template):
@@ -414,15 +442,15 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
             for i in range(p):
                 P[nx + i, nx + i] += drift[i]
                 for j in range(k):
-                    dP[j, nx + i, nx + i] += d_drift[j, i]
+                    dP[nx + i, j, nx + i] += d_drift[j, i]
                 if code == BOTH:
                     P[nx + p + i, nx + p + i] += drift[i]
                     for j in range(k):
-                        dP[j, nx + p + i, nx + p + i] += d_drift[j, i]
+                        dP[nx + p + i, j, nx + p + i] += d_drift[j, i]
             if reset[kk]:
                 _reset(code, x, P, D, E, p, nx, n_template, tau, True)
                 for j in range(k):
-                    _reset(code, dx[j], dP[j], d_D[j], d_E[j], p, nx, n_template, zero, True)
+                    _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, True)
         # ---- update with y_k
         if varying:
             row = hx[kk]
@@ -445,18 +473,21 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
         inv_f = 1.0 / f
         v_out[kk] = v
         f_out[kk] = f
+        # dP h for every parameter at once: dP is symmetric, so its columns: sum_c h_c dP[c, j, :]
+        for i in range(km):
+            tf[i] = 0.0
+        for c in range(m):
+            hc = h[c]
+            if hc != 0.0:
+                for i in range(km):
+                    tf[i] += hc * dPf[c, i]
         for j in range(k):
             d = dyn[j]
             dv = 0.0
-            for a in range(m):
-                w = 0.0
-                for c in range(m):
-                    w += dP[j, a, c] * h[c]
-                t[a] = w
-                dv -= h[a] * dx[j, a]
             df = 0.0
             for a in range(m):
-                df += h[a] * t[a]
+                dv -= h[a] * dx[j, a]
+                df += h[a] * tk[j, a]
             if d >= 0:
                 dv += d_y[d, kk]
                 drow = d_hx[d, kk] if varying else d_hx[d, 0]
@@ -465,24 +496,26 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                     dv -= dh[i] * x[i]
                     df += 2.0 * dh[i] * s[i]
                 for a in range(m):
-                    w = t[a]
+                    w = tk[j, a]
                     for i in range(nx):
                         w += P[a, i] * dh[i]
                     ds[a] = w
             else:
                 for a in range(m):
-                    ds[a] = t[a]
+                    ds[a] = tk[j, a]
             dv_out[kk, j] = dv
             df_out[kk, j] = df
             # dx += dK v + K dv, dK = ds / f - s df / f^2; dP -= g s' + s g', g = ds / f - s df / (2 f^2)
             c1 = df * inv_f * inv_f
             for a in range(m):
                 dx[j, a] += (ds[a] * inv_f - s[a] * c1) * v + s[a] * inv_f * dv
-                g[a] = ds[a] * inv_f - 0.5 * s[a] * c1
-            for a in range(m):
-                ga, sa = g[a], s[a]
+                gk[j, a] = ds[a] * inv_f - 0.5 * s[a] * c1
+        for a in range(m):
+            sa = s[a]
+            for j in range(k):
+                ga = gk[j, a]
                 for c in range(m):
-                    dP[j, a, c] -= ga * s[c] + sa * g[c]
+                    dP[a, j, c] -= ga * s[c] + sa * gk[j, c]
         for a in range(m):
             K = s[a] * inv_f
             x[a] += K * v
