@@ -5,8 +5,9 @@ On a simulated 30 s record at 100 Hz, the record-level model with variation
 fastest of ``--repeats`` runs (one thread) of:
 
 * ``model.system(params)`` alone, the compiled augmented pass alone, ``model.loglike`` (both and the GLS);
-* the derivatives of the system arrays (central differences of ``system`` in ``f_h`` and ``xi_h``) and the
-  sensitivity pass alone, and the whole :func:`score`;
+* the derivatives of the system arrays in ``f_h`` and ``xi_h`` (analytic through the discretisation, the
+  default for linear dynamics, or central differences of ``system``), the sensitivity pass alone, and the whole
+  :func:`score`;
 * ``k + 1`` likelihood evaluations (L-BFGS-B's 2-point gradient) and ``2 k`` (a central gradient);
 * once each: the numerical Hessian of :func:`~smd_statespace.person.fit.information` (``2 k^2`` evaluations)
   and the per-cycle scores of the robust covariance (``_cluster_scores``: ``2 k`` evaluations), which
@@ -82,7 +83,9 @@ def main(argv=None):
         "model.system": fastest(lambda: model.system(params), args.repeats),
         "augmented_pass": fastest(lambda: kalman.augmented_pass(*pass_args), args.repeats),
         "model.loglike": fastest(lambda: model.loglike(params), args.repeats),
-        "system_derivatives": fastest(lambda: system_derivatives(model, params, sys), args.repeats),
+        "system_derivatives (analytic)": fastest(lambda: system_derivatives(model, params, sys), args.repeats),
+        "system_derivatives (difference)": fastest(
+            lambda: system_derivatives(model, params, sys, method="difference"), args.repeats),
         "sensitivity_pass": fastest(lambda: sensitivity_pass(*sens_args), args.repeats),
         "score": fastest(lambda: score(model, params), args.repeats),
         "score (given filter)": fastest(lambda: score(model, params, fitted), args.repeats),
