@@ -764,7 +764,7 @@ def system_derivatives(model: RecordModel, params, system=None, step=DYNAMICS_ST
 
 
 # ------------------------------------------------------------------------------------------------ score
-def score(model: RecordModel, params, fitted=None) -> dict:
+def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
     """Exact gradient of the profile log-likelihood, per-sample scores and the expected information.
 
     One compiled pass of the Kalman filter at the estimated ``delta`` and
@@ -779,7 +779,10 @@ def score(model: RecordModel, params, fitted=None) -> dict:
     params : ndarray, shape (k,)
         Parameters in the order of :attr:`RecordModel.param_names`.
     fitted : dict, optional
-        ``model.filter(params)`` when already made (its ``delta``, ``sigma2``, ``loglike``).
+        ``model.filter(params)`` when already made (its ``delta``, ``sigma2``, ``loglike``,
+        ``innovation_regression``, ``delta_cov_unscaled``).
+    method : {"auto", "analytic", "difference"}
+        How the dynamics' arrays are differentiated (:func:`system_derivatives`).
 
     Returns
     -------
@@ -814,9 +817,11 @@ def score(model: RecordModel, params, fitted=None) -> dict:
         nan = np.full(k, np.nan)
         return {"loglike": fitted["loglike"], "sample_loglike": np.full(N, np.nan), "gradient": nan,
                 "per_sample": np.full((N, k), np.nan), "expected_information": np.full((k, k), np.nan),
+                "profile_information": np.full((k, k), np.nan),
                 "innovations": np.full(N, np.nan), "variances": np.full(N, np.nan),
+                "d_innovations": np.full((N, k), np.nan), "d_log_variances": np.full((N, k), np.nan),
                 "delta": fitted["delta"], "sigma2": fitted["sigma2"]}
-    der = system_derivatives(model, params, sys)
+    der = system_derivatives(model, params, sys, method=method)
     delta, sigma2 = np.asarray(fitted["delta"], dtype=float), float(fitted["sigma2"])
     v, f, dv, df = sensitivity_pass(
         model.y - sys["y_known"], sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["offset"],
@@ -829,7 +834,14 @@ def score(model: RecordModel, params, fitted=None) -> dict:
     sample = -0.5 * (np.log(2.0 * math.pi * variance) + standard2)
     relative = df / f[:, None]  # d log f
     per_sample = -0.5 * (relative * (1.0 - standard2)[:, None]) - (v / variance)[:, None] * dv
-    info = 0.5 * relative.T @ relative + (dv / variance[:, None]).T @ dv
+    weighted = dv / variance[:, None]
+    info = 0.5 * relative.T @ relative + weighted.T @ dv
+    info = 0.5 * (info + info.T)
+    # delta and sigma^2 as nuisance parameters: d v / d delta = -Ev, d log(sigma^2 f) / d sigma^2 = 1 / sigma^2
+    cross = -weighted.T @ fitted["innovation_regression"]  # (k, q)
+    total = relative.sum(axis=0)
+    profile = info - cross @ (sigma2 * fitted["delta_cov_unscaled"]) @ cross.T - 0.5 * np.outer(total, total) / N
     return {"loglike": float(fitted["loglike"]), "sample_loglike": sample, "gradient": per_sample.sum(axis=0),
-            "per_sample": per_sample, "expected_information": 0.5 * (info + info.T), "innovations": v,
-            "variances": variance, "delta": delta, "sigma2": sigma2}
+            "per_sample": per_sample, "expected_information": info, "profile_information": 0.5 * (profile + profile.T),
+            "innovations": v, "variances": variance, "d_innovations": dv, "d_log_variances": relative,
+            "delta": delta, "sigma2": sigma2}
