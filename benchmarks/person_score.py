@@ -13,6 +13,11 @@ fastest of ``--repeats`` runs (one thread) of:
   and the per-cycle scores of the robust covariance (``_cluster_scores``: ``2 k`` evaluations), which
   :func:`score` gives (its expected information and its per-sample scores) from one pass.
 
+Then (``--no-information`` skips it) the shipped sample record (``data/sample.csv``, 30 s) is identified with
+variation "independent" (``identify_person``: about 10 s) and the standard errors of ``f_h`` and ``xi_h`` from
+:func:`score`'s expected information, conditional on ``delta`` and with ``delta`` and ``sigma^2`` profiled out,
+are compared with those of the observed information (``information(model, params, "oim")``).
+
 Usage::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/person_score.py [--repeats 7] [--duration 30]
@@ -57,6 +62,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--duration", type=float, default=30.0)
+    parser.add_argument("--no-information", dest="information", action="store_false",
+                        help="skip the comparison of the information matrices on the fitted sample record")
     args = parser.parse_args(argv)
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.3, duration=args.duration, seed=3)
     record = sim.record
@@ -105,6 +112,33 @@ def main(argv=None):
     print(f"score / (k+1) loglike: {rows['score'] / rows[f'{k + 1} x loglike (2-point gradient)']:.2f}; "
           f"score / 2k loglike: {rows['score'] / rows[f'{2 * k} x loglike (central gradient)']:.2f}")
     print(f"load average after {os.getloadavg()[0]:.2f}")
+    if args.information:
+        compare_information()
+
+
+def compare_information():
+    """Standard errors of ``f_h``, ``xi_h``: :func:`score`'s expected information against the observed one."""
+    from smd_statespace.io import read_record
+    from smd_statespace.person import identify_person
+    from smd_statespace.simulation import sample_path
+
+    start = time.perf_counter()
+    result = identify_person(read_record(sample_path(), 70.0), variation="independent", intervals="wald")
+    model, params = result.model, result.params
+    fitted = time.perf_counter()
+    cov, free = information(model, params, "oim")
+    hessian = time.perf_counter()
+    out = score(model, params)
+    done = time.perf_counter()
+    index = np.flatnonzero(free)
+    observed = np.sqrt(np.diag(cov)[index])
+    print(f"\nsample.csv, variation independent, {params.size} parameters: fit {fitted - start:.1f} s, "
+          f"observed information {1e3 * (hessian - fitted):.0f} ms, score {1e3 * (done - hessian):.0f} ms; "
+          f"gradient at the fit: {np.array2string(out['gradient'], precision=3)}")
+    print(f"se from the observed information: f_h {observed[0]:.4f} Hz, xi_h {observed[1]:.4f}")
+    for key in ("expected_information", "profile_information"):
+        se = np.sqrt(np.diag(np.linalg.inv(out[key][np.ix_(index, index)])))
+        print(f"{key:<21} se / observed se: f_h {se[0] / observed[0]:.2f}, xi_h {se[1] / observed[1]:.2f}")
 
 
 if __name__ == "__main__":

@@ -2,75 +2,100 @@
 
 :func:`score` returns the gradient of the profile log-likelihood of a
 :class:`~smd_statespace.person.model.RecordModel`, the per-sample scores and
-the expected (conditional) information, from one compiled pass that carries,
-next to the filter's state mean and covariance, their derivatives with respect
-to every parameter (Harvey 1989, *Forecasting, structural time series models
-and the Kalman filter*, Sect. 3.4.5-3.4.6).
+the expected information (conditional on the linear unknowns, and with them
+profiled out), from one compiled pass that carries, next to the filter's
+state mean and covariance, their derivatives with respect to every parameter
+(Harvey 1989, *Forecasting, structural time series models and the Kalman
+filter*, Sect. 3.4.5).
 
-Envelope theorem
-    The profile log-likelihood is ``L(theta) = max over delta, sigma^2 of
-    l(theta, delta, sigma^2)`` with ``l = sum_k l_k``,
-    ``l_k = -0.5 [log(2 pi sigma^2 f_k) + v_k^2 / (sigma^2 f_k)]``,
-    ``v_k = e_k - Ev_k delta`` the innovation and ``f_k`` its variance
-    relative to ``sigma^2``. At the maximiser ``(delta_hat, sigma2_hat)``
-    (:meth:`RecordModel.filter`) ``dL/dtheta = dl/dtheta`` at fixed
-    ``delta = delta_hat`` and ``sigma^2 = sigma2_hat``; the ``dl_k/dtheta``
-    are the per-sample scores (their sum the gradient), the quantities
-    :func:`~smd_statespace.person.fit._cluster_scores` builds by central
-    differences of :meth:`RecordModel.sample_loglike`.
+*Envelope theorem.* The profile log-likelihood is ``L(theta) = max over
+delta, sigma^2 of l(theta, delta, sigma^2)`` with ``l = sum_k l_k``,
+``l_k = -0.5 [log(2 pi sigma^2 f_k) + v_k^2 / (sigma^2 f_k)]``,
+``v_k = e_k - Ev_k delta`` the innovation and ``f_k`` its variance
+relative to ``sigma^2``. At the maximiser ``(delta_hat, sigma2_hat)``
+(:meth:`RecordModel.filter`) ``dL/dtheta = dl/dtheta`` at fixed
+``delta = delta_hat`` and ``sigma^2 = sigma2_hat``; the ``dl_k/dtheta``
+are the per-sample scores (their sum the gradient), the quantities
+:func:`~smd_statespace.person.fit._cluster_scores` builds by central
+differences of :meth:`RecordModel.sample_loglike`.
 
-Fixed ``delta``
-    With ``delta`` known the augmented (de Jong) filter of
-    :func:`~smd_statespace.person.kalman.augmented_pass` is an ordinary
-    Kalman filter whose state mean is ``a_k + A_k delta``: the initial
-    dynamic states, the template (entering at the resets, the smooth step and
-    the start) and the regressors' coefficients (``X_tr beta`` in the step,
-    ``X_obs beta`` in the observation) are known inputs. The pass here runs
-    that filter (mean ``x``, covariance ``P``: no ``delta`` columns) and for
-    each parameter ``j`` the derivatives ``dx_j``, ``dP_j`` of every step:
+*Fixed ``delta``.* With ``delta`` known the augmented (de Jong) filter of
+:func:`~smd_statespace.person.kalman.augmented_pass` is an ordinary
+Kalman filter whose state mean is ``a_k + A_k delta``: the initial
+dynamic states, the template (entering at the resets, the smooth step and
+the start) and the regressors' coefficients (``X_tr beta`` in the step,
+``X_obs beta`` in the observation) are known inputs. The pass here runs
+that filter (mean ``x``, covariance ``P``: no ``delta`` columns) and for
+each parameter ``j`` the derivatives ``dx_j``, ``dP_j`` of every step:
 
-    - predict ``x <- T x + c``, ``P <- T P T' + Q`` with ``T`` the identity
-      but in its first ``n_x`` rows ``[Phi, Gam]``:
-      ``dP <- T dP T' + dT P T' + T P dT' + dQ`` (``dT`` has the same rows
-      only), ``dx <- T dx + dT x + dc``;
-    - the smooth variation's step (pairs of a deviation and its rate) the
-      same way, with ``dD_i Q_s + D_i dQ_s`` and the template's input
-      ``tau_i [1 - phi_00, -phi_10]``;
-    - the drift and the resets of each variation model are linear in
-      ``(x, P, D, E)``: the same operations on ``(dx, dP, dD, dE)``, with the
-      template (a known input) contributing nothing;
-    - update: ``s = P h``, ``f = 1 + h's``, ``v = y - y_known - h'x -
-      X_obs beta``, ``ds = dP h + P dh``, ``df = h' dP h + 2 dh' s``,
-      ``dv = -dy_known - dh' x - h' dx``,
-      ``dx <- dx + (ds / f - s df / f^2) v + s dv / f``,
-      ``dP <- dP - g s' - s g'`` with ``g = ds / f - s df / (2 f^2)``.
+- predict ``x <- T x + c``, ``P <- T P T' + Q`` with ``T`` the identity
+  but in its first ``n_x`` rows ``[Phi, Gam]``:
+  ``dP <- T dP T' + dT P T' + T P dT' + dQ`` (``dT`` has the same rows
+  only), ``dx <- T dx + dT x + dc``;
+- the smooth variation's step (pairs of a deviation and its rate) the
+  same way, with ``dD_i Q_s + D_i dQ_s`` and the template's input
+  ``tau_i [1 - phi_00, -phi_10]``;
+- the drift and the resets of each variation model are linear in
+  ``(x, P, D, E)``: the same operations on ``(dx, dP, dD, dE)``, with the
+  template (a known input) contributing nothing;
+- update: ``s = P h``, ``f = 1 + h's``, ``v = y - y_known - h'x -
+  X_obs beta``, ``ds = dP h + P dh``, ``df = h' dP h + 2 dh' s``,
+  ``dv = -dy_known - dh' x - h' dx``,
+  ``dx <- dx + (ds / f - s df / f^2) v + s dv / f``,
+  ``dP <- dP - g s' - s g'`` with ``g = ds / f - s df / (2 f^2)``.
 
-    The score of a sample is then ``dl_k = -0.5 [df_k / f_k (1 - v_k^2 /
-    (sigma^2 f_k)) + 2 v_k dv_k / (sigma^2 f_k)]``.
+The score of a sample is then ``dl_k = -0.5 [df_k / f_k (1 - v_k^2 /
+(sigma^2 f_k)) + 2 v_k dv_k / (sigma^2 f_k)]``.
 
-    (Koopman & Shephard 1992, *Biometrika* 79, 823-826, give the exact score
-    from one smoothing pass, whose cost does not grow with the number of
-    parameters; it needs the derivatives of the system arrays all the same
-    and the smoother of the augmented filter, and is not used here.)
+(Koopman & Shephard 1992, *Biometrika* 79, 823-826, give the exact score
+from one smoothing pass, whose cost does not grow with the number of
+parameters; it needs the derivatives of the system arrays all the same
+and the smoother of the augmented filter, and is not used here.)
 
-Derivatives of the system arrays (:meth:`RecordModel.system`)
-    The log variance ratios enter as ``exp``: the derivative of ``D``,
-    ``E``, the drift and the process noise ``Qx`` is the value itself on the
-    entries the parameter sets. ``log_smooth_time`` enters through the
-    Matern-3/2 step (:func:`~smd_statespace.person.model.matern32_step`),
-    differentiated in closed form. ``f_h``, ``xi_h`` and the effects'
-    parameters change the dynamics (``Phi``, ``Gam``, ``offset``, ``X_tr``,
-    ``hx``, ``y_known``, ``Qx``): central differences of
-    :meth:`RecordModel.system` with a relative step of :data:`DYNAMICS_STEP`
-    (truncation ~ step^2, rounding ~ 1e-16 / step: both about 1e-10 of the
-    arrays), two calls of ``system`` per parameter.
+*Derivatives of the system arrays* (:func:`system_derivatives`). The log
+variance ratios enter as ``exp``: the derivative of ``D``, ``E``, the drift
+and the process noise ``Qx`` is the value itself on the entries the
+parameter sets. ``log_smooth_time`` enters through the
+Matern-3/2 step (:func:`~smd_statespace.person.model.matern32_step`),
+differentiated in closed form. ``f_h``, ``xi_h`` and the effects'
+parameters change the dynamics (``Phi``, ``Gam``, ``offset``, ``X_tr``,
+``hx``, ``y_known``, ``Qx``): with linear dynamics (the person, a floor
+mode) through the discretisation (the Van Loan block exponential for
+``Phi`` and ``W``, the harmonic gains' derivative; only the small
+continuous ``A, b`` are differenced), else (a path-linearised effect)
+by central differences of :meth:`RecordModel.system` with a relative
+step of :data:`DYNAMICS_STEP`. The analytic arrays are 100-1000 times
+closer to a Richardson extrapolation than the differenced ones, and
+cheaper (3.0 against 4.9 ms below).
 
-Cost (``benchmarks/person_score.py``, 30 s at 100 Hz, variation
-"independent" with a phase template, 9 parameters, one thread): see the
-benchmark's output; measured on the development machine (shared, two cores):
-:func:`score` about 3 times cheaper than the ``k + 1`` likelihood
-evaluations of L-BFGS-B's forward differences, and 5 times cheaper than
-``2 k`` central ones.
+*Information.* :func:`score` gives Harvey's expected information at fixed
+``delta`` and ``sigma^2`` (``expected_information``) and with them as nuisance
+parameters (``profile_information``: the Schur complement, with
+``d v / d delta = -Ev``, the augmented filter's regression). The first
+is *not* usable for ``f_h`` and ``xi_h``: the template absorbs much of a
+change of the dynamics, and it gives standard errors 0.1-0.2 times those
+of the observed information (the Hessian of
+:func:`~smd_statespace.person.fit.information`). The second agrees with
+the observed information: ratios of the ``f_h``, ``xi_h`` standard
+errors 0.98, 0.94 on the fitted sample record (``data/sample.csv``,
+"independent"), 0.84-1.06 on six simulated 12 s records, 0.75-1.16 with
+variation "smooth".
+
+*Cost* (``benchmarks/person_score.py``: 30 s at 100 Hz, variation
+"independent" with a phase template and the offset, 9 parameters, one
+thread, fastest of 7 runs on a shared two-core machine). ``model.loglike``
+3.9 ms (``system`` 1.0, the compiled pass 2.2); :func:`score` 19 ms (5 likelihoods: ``filter`` 3.9, ``system`` 1.0,
+:func:`system_derivatives` 3.0, :func:`sensitivity_pass` 10.5),
+against 37 ms for the ``k + 1`` likelihoods of L-BFGS-B's forward
+differences and 66 ms for ``2 k`` central ones: about half and a third.
+The pass costs 1.4 ms for the filter itself, then about 0.8 ms per
+variance parameter and 1.4 ms per dynamics parameter, against 2.2 +
+1.7 ms per likelihood evaluation, so the saving grows slowly with the
+parameters. Where it counts most: the per-sample
+(per-cycle) scores of the robust covariance (``_cluster_scores``, 73 ms
+by central differences) and the information matrix (the numerical
+Hessian, ``2 k^2`` likelihoods: 610 ms; the profiled expected
+information comes with :func:`score`).
 """
 
 from __future__ import annotations
@@ -800,13 +825,19 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
         (held at their estimates, not profiled out): it ignores the
         information the parameters share with the template, the initial
         state, the regressors and the scale, so it is not the information of
-        the profile likelihood; compared with the observed one (the
-        numerical Hessian of :func:`~smd_statespace.person.fit.information`)
-        on a fitted record it gives standard errors of ``f_h`` and ``xi_h``
-        that agree to within about 10 % (tests/test_person_score.py), a cheap
-        approximation, not a replacement;
-        ``innovations`` (N,), ``variances`` (N,) (``sigma^2 f``);
-        ``delta``, ``sigma2``.
+        the profile likelihood and *not usable as the observed information*:
+        on fitted records its standard errors of ``f_h`` and ``xi_h`` are
+        0.1-0.2 times those of the observed information (the numerical
+        Hessian of :func:`~smd_statespace.person.fit.information`);
+        ``profile_information`` (k, k): the same expected information of
+        ``(theta, delta, sigma^2)`` with ``delta`` and ``sigma^2`` as
+        nuisance parameters, ``I_tt - I_td I_dd^-1 I_dt - I_ts I_ss^-1 I_st``
+        (``d v / d delta = -Ev``, ``I_dd = S / sigma^2``, ``I_ss = N / (2 sigma^4)``):
+        its ``f_h``, ``xi_h`` standard errors are within about 15-25 % of the
+        observed information's (0.98 and 0.94 on the fitted sample record);
+        ``innovations`` (N,), ``variances`` (N,) (``sigma^2 f``),
+        ``d_innovations`` (N, k), ``d_log_variances`` (N, k) (derivatives of
+        ``v`` and of ``log f``); ``delta``, ``sigma2``.
     """
     params = np.asarray(params, dtype=float)
     fitted = model.filter(params) if fitted is None else fitted
