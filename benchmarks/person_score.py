@@ -104,7 +104,7 @@ def main(argv=None):
         lambda: [model.loglike(params) for _ in range(2 * k)], max(2, args.repeats // 3))
     index = np.arange(k)
     steps = np.where(index < 2, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3 * model.scales)
-    rows["_cluster_scores (robust)"] = fastest(lambda: _cluster_scores(model, params, index, steps), 1)
+    rows["_cluster_scores (robust)"] = fastest(lambda: _cluster_scores(model, params, index), 1)
     rows["information 'oim' (Hessian)"] = fastest(lambda: information(model, params, "oim"), 1)
     width = max(len(name) for name in rows)
     for name, ms in rows.items():
