@@ -119,6 +119,17 @@ def _basis(theta, n):
     return np.concatenate([np.ones(theta.shape + (1,)), np.cos(angle), np.sin(angle)], axis=-1)
 
 
+def _series(theta, coef, n):
+    """``_basis(theta, n) @ coef`` without the basis: ``cos(i theta), sin(i theta)`` by rotation from the first."""
+    turn = np.exp(1j * theta)
+    power = turn.copy()
+    total = np.full(theta.shape, coef[0])
+    for i in range(1, n + 1):
+        total += coef[i] * power.real + coef[n + i] * power.imag
+        power *= turn
+    return total
+
+
 def _template(time, y, boundaries, n):
     """Least-squares Fourier template of ``y`` against the phase; returns its coefficients."""
     _, theta, _ = CycleTiming(boundaries).locate(time)
@@ -148,7 +159,7 @@ def _sweep(time, y, b, movable, coef, n):
     first = tw < c
     theta = np.where(first, (tw - left[:, None, None]) / (c - left[:, None, None]),
                      (tw - c) / (right[:, None, None] - c))
-    model = _basis(2.0 * np.pi * theta, n) @ coef
+    model = _series(2.0 * np.pi * theta, coef, n)
     cost = np.sum(np.where(inside[:, None, :], (y_win[:, None, :] - model) ** 2, 0.0), axis=-1)
     b[movable] = candidate[np.arange(movable.size), np.argmin(cost, axis=1)]
 
