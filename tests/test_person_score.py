@@ -107,16 +107,36 @@ CASES = {
 }
 
 
+def disturbance_model(record):
+    """An effect whose term is a known function of time with an unknown gain, at gain 0 (where identify starts it):
+    its known term vanishes there, its derivative does not."""
+    from smd_statespace.model import Effect, Slot
+
+    class Disturbance(Effect):
+        name = "known_disturbance"
+
+        def slots(self, model):
+            return (Slot("c_d", "parameter", "m/s^2", -5.0, 5.0, nominal=1.0, description="gain"),)
+
+        def acceleration(self, model, x, t, inputs):
+            return model.value(x, "c_d") * np.sin(2 * np.pi * 7.3 * np.asarray(t))
+
+    model = build(record, effects=[Disturbance()])
+    return model, point(model, c_d=0.0)
+
+
 def case(record, name):
     if name == "floor_mode":
         return floor_model(record)
+    if name == "known_disturbance":
+        return disturbance_model(record)
     if name == "cubic_stiffness":
         return cubic_model(record)
     model = CASES[name](record)
     return model, point(model)
 
 
-@pytest.mark.parametrize("name", list(CASES) + ["floor_mode", "cubic_stiffness"])
+@pytest.mark.parametrize("name", list(CASES) + ["floor_mode", "cubic_stiffness", "known_disturbance"])
 def test_gradient_is_the_derivative_of_the_profile_loglike(record, name):
     model, params = case(record, name)
     fitted = model.filter(params)

@@ -630,9 +630,12 @@ def _dynamics_derivative(model: RecordModel, params, j, h, base: _Discretisation
     down[j] -= h
     lin, plus, minus = base.lin, _linearise(model, up), _linearise(model, down)
 
-    def diff(name):
+    def diff(name):  # an effect's known term is None where it is zero (a gain of 0): its derivative need not be
         a, b = getattr(plus, name), getattr(minus, name)
-        return None if a is None else (a - b) / (2.0 * h)
+        if a is None and b is None:
+            return None
+        a = np.zeros_like(b) if a is None else a
+        return (a - (np.zeros_like(a) if b is None else b)) / (2.0 * h)
 
     A, b, dA, db = lin.A, lin.b, diff("A"), diff("b")
     n = A.shape[-1]
@@ -662,14 +665,15 @@ def _dynamics_derivative(model: RecordModel, params, j, h, base: _Discretisation
         _integrated_white_noise(plus.A.mean(axis=0), plus.b.mean(axis=0), dt)
         - _integrated_white_noise(minus.A.mean(axis=0), minus.b.mean(axis=0), dt)) / (2.0 * h)
     dynamic = np.array([r.dynamic for r in model.regressors], dtype=bool)
-    if lin.c is None:
-        d_offset = np.zeros((N, n))
-    else:
-        d_offset = np.einsum("kij,kj->ki", d_integral, _step_mean(lin.c)) + np.einsum(
-            "kij,kj->ki", integral, _step_mean(diff("c")))
+    d_c, d_d = diff("c"), diff("d")
+    d_offset = np.zeros((N, n))
+    if lin.c is not None:
+        d_offset += np.einsum("kij,kj->ki", d_integral, _step_mean(lin.c))
+    if d_c is not None:
+        d_offset += np.einsum("kij,kj->ki", integral, _step_mean(d_c))
     return {"hx": diff("hx"), "Phi": d_phi, "Gam": gam, "offset": d_offset,
             "X_tr": _regressor_steps(d_g0, model._X * dynamic),
-            "y_known": np.zeros(N) if lin.d is None else diff("d"), "Qx": d_qx}
+            "y_known": np.zeros(N) if d_d is None else d_d, "Qx": d_qx}
 
 
 def _variance_entries(model: RecordModel, name):
