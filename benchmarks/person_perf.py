@@ -98,9 +98,19 @@ IDENTIFY_IMPORTS = ("smd_statespace.cli", "smd_statespace.person", "smd_statespa
 """What ``identify REC --mass M`` imports before its first figure (the command, the fit, statsmodels' twin,
 the files and the figures)."""
 
-PACKAGES = ("numpy", "pandas", "scipy", "scipy.stats", "scipy.signal", "scipy.optimize", "matplotlib",
-            "matplotlib.figure", "filterpy", "numba", "statsmodels", "tqdm", "dask", "distributed")
-"""Third-party packages whose first import ``-X importtime`` reports, summarised in the import table."""
+PACKAGES = {"numpy": ("numpy",), "pandas": ("pandas",), "scipy": ("scipy",), "matplotlib": ("matplotlib", "mpl_toolkits",
+            "PIL", "kiwisolver", "pyparsing", "cycler", "fontTools", "contourpy"), "numba": ("numba", "llvmlite"),
+            "statsmodels": ("statsmodels", "patsy"), "filterpy": ("filterpy",), "dask": ("dask", "distributed"),
+            "smd_statespace": ("smd_statespace",)}
+"""Packages (and the top-level modules counted with them) of the ``-X importtime`` summary."""
+
+WRITE_STEPS = (("data", "smd_statespace.person.results", "PersonResult", "to_dict"),
+               ("fit", "smd_statespace.person.results", "PersonResult", "plot_fit"),
+               ("diagnostics", "smd_statespace.person.results", "PersonResult", "plot_diagnostics"),
+               ("spectrum", "smd_statespace.plotting.person", None, "plot_spectrum"),
+               ("compare", "smd_statespace.plotting.person", None, "plot_compare"))
+"""``(key, module, class or None, function)`` timed inside ``write_person`` (``result.cycles``, a cached property
+that ``write_person`` reads, is timed before it)."""
 
 
 # ---------------------------------------------------------------------------
@@ -170,6 +180,21 @@ class Timers:
         self._undo.clear()
 
 
+def write_timers() -> Timers:
+    import importlib
+
+    timers = Timers()
+    for key, module, cls, name in WRITE_STEPS:
+        owner = importlib.import_module(module)
+        owner = getattr(owner, cls) if cls else owner
+        member = owner.__dict__.get(name) if isinstance(owner, type) else None
+        if isinstance(member, property) or type(member).__name__ == "cached_property":
+            timers.missing.append(key)  # a property: not wrapped (cached_property keeps its value on the object)
+            continue
+        timers.wrap(owner, name, key)
+    return timers
+
+
 def library_timers() -> Timers:
     timers = Timers()
     for key, name in TIMED:
@@ -219,10 +244,15 @@ def time_library(records, progress=print) -> list[dict]:
             result.summary()
             row["summary_seconds"] = time.perf_counter() - started
             started = time.perf_counter()
+            _ = result.cycles  # cached on the result: write_person reads it
+            row["cycles_seconds"] = time.perf_counter() - started
             folder = Path(scratch) / f"r{k}"
             folder.mkdir()
-            write_person(folder, result, {"benchmark": True})
-            row["write_seconds"] = time.perf_counter() - started
+            with write_timers() as writing:
+                started = time.perf_counter()
+                write_person(folder, result, {"benchmark": True})
+                row["write_seconds"] = time.perf_counter() - started
+            row["write_parts"] = {key: writing.seconds.get(key, np.nan) for key, *_ in WRITE_STEPS}
             rows.append(row)
             progress(f"  {item['name']}: identify_person {total:.1f} s ({row['loglike_calls']} likelihoods), "
                      f"summary {row['summary_seconds']:.1f} s, files {row['write_seconds']:.1f} s")
@@ -270,19 +300,23 @@ def import_times(repeats: int) -> list[dict]:
 
 
 def importtime(code: str) -> dict:
-    """``python -X importtime -c code``: total and the first import of each of :data:`PACKAGES` (ms, cumulative)."""
+    """``python -X importtime -c code``: the total and the modules' own (self) times summed by package (ms).
+
+    Self times add up to the total, so each package's share is what importing its own modules cost
+    (a package imported inside another one is counted as itself).
+    """
     done = subprocess.run([sys.executable, "-X", "importtime", "-c", code], capture_output=True, text=True,
                           env=child_env())
-    total, packages, ours = 0.0, {}, 0.0
+    owner = {top: package for package, tops in PACKAGES.items() for top in tops}
+    total, packages = 0.0, {}
     for line in done.stderr.splitlines():
         match = re.match(r"import time:\s+(\d+) \|\s+(\d+) \|( *)(\S+)", line)
         if not match:
             continue
-        cumulative, depth, name = int(match[2]) / 1000.0, len(match[3]) // 2, match[4]
-        if depth == 0:
-            total += cumulative
-        if name in PACKAGES and name not in packages:
-            packages[name] = cumulative
+        own, name = int(match[1]) / 1000.0, match[4]
+        total += own
+        package = owner.get(name.split(".")[0], "other (Python's own, small packages)")
+        packages[package] = packages.get(package, 0.0) + own
     return {"total": total, "packages": packages}
 
 
@@ -516,11 +550,19 @@ def library_section(rows, warm) -> list[str]:
                      f"{r['xi_h_true']:.2f} / {r['xi_h']:.2f} | {r['variation']} | {r['seconds']:.1f} | "
                      f"{r['searches']:.1f} ({r['searches_calls']}) | {r['loglike_calls']} | "
                      f"{r['summary_seconds']:.1f} | {r['write_seconds']:.1f} |")
-    lines += ["", "After the fit, in the same process (what the command does next): "
-              f"`result.summary()` (statsmodels' smoother, residual tests) {spread([r['summary_seconds'] for r in rows])} s; "
-              f"`write_person` (person.json, results.csv, 4 figures) {spread([r['write_seconds'] for r in rows])} s.",
-              ""]
-    return lines
+    labels = {"data": "`to_dict` (person.json's numbers)", "fit": "`plot_fit`", "diagnostics": "`plot_diagnostics`",
+              "spectrum": "`plot_spectrum`", "compare": "`plot_compare` (free-run simulation)"}
+    lines += ["", "After the fit, in the same process (what the command does next), seconds per record, median "
+              "[min, max]:", "", "| step | s |", "|---|---|",
+              f"| `result.summary()` (statsmodels' smoother at the estimate, residual tests) | "
+              f"{spread([r['summary_seconds'] for r in rows])} |",
+              f"| `result.cycles` (per-cycle table from the smoother; cached) | "
+              f"{spread([r['cycles_seconds'] for r in rows])} |",
+              f"| `write_person` (person.json, results.csv, run.json, 4 figures) | "
+              f"{spread([r['write_seconds'] for r in rows])} |"]
+    for key, label in labels.items():
+        lines.append(f"| - of which {label} | {spread([r['write_parts'].get(key, np.nan) for r in rows])} |")
+    return lines + [""]
 
 
 def cli_section(imports, profile, cli, diagnose) -> list[str]:
@@ -530,9 +572,10 @@ def cli_section(imports, profile, cli, diagnose) -> list[str]:
         lines += [f"| {r['what']} | {r['min']:.2f} | {r['median']:.2f} |" for r in imports]
         lines.append("")
     if profile:
-        names = [p for p in PACKAGES if any(p in prof["packages"] for prof in profile.values())]
-        lines += ["`python -X importtime -c CODE`: the sum of the top-level imports, and the cumulative ms of each "
-                  "package's first import (nested: scipy.stats may be inside filterpy).", "",
+        names = [p for p in list(PACKAGES) + ["other (Python's own, small packages)"]
+                 if any(p in prof["packages"] for prof in profile.values())]
+        lines += ["`python -X importtime -c CODE`: ms of the modules' own import times, summed by package (they add "
+                  "up to the total; `-X importtime` itself slows imports a little).", "",
                   "| CODE | total ms | " + " | ".join(names) + " |", "|---|---|" + "---|" * len(names)]
         for code, prof in profile.items():
             lines.append(f"| `{code}` | {prof['total']:.0f} | "
@@ -595,7 +638,8 @@ def study_section(rows) -> list[str]:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--people", type=int, default=2, help="simulated people (default 2)")
+    parser.add_argument("--people", type=int, default=2,
+                        help="simulated people (default 2; 0 with --study times the batch alone)")
     parser.add_argument("--generators", default="jumps,smooth",
                         help="force-variation generators of simulate_bouncing, comma-separated (default jumps,smooth)")
     parser.add_argument("--seed", type=int, default=2023, help="SeedSequence seed of the people (default 2023)")
@@ -674,7 +718,8 @@ def main(argv=None) -> int:
              f"- {machine_line()}.",
              f"- {len(records)} records: {args.people} simulated people (seed {args.seed}) x generators "
              f"{', '.join(generators)}; {DURATION:g} s at {FS:g} Hz each.", ""]
-    lines += library_section(library, warm)
+    if library:
+        lines += library_section(library, warm)
     lines += cli_section(imports, profile, cli, diagnose)
     if side:
         lines += statsmodels_section(side)
