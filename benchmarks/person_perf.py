@@ -720,7 +720,8 @@ def main(argv=None) -> int:
              f"{', '.join(generators)}; {DURATION:g} s at {FS:g} Hz each.", ""]
     if library:
         lines += library_section(library, warm)
-    lines += cli_section(imports, profile, cli, diagnose)
+    if imports or profile or cli or diagnose:
+        lines += cli_section(imports, profile, cli, diagnose)
     if side:
         lines += statsmodels_section(side)
     if study:
