@@ -22,11 +22,14 @@ import csv
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from .errors import MassError, RecordError
+
+if TYPE_CHECKING:  # pandas is imported where it is used: `import smd_statespace` needs numpy only
+    import pandas as pd
 
 G = 9.80665
 """Standard gravity (m/s^2)."""
@@ -83,6 +86,8 @@ class Record:
 
     def to_frame(self) -> pd.DataFrame:
         """The record as a DataFrame with the CSV column names."""
+        import pandas as pd  # here, not at the top: `import smd_statespace` needs numpy only (0.3 s less)
+
         data = {"time": self.time, "force": self.force}
         if self.floor_acc is not None:
             data["floor_acc"] = self.floor_acc
@@ -110,6 +115,8 @@ def check_mass(mass, source: str = "--mass") -> float:
 
 def _check_numeric(values: np.ndarray, column: str, source: str) -> np.ndarray:
     """Convert one column to float64, naming the first bad row (1-based data row)."""
+    import pandas as pd  # here, not at the top: `import smd_statespace` needs numpy only
+
     numeric = pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(numeric)
     if bad.any():

@@ -53,8 +53,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import linalg, signal
-from scipy.integrate import cumulative_trapezoid
 
 from .errors import CycleError, MassError, OptionError, RecordError
 from .io import G, Record
@@ -182,6 +180,7 @@ def decimate_record(record: Record, rate=RECORD_RATE, extra=()):
         return record, 1, list(extra)
 
     kept = record.time.size // factor
+    from scipy import signal  # imported here: with scipy.stats, ~1 s (not needed to start)
 
     def down(values):
         whole = np.asarray(values, dtype=float)[:kept * factor]
@@ -258,6 +257,8 @@ def _check_filter_options(n_samples: int, fs: float, cutoff: float, order: int, 
         raise OptionError(f"order={order!r}: the Butterworth order must be an integer from 1 to 12 (default 4)")
     if padding not in PADDINGS:
         raise OptionError(f"padding={padding!r} is not one of {', '.join(PADDINGS)}")
+    from scipy import signal  # imported here: with scipy.stats, ~1 s (not needed to start)
+
     sos = signal.butter(int(order), cutoff, btype="highpass", fs=fs, output="sos")
     # The padding sosfiltfilt itself needs (its default padlen).
     padlen = 3 * (2 * len(sos) + 1 - min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum())))
@@ -277,6 +278,8 @@ def _ar_forecast(segment: np.ndarray, n_ahead: int, order: int) -> np.ndarray:
     the segment mean instead of growing. Falls back to the mean when the
     segment is constant or the fit fails.
     """
+    from scipy import linalg, signal  # imported here: with scipy.stats, ~1 s (not needed to start)
+
     mean = float(segment.mean())
     fallback = np.full(n_ahead, mean)
     centred = segment - mean
@@ -301,6 +304,8 @@ def _ar_forecast(segment: np.ndarray, n_ahead: int, order: int) -> np.ndarray:
 
 def _predictive_highpass(rows: np.ndarray, fs: float, cutoff: float, sos: np.ndarray) -> np.ndarray:
     """High-pass each row after detrending and extending both ends by linear prediction."""
+    from scipy import signal  # imported here: with scipy.stats, ~1 s (not needed to start)
+
     n = rows.shape[-1]
     rows = signal.detrend(rows, axis=-1, type="linear")
     n_pad = int(math.ceil(_PAD_CUTOFF_PERIODS / cutoff * fs))
@@ -366,6 +371,8 @@ def highpass(x, fs, cutoff=0.5, order=4, *, axis=-1, padding="predict"):
     if not np.all(np.isfinite(x)):
         raise RecordError("signal holds NaN or infinite values; the high-pass needs finite samples")
     if padding != "predict":
+        from scipy import signal  # imported here: with scipy.stats, ~1 s (not needed to start)
+
         return signal.sosfiltfilt(sos, x, axis=axis, padtype=padding)
     moved = np.moveaxis(x, axis, -1)
     rows = moved.reshape(-1, moved.shape[-1])
@@ -418,6 +425,8 @@ def integrate(x, fs, cutoff=0.5, order=4, *, axis=-1, padding="predict"):
     if x.ndim == 0:
         raise OptionError("x is a scalar; integrate needs a signal (an array of samples)")
     _check_filter_options(x.shape[axis], fs, cutoff, order, padding)
+    from scipy.integrate import cumulative_trapezoid  # here, not at the top, as scipy.signal
+
     integral = cumulative_trapezoid(x, dx=1.0 / float(fs), axis=axis, initial=0.0)
     return highpass(integral, fs, cutoff, order, axis=axis, padding=padding)
 
@@ -496,6 +505,8 @@ def _bouncing_period(force: np.ndarray, fs: float, fb_hi: float) -> float | None
     reaches :data:`_AUTOCORR_REPEAT` of the highest one, so that a multiple of
     the period is not taken for the period itself.
     """
+    from scipy import signal  # imported here: with scipy.stats, ~1 s (not needed to start)
+
     centred = signal.detrend(force, type="linear")
     n = centred.size
     acf = signal.correlate(centred, centred, mode="full", method="fft")[n - 1 :]
@@ -610,6 +621,8 @@ def _grf_peaks(time, force, highest_fb, prominence, label):
     if period is None:
         period = 1.0 / highest_fb  # no repetition visible (e.g. under two cycles): shortest supported period
     distance = max(1, int(PEAK_SPACING * period * fs))
+    from scipy import signal  # imported here: with scipy.stats, ~1 s (not needed to start)
+
     peaks, _ = signal.find_peaks(force, distance=distance, prominence=prominence * span)
     duration = float(time[-1] - time[0])
     if peaks.size == 0:

@@ -199,3 +199,27 @@ def test_record_estimator_batch_command_gives_one_person_per_record_that_stats_r
     report = capsys.readouterr().out
     assert "4 people read from 1 file(s): 3 ok, 1 failed left out" in report
     assert "too few people: need" in report and "cycles" not in report.replace("n_cycles", "")
+
+
+@pytest.mark.slow
+def test_record_estimator_batch_resumed_on_a_dask_cluster_gives_the_serial_table(records, tmp_path):
+    """``run_batch(executor=...)`` runs the record-level model on a Dask cluster: a run killed after its first
+    record, resumed on a ``LocalCluster`` (127.0.0.1, one worker process), identifies only the others there and
+    ends with the serial run's table (docs/performance.md, "The record-level person")."""
+    distributed = pytest.importorskip("distributed")
+    import shutil
+
+    found = collect_records(records, manifest=records / "manifest.csv")[:3]  # flat.csv (fails), rec0, rec1
+    serial = run_batch(found, tmp_path / "serial", estimator="record", progress=False)
+    assert serial.failed_records == ["flat.csv"] and serial.identified == 3
+    killed = tmp_path / "cluster"
+    shutil.copytree(tmp_path / "serial", killed)
+    (killed / "results.csv").unlink()
+    for record in found[1:]:  # as if killed after the first record
+        (killed / "parts" / record.part).unlink()
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        resumed = run_batch(found, killed, estimator="record", resume=True, progress=False,
+                            executor=client.get_executor())
+    assert resumed.identified == 2 and resumed.resumed == 1 and resumed.failed_records == ["flat.csv"]
+    pd.testing.assert_frame_equal(pd.read_csv(killed / "results.csv"), pd.read_csv(tmp_path / "serial" / "results.csv"))

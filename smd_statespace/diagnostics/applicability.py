@@ -47,7 +47,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import signal
 
 from ..errors import SMDInputError
 from ..io import G, Record
@@ -225,6 +224,8 @@ def _period(weight_fraction, dt):
     neighbours (a period of 62.5 samples read as 62 would slide the mean cycle
     by 24 samples over 48 cycles).
     """
+    from scipy import signal  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
+
     acf = _autocorrelation(weight_fraction)
     lo, hi = int(round(PERIOD_RANGE[0] / dt)), min(int(round(PERIOD_RANGE[1] / dt)), acf.size - 2)
     if hi <= lo + 2:
@@ -285,6 +286,8 @@ def _gait(weight_fraction, dt, period) -> Finding | None:
                        f"force swing): bouncing at {0.5 / period:.2f} Hz with a dominant second harmonic, or two "
                        "steps per cycle as in walking; the SMD model describes only the first")
     circular = np.r_[one, one, one]
+    from scipy import signal  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
+
     peaks, props = signal.find_peaks(circular, prominence=0.05 * swing)
     inside = (peaks >= samples) & (peaks < 2 * samples)
     prominence = np.sort(props["prominences"][inside])[::-1]

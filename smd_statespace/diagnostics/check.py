@@ -82,7 +82,6 @@ from typing import Mapping
 
 import numpy as np
 import pandas as pd
-from scipy import signal, stats
 
 from ..errors import OptionError
 from ..io import G, Record
@@ -491,6 +490,7 @@ class ModelCheck:
             the summed statistic and degrees of freedom and the chi-square
             p-value.
         """
+        from scipy import stats  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
         from statsmodels.stats.diagnostic import acorr_ljungbox
 
         lags = self.default_lags() if lags is None else int(lags)
@@ -593,6 +593,8 @@ class ModelCheck:
     # -- spectra --------------------------------------------------------------
 
     def _welch(self, x, nperseg=None):
+        from scipy import signal  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
+
         n = len(x)
         if nperseg is None:
             nperseg = int(round(SEGMENT_CYCLES * self.fs / self.f_b))
@@ -664,6 +666,8 @@ class ModelCheck:
             ``noise_floor``, ``threshold`` (N^2/Hz), ``f_b``, ``tolerance``
             (Hz) and ``resolution`` (Hz).
         """
+        from scipy import signal, stats  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
+
         series = self.residual if values is None else np.asarray(values, dtype=float)
         if series.shape != self.residual.shape:
             raise OptionError(f"values has shape {series.shape}; the check has {self.residual.shape}")

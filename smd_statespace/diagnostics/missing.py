@@ -66,7 +66,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from .check import ModelCheck, check_model
 from ..effects import EFFECTS, make_effect
@@ -237,6 +236,8 @@ def _judge(base: ModelCheck, check: ModelCheck, effect, n_candidates: int, alpha
     comparable = check.residual.size == n and extra >= 0 and dof > 0 and rss_with > 0
     if comparable:
         f_statistic = (rss - rss_with) / tested / (rss_with / dof)
+        from scipy import stats  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
+
         pvalue = float(stats.f.sf(f_statistic, tested, dof))
         lr = n * np.log(rss / rss_with)
     else:  # fewer dimensions than the base, or the refit checked other cycles: no nested test

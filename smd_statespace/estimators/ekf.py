@@ -1,7 +1,8 @@
 """Extended Kalman filter: filterpy's ``ExtendedKalmanFilter`` with the model's analytic Jacobians.
 
-filterpy's EKF predicts linearly (``x = F x + B u``). :class:`_ModelEKF`
-overrides ``predict_x`` so that the state moves by the model's nonlinear
+filterpy's EKF predicts linearly (``x = F x + B u``). ``_ModelEKF`` (in
+:mod:`._filterpy`, imported when the filter runs) overrides ``predict_x`` so
+that the state moves by the model's nonlinear
 :meth:`~smd_statespace.model.SMDModel.transition` (Eq. 11-12) while ``F``,
 the transition's Jacobian at the previous estimate, propagates the
 covariance. The update uses the observation (Eq. 14-16) and its Jacobian.
@@ -10,33 +11,10 @@ covariance. The update uses the observation (Eq. 14-16) and its Jacobian.
 from __future__ import annotations
 
 import numpy as np
-from filterpy.kalman import ExtendedKalmanFilter
 
 from ..model import SMDModel
 from .base import (CycleData, CovarianceGuard, Estimator, FreeState, GaussianStart, GaussianTrace, gaussian_start,
                    prepare, register_estimator)
-
-
-class _ModelEKF(ExtendedKalmanFilter):
-    """filterpy EKF whose prediction runs the model's nonlinear transition."""
-
-    def __init__(self, model: SMDModel, data: CycleData, free_state: FreeState):
-        super().__init__(dim_x=free_state.free.size, dim_z=model.n_obs)
-        self.model, self.data, self.free_state = model, data, free_state
-        self.t, self.step = data.t[0], data.dt
-
-    def predict_x(self, u=0):
-        full = self.free_state.embed(self.x[:, 0])
-        free = self.free_state.free
-        self.F = self.model.transition_jacobian(full, self.t, self.step, self.data.inputs)[np.ix_(free, free)]
-        self.x = self.model.transition(full, self.t, self.step, self.data.inputs)[free][:, None]
-
-    def h_jacobian(self, x, t):
-        full = self.free_state.embed(x[:, 0])
-        return self.model.observation_jacobian(full, t, self.data.inputs)[:, self.free_state.free]
-
-    def h(self, x, t):
-        return self.model.observe(self.free_state.embed(x[:, 0]), t, self.data.inputs)[:, None]
 
 
 @register_estimator
@@ -61,6 +39,8 @@ class ExtendedFilter(Estimator):
         self.observation_noise_std = observation_noise_std
 
     def run(self, model: SMDModel, data: CycleData, start=None, rng=None, fixed=None):
+        from ._filterpy import _ModelEKF  # here, not at the top: filterpy loads scipy.stats (0.7 s)
+
         setup = prepare(model, data, fixed, self.process_noise_std, self.observation_noise_std)
         free_state = FreeState(setup)
         mean, cov = gaussian_start(model, setup, start)

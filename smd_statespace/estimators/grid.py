@@ -22,7 +22,6 @@ that does not determine that parameter.
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from ..errors import OptionError
 from ..model import SMDModel
@@ -110,6 +109,8 @@ class GridReference(Estimator):
                 trace.mean[k], trace.std[k] = mixture_moments(normalised(log_lik), x, P, linear)
         if not np.all(np.isfinite(log_lik)):
             raise EstimatorFailure(f"cycle {data.index}: the grid Kalman filters diverged (non-finite likelihood)")
+        from scipy.special import logsumexp  # imported here: scipy.special takes 0.2 s (not needed to start)
+
         trace.log_likelihood = float(logsumexp(log_lik) - np.log(n_grid))
         posterior = normalised(log_lik)
         self.f_h_grid_, self.xi_h_grid_ = f_axis, xi_axis

@@ -14,7 +14,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from scipy.special import logsumexp
 
 from ..model import SMDModel
 from .base import EstimatorFailure, Setup
@@ -115,6 +114,8 @@ class ConditionalKalman:
 
 def normalised(log_weights):
     """Weights summing to one from log-weights."""
+    from scipy.special import logsumexp  # imported here: scipy.special takes 0.2 s (not needed to start)
+
     return np.exp(log_weights - logsumexp(log_weights))
 
 

@@ -13,53 +13,10 @@ is reported in ``diagnostics["covariance_repairs"]``.
 from __future__ import annotations
 
 import numpy as np
-from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter, unscented_transform
 
 from ..model import SMDModel
 from .base import (CycleData, CovarianceGuard, Estimator, FreeState, GaussianStart, GaussianTrace, gaussian_start,
                    prepare, register_estimator)
-
-
-class _BatchUKF(UnscentedKalmanFilter):
-    """filterpy's UKF whose sigma points go through ``fx`` and ``hx`` in one vectorised call each.
-
-    filterpy calls ``fx`` and ``hx`` once per sigma point in Python loops, and
-    sums the cross-covariance in a third; the model's transition and
-    observation take all ``2n + 1`` points at once, and the cross-covariance
-    is one matrix product. ``predict`` is filterpy's own; ``update`` is
-    filterpy's, line for line, with the loop over ``hx`` replaced. The numbers
-    are the same (``tests/test_estimators.py``).
-    """
-
-    def compute_process_sigmas(self, dt, fx=None, **fx_args):
-        fx = self.fx if fx is None else fx
-        self.sigmas_f = fx(self.points_fn.sigma_points(self.x, self.P), dt, **fx_args)
-
-    def cross_variance(self, x, z, sigmas_f, sigmas_h):
-        if self.residual_x is not np.subtract or self.residual_z is not np.subtract:
-            return super().cross_variance(x, z, sigmas_f, sigmas_h)
-        return (self.Wc[:, None] * (sigmas_f - x)).T @ (sigmas_h - z)
-
-    def update(self, z, R=None, UT=None, hx=None, **hx_args):
-        if z is None:
-            return super().update(z, R, UT, hx, **hx_args)
-        hx = self.hx if hx is None else hx
-        R = self.R if R is None else (np.eye(self._dim_z) * R if np.isscalar(R) else R)
-        UT = unscented_transform if UT is None else UT
-        self.sigmas_h = np.atleast_2d(hx(self.sigmas_f, **hx_args))
-        zp, self.S = UT(self.sigmas_h, self.Wm, self.Wc, R, self.z_mean, self.residual_z)
-        self.SI = self.inv(self.S)
-        Pxz = self.cross_variance(self.x, zp, self.sigmas_f, self.sigmas_h)
-        self.K = Pxz @ self.SI
-        self.y = self.residual_z(z, zp)
-        self.x = self.state_add(self.x, self.K @ self.y)
-        self.P = self.P - self.K @ (self.S @ self.K.T)
-        self.z = np.array(z, copy=True)
-        self.x_post = self.x.copy()
-        self.P_post = self.P.copy()
-        self._log_likelihood = None
-        self._likelihood = None
-        self._mahalanobis = None
 
 
 @register_estimator
@@ -96,6 +53,11 @@ class UnscentedFilter(Estimator):
         self.observation_noise_std = observation_noise_std
 
     def run(self, model: SMDModel, data: CycleData, start=None, rng=None, fixed=None):
+        # here, not at the top: filterpy loads scipy.stats (0.7 s), which the record-level model may not need
+        from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
+
+        from ._filterpy import _BatchUKF
+
         setup = prepare(model, data, fixed, self.process_noise_std, self.observation_noise_std)
         free_state = FreeState(setup)
         mean, cov = gaussian_start(model, setup, start)

@@ -285,8 +285,16 @@ def _check_settings(sidecar: Path, settings: dict, resume: bool, parts: Path):
                               f"({sidecar.name}); resume with the same records and options, or choose another --out")
 
 
+def _run_on(executor, pending, model, estimator, runner_options, check, parts: Path, bar) -> None:
+    """Identify the ``pending`` records on ``executor``, writing each record's part as soon as it is done."""
+    futures = {executor.submit(identify_record, r, model, estimator, runner_options, check): r for r in pending}
+    for future in as_completed(futures):
+        atomic_write_csv(future.result(), parts / futures[future].part)
+        bar.update()
+
+
 def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_options=None, jobs: int = 1,
-              resume: bool = False, progress: bool = True, check: bool = True) -> BatchSummary:
+              resume: bool = False, progress: bool = True, check: bool = True, executor=None) -> BatchSummary:
     """Identify every record, writing each finished one at once; see the module docstring.
 
     Parameters
@@ -304,13 +312,19 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
         ``seed``, ``rate``, ``n_particles``, ...); with ``estimator="record"`` only ``rate`` is
         used (default :data:`~smd_statespace.signals.RECORD_RATE`).
     jobs : int
-        Records identified in parallel processes (results do not depend on it).
+        Records identified in parallel processes (results do not depend on it); ignored with ``executor``.
     resume : bool
         Continue the run in ``out``: keep its finished records.
     progress : bool
         Show a progress bar over records.
     check : bool
         Refuse records that are not bouncing (each fails with its reason; the others go on).
+    executor : concurrent.futures.Executor, optional
+        Identifies the records, one task per record, instead of ``jobs`` local processes: any
+        executor (processes, threads, or a Dask cluster's ``client.get_executor()``), for either
+        estimator (``"record"`` too). Each part is written by this process as its record
+        finishes, so a killed run resumes as usual, and the results do not depend on the
+        number of workers. The executor is not shut down here.
 
     Returns
     -------
@@ -336,13 +350,11 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     bar = tqdm(total=len(records), initial=len(records) - len(pending), desc=f"identify ({estimator})",
                unit="record", disable=not progress)
     try:
-        if jobs > 1 and len(pending) > 1:
+        if executor is not None and pending:
+            _run_on(executor, pending, model, estimator, runner_options, check, parts, bar)
+        elif jobs > 1 and len(pending) > 1:
             with ProcessPoolExecutor(max_workers=jobs) as pool:
-                futures = {pool.submit(identify_record, r, model, estimator, runner_options, check): r
-                           for r in pending}
-                for future in as_completed(futures):
-                    atomic_write_csv(future.result(), parts / futures[future].part)
-                    bar.update()
+                _run_on(pool, pending, model, estimator, runner_options, check, parts, bar)
         else:
             for record in pending:
                 atomic_write_csv(identify_record(record, model, estimator, runner_options, check),

@@ -51,10 +51,10 @@ import time as _time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 
 from .. import article
 from ..errors import OptionError
@@ -64,6 +64,9 @@ from .bouncing import default_phases, steady_grf_shape
 from .dynamics import _cycle_states, _simulation_effects, _System
 from .population import _population_columns, with_stiffness_and_damping
 from .variation import TRUNCATION_SD, _draw_cycles
+
+if TYPE_CHECKING:  # matplotlib is imported in plot_crowd: the command line's start does not load it (0.4 s)
+    from matplotlib.figure import Figure
 
 __all__ = [
     "CROWD_SETTINGS",
@@ -732,6 +735,8 @@ def plot_crowd(crowd: Crowd, path=None, n_people=3, window=4.0) -> Figure:
     -------
     matplotlib.figure.Figure
     """
+    from matplotlib.figure import Figure  # here, not at the top: only the figure needs matplotlib
+
     s = crowd.settings
     time = crowd.time
     fig = Figure(figsize=(8.0, 7.2))

@@ -16,8 +16,6 @@ import math
 
 import numpy as np
 import pandas as pd
-from scipy import optimize
-from scipy.integrate import solve_ivp
 
 from ..effects import build_effect, make_effect
 from ..errors import OptionError
@@ -325,6 +323,8 @@ def _linear_steady_state(system, force):
 
 def _integrate_cycle(system, force, x0, t_start, t_end, t_eval):
     """Integrate one cycle; return (states at t_eval, state at t_end)."""
+    from scipy.integrate import solve_ivp  # imported here: with scipy.optimize, 0.3 s (not needed to start)
+
     times = np.append(t_eval, t_end)
     solution = solve_ivp(
         system.rhs,
@@ -358,6 +358,8 @@ def _periodic_state(system, force, period, t_start):
 
     def mismatch(x0):
         return _integrate_cycle(system, force, x0, t_start, t_start + period, empty)[1] - x0
+
+    from scipy import optimize  # imported here: 0.3 s (not needed to start the command line)
 
     scale = np.maximum(np.abs(guess), 1e-6)
     solution = optimize.root(lambda s: mismatch(s * scale) / scale, guess / scale, method="hybr", tol=1e-12)

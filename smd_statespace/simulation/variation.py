@@ -16,7 +16,6 @@ import math
 
 import numpy as np
 import pandas as pd
-from scipy.interpolate import CubicSpline, PPoly
 
 from ..io import G
 from .dynamics import _CycleForce, _integrate_cycle, _periodic_state, _states_frame
@@ -271,6 +270,8 @@ def _smooth_force(rng_blocks, run_in_knots, geometry, f_b, fb_variation, a0, blf
     (n_run, 1 + 2m)) extends them into the past, nearest knot first, so the
     processes over the record do not depend on them.
     """
+    from scipy.interpolate import CubicSpline, PPoly  # imported here: 0.4 s (not needed to start)
+
     start_fraction, eps, amp_noise, phase_noise = rng_blocks
     t_lo, _, reach = geometry
     knots = np.concatenate([run_in_knots[::-1], np.column_stack([eps, amp_noise, phase_noise])])
