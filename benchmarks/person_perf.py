@@ -74,6 +74,7 @@ import smd_statespace  # noqa: E402
 from smd_statespace.io import write_record  # noqa: E402
 from smd_statespace.person import fit as person_fit  # noqa: E402
 from smd_statespace.person import identify_person  # noqa: E402
+from smd_statespace.person import score as person_score  # noqa: E402
 from smd_statespace.person.model import RecordModel  # noqa: E402
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing  # noqa: E402
 
@@ -199,7 +200,8 @@ def library_timers() -> Timers:
     timers = Timers()
     for key, name in TIMED:
         timers.wrap(person_fit, name, key)
-    timers.wrap(RecordModel, "loglike", "loglike")
+    timers.wrap(RecordModel, "filter", "loglike")  # every Kalman pass: a likelihood alone or under a score
+    timers.wrap(person_score, "score", "score")  # passes with derivatives (each also one pass above)
     return timers
 
 
@@ -237,6 +239,7 @@ def time_library(records, progress=print) -> list[dict]:
                    "seconds": total, **parts,
                    "other": total - np.nansum([parts[key] for key, _ in TIMED]),
                    "loglike_calls": timers.calls.get("loglike", 0), "loglike_seconds": timers.seconds.get("loglike", np.nan),
+                   "score_calls": timers.calls.get("score", 0), "score_seconds": timers.seconds.get("score", np.nan),
                    "searches_calls": timers.calls.get("searches", 0), "variation": result.model.variation,
                    "f_h": result.f_h, "xi_h": result.xi_h, "n_evaluations": result.n_evaluations,
                    "fitted": result}
@@ -254,7 +257,7 @@ def time_library(records, progress=print) -> list[dict]:
                 row["write_seconds"] = time.perf_counter() - started
             row["write_parts"] = {key: writing.seconds.get(key, np.nan) for key, *_ in WRITE_STEPS}
             rows.append(row)
-            progress(f"  {item['name']}: identify_person {total:.1f} s ({row['loglike_calls']} likelihoods), "
+            progress(f"  {item['name']}: identify_person {total:.1f} s ({row['loglike_calls']} Kalman passes, {row['score_calls']} with derivatives), "
                      f"summary {row['summary_seconds']:.1f} s, files {row['write_seconds']:.1f} s")
         missing = list(timers.missing)
     for row in rows:
@@ -527,8 +530,9 @@ def library_section(rows, warm) -> list[str]:
     lines += ["Seconds per record, median [min, max]; each part: median seconds (share of all records' time).", "",
               "| records | identify_person (s) | likelihood searches (`fit_model`) | cycle-start re-placement "
               "(`corrected_timing`) | information matrix (`information`) | rest of the result (`person_result`) "
-              "| other | likelihoods per record | ms per likelihood |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "| other | Kalman passes per record | of them with derivatives (`score`) | ms per pass "
+              "(`filter`) | ms per `score` (its pass included) |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     groups = [(g, [r for r in rows if r["generator"] == g]) for g in dict.fromkeys(r["generator"] for r in rows)]
     groups.append(("all", rows))
     for label, group in groups:
@@ -536,14 +540,17 @@ def library_section(rows, warm) -> list[str]:
             continue
         total = [r["seconds"] for r in group]
         per = [1e3 * r["loglike_seconds"] / r["loglike_calls"] for r in group if r["loglike_calls"]]
+        per_score = [1e3 * r["score_seconds"] / r["score_calls"] for r in group if r["score_calls"]]
         lines.append(f"| {label} ({len(group)}) | {spread(total)} | "
                      + " | ".join(share([r[key] for r in group], total) for key in
                                   ("searches", "timing", "information", "result", "other"))
                      + f" | {np.median([r['loglike_calls'] for r in group]):.0f} | "
-                       f"{np.median(per) if per else float('nan'):.2f} |")
+                       f"{np.median([r['score_calls'] for r in group]):.0f} | "
+                       f"{np.median(per) if per else float('nan'):.2f} | "
+                       f"{np.median(per_score) if per_score else float('nan'):.1f} |")
     lines += ["", f"Warm-up before the timed records (numba's compiled passes loaded or compiled): {warm:.1f} s.", "",
               "| record | generator | f_b (Hz) | f_h true / est. (Hz) | xi_h true / est. | variation chosen | s | "
-              "searches (`fit_model` calls) | likelihoods | summary (s) | files and figures (s) |",
+              "searches (`fit_model` calls) | Kalman passes | summary (s) | files and figures (s) |",
               "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['name']} | {r['generator']} | {r['f_b']:.2f} | {r['f_h_true']:.2f} / {r['f_h']:.2f} | "
