@@ -300,7 +300,9 @@ def information(model: RecordModel, params, cov_type="robust") -> tuple:
     w, v = np.linalg.eigh(-hess)
     if np.any(w <= 0):
         core = -hess[:2, :2]
-        if np.any(np.linalg.eigvalsh(core) <= 0):
+        # on a search bound f_h or xi_h is no estimate and the likelihood need not be curved there: the
+        # regularised inverse below gives it an sd as wide as the record leaves it (said "not determined")
+        if np.any(np.linalg.eigvalsh(core) <= 0) and not model.person_at_bound(params):
             raise FitError("the likelihood is not curved in f_h and xi_h at the estimate (information not positive "
                            "definite): the record does not determine them; use a longer record or a per-cycle "
                            "estimator (--estimator ekf)")
