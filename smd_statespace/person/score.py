@@ -679,25 +679,17 @@ def _dynamics_derivative(model: RecordModel, params, j, h, base: _Discretisation
             "y_known": np.zeros(N) if d_d is None else d_d, "Qx": d_qx}
 
 
-def _variance_entries(model: RecordModel, name):
-    """Which of ``D``, ``E``, the drift (per force state) and the process noise the log variance ``name`` sets.
-
-    Returns ``(which, mask)``: ``which`` one of ``"D"``, ``"E"``, ``"drift"``,
-    ``"w"``; ``mask`` (shape (n_force_states,)) the entries (as
-    :meth:`RecordModel._variances` fills them: ``a0`` is group 0, ``a_i``
-    and ``b_i`` group ``i``; the phase and rate errors follow the coefficients
-    in ``D``).
-    """
-    group = np.concatenate([[0], np.repeat(np.arange(1, model.n_harmonics + 1), 2)])
-    mask = np.zeros(model.n_force_states, dtype=bool)
-    if name == "log_var_w":
-        return "w", mask
-    if name in ("log_var_phase", "log_var_rate"):
-        mask[model.n_coefficients + (name == "log_var_rate")] = True
-        return "D", mask
-    kind, number = name[len("log_var_"):].split("_")
-    mask[:group.size] = group == int(number)
-    return {"d": "D", "e": "E", "s": "drift"}[kind], mask
+def _variance_entries(model: RecordModel, j):
+    """Which of ``D``, ``E``, the drift (per force state) and the process noise parameter ``j`` (a log variance)
+    sets: ``(which, mask)``, from :attr:`RecordModel._variance_index` (the one map :meth:`RecordModel._variances`
+    fills them by)."""
+    index = model._variance_index
+    if index["log_var_w"] == j:
+        return "w", np.zeros(model.n_force_states, dtype=bool)
+    for kind, which in (("log_var_d", "D"), ("log_var_e", "E"), ("log_var_s", "drift")):
+        if index[kind] is not None and np.any(index[kind] == j):
+            return which, index[kind] == j
+    raise ValueError(f"parameter {model.param_names[j]!r} is no log variance of the model")
 
 
 def system_derivatives(model: RecordModel, params, system=None, step=DYNAMICS_STEP, method="auto") -> dict:
@@ -774,7 +766,7 @@ def system_derivatives(model: RecordModel, params, system=None, step=DYNAMICS_ST
         elif name == "log_smooth_time":
             out["d_sphi"][j], out["d_sq"][j], out["d_sp0"][j] = _matern32_derivatives(np.exp(params[j]), model.dt)
         elif name.startswith("log_var_"):  # exp(log variance): the derivative is the value where it enters
-            which, mask = _variance_entries(model, name)
+            which, mask = _variance_entries(model, j)
             if which == "w":
                 out["d_Qx"][j] = sys["Qx"]
             else:
