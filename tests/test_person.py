@@ -227,8 +227,12 @@ def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects,
     assert result.missing[0] == expected
     row = result.table().loc[expected]
     assert row["noise_change_%"] < 0 and row["likelihood"] == "exact"
-    assert row["f_h"] == pytest.approx(2.5, rel=0.03)
     fitted = result.fits[expected]
+    # the person with the effect: its interval holds the truth (with the 5th and 6th harmonics, f_h is 2.41 Hz,
+    # 0.8 sd below 2.5, at a log-likelihood 311 above where L-BFGS-B with difference gradients had stopped with
+    # 2.53 Hz: issue 21's "f_h never worse with the true effect" is missed on this record, see its note)
+    low, high = fitted.intervals["f_h"]
+    assert low < 2.5 < high and row["f_h"] == pytest.approx(2.5, rel=0.06)
     if expected == "harmonics":  # the 5th harmonic's amplitude comes back, with 4 template coefficients and 2 spreads
         assert row["df"] == 6
         assert fitted.template_blf().loc[5, "blf"] == pytest.approx(0.04, rel=0.15)
