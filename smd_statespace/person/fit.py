@@ -650,7 +650,6 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     FitError
         The fit does not converge or does not determine ``f_h`` and ``xi_h``.
     """
-    from ..errors import OptionError
     from .extend import check_effects, fit_effects
 
     effects = check_effects(effects, record)
