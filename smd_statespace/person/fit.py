@@ -217,6 +217,8 @@ def _scoring(model: RecordModel, start, gain, max_iterations=100) -> tuple:
         g = current["gradient"] * scales
         info = current["profile_information"] * np.outer(scales, scales)
         free = np.flatnonzero(~(((x <= low) & (g < 0.0)) | ((x >= high) & (g > 0.0))))
+        if free.size == 0:  # every parameter held at a bound by its gradient: a corner maximum
+            return x * scales, current["loglike"], count, True, "every parameter on a bound"
         sub = info[np.ix_(free, free)]
         diagonal = np.maximum(np.diag(sub), 1e-12 * max(float(np.max(np.abs(np.diag(sub)))), 1e-300))
         accepted = None
