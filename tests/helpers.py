@@ -119,3 +119,20 @@ def zero_force_cycles(duration, period=0.5, n=1):
         frame[f"a{i}"] = 0.0
         frame[f"b{i}"] = 0.0
     return pd.DataFrame(frame)
+
+
+def known_disturbance():
+    """A test effect: a known disturbance ``c_d sin(2 pi 7.3 t)`` (m/s^2) on the COM with an unknown gain ``c_d``
+    (a known function of time: its term vanishes at gain 0, its derivative does not)."""
+    from smd_statespace.model import Effect, Slot
+
+    class Disturbance(Effect):
+        name = "known_disturbance"
+
+        def slots(self, model):
+            return (Slot("c_d", "parameter", "m/s^2", -5.0, 5.0, nominal=1.0, description="gain"),)
+
+        def acceleration(self, model, x, t, inputs):
+            return model.value(x, "c_d") * np.sin(2 * np.pi * 7.3 * np.asarray(t))
+
+    return Disturbance()

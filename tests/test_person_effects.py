@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from scipy import integrate, linalg, optimize
 
+from helpers import known_disturbance
 from smd_statespace.cli import main
 from smd_statespace.effects import make_effect
 from smd_statespace.io import G
@@ -247,25 +248,6 @@ def test_diagnose_prints_the_identify_command_that_adds_the_effect_and_it_runs(t
     assert abs(person["f_h"] / 2.6 - 1) <= abs(person["before"]["f_h"] / 2.6 - 1) + 0.01
 
 
-class KnownDisturbance:
-    """A test effect: a known disturbance ``c sin(2 pi 7.3 t)`` (m/s^2) on the COM with an unknown gain ``c``."""
-
-    @staticmethod
-    def build():
-        from smd_statespace.model import Effect, Slot
-
-        class Disturbance(Effect):
-            name = "known_disturbance"
-
-            def slots(self, model):
-                return (Slot("c_d", "parameter", "m/s^2", -5.0, 5.0, nominal=1.0, description="gain"),)
-
-            def acceleration(self, model, x, t, inputs):
-                return model.value(x, "c_d") * np.sin(2 * np.pi * 7.3 * np.asarray(t))
-
-        return Disturbance()
-
-
 @pytest.mark.slow
 def test_the_likelihood_ratio_of_an_absent_effect_is_chi_square_with_its_degrees_of_freedom():
     """On clean records, adding an effect of one parameter that is not there gives a likelihood ratio distributed
@@ -277,7 +259,7 @@ def test_the_likelihood_ratio_of_an_absent_effect_is_chi_square_with_its_degrees
     from smd_statespace.person.extend import fit_effects
     from smd_statespace.simulation import simulate_bouncing
 
-    effect = KnownDisturbance.build()
+    effect = known_disturbance()
     ratios = []
     for seed in np.random.SeedSequence(2026).generate_state(30):
         sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=8, seed=int(seed))
@@ -306,7 +288,7 @@ def test_an_effect_added_on_top_of_another_is_tested_against_the_person_with_the
     from smd_statespace.person.extend import fit_effects
     from smd_statespace.simulation import simulate_bouncing
 
-    disturbance = KnownDisturbance.build()
+    disturbance = known_disturbance()
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=10, seed=7,
                             effects=[disturbance.with_values(c_d=0.3), "harmonics:blf=0.05"])
     base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")

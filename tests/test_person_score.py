@@ -14,6 +14,7 @@
 import numpy as np
 import pytest
 
+from helpers import known_disturbance
 from smd_statespace.effects import make_effect
 from smd_statespace.io import G
 from smd_statespace.model import SMDModel
@@ -110,18 +111,7 @@ CASES = {
 def disturbance_model(record):
     """An effect whose term is a known function of time with an unknown gain, at gain 0 (where identify starts it):
     its known term vanishes there, its derivative does not."""
-    from smd_statespace.model import Effect, Slot
-
-    class Disturbance(Effect):
-        name = "known_disturbance"
-
-        def slots(self, model):
-            return (Slot("c_d", "parameter", "m/s^2", -5.0, 5.0, nominal=1.0, description="gain"),)
-
-        def acceleration(self, model, x, t, inputs):
-            return model.value(x, "c_d") * np.sin(2 * np.pi * 7.3 * np.asarray(t))
-
-    model = build(record, effects=[Disturbance()])
+    model = build(record, effects=[known_disturbance()])
     return model, point(model, c_d=0.0)
 
 

@@ -47,19 +47,28 @@ INDEPENDENT, RANDOM_WALK, BOTH, SMOOTH = 0, 1, 2, 3
 """Codes of the variation models in the compiled pass."""
 
 
+@numba.njit(cache=True)
+def state_size(code, nx, p, n_template):
+    """Length of the filter's state for variation ``code``: ``[x (n_x), alpha (p)]``, plus the random walk's base
+    ``m`` (p) for :data:`BOTH` or the coefficients' rates (``n_template``) for :data:`SMOOTH`."""
+    if code == BOTH:
+        return nx + 2 * p
+    if code == SMOOTH:
+        return nx + p + n_template
+    return nx + p
+
+
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
-    """Draw the force coefficients again at a cycle boundary (in place); they start at row ``n_free``."""
+def reset_covariance(code, P, p, D, E, o, n_template, step):
+    """The covariance's part of a cycle boundary's new draw (in place); the force states start at row ``o``.
+
+    Shared by :func:`_reset` (the augmented pass) and the sensitivity pass of
+    :mod:`~smd_statespace.person.score`, which applies it to ``P`` and, being
+    linear in ``(P, D, E)``, to every ``(dP_j, dD_j, dE_j)``.
+    """
     m = P.shape[0]
-    q = A.shape[1]
-    o = n_free
-    if code == INDEPENDENT:  # alpha := tau + d
-        for i in range(o, o + p):
-            a[i] = 0.0
-            for c in range(q):
-                A[i, c] = 0.0
-            if i - o < n_template:
-                A[i, i] = 1.0
+    if code == INDEPENDENT or code == SMOOTH:  # alpha := tau + d (SMOOTH: only the timing states)
+        for i in range(o + (n_template if code == SMOOTH else 0), o + p):
             for c in range(m):
                 P[i, c] = 0.0
                 P[c, i] = 0.0
@@ -67,24 +76,12 @@ def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
     elif code == RANDOM_WALK:  # alpha := alpha + e
         for i in range(o, o + p):
             P[i, i] += E[i - o]
-    elif code == SMOOTH:  # the coefficients run on; only the timing states are drawn again
-        for i in range(o + n_template, o + p):
-            a[i] = 0.0
-            for c in range(q):
-                A[i, c] = 0.0
-            for c in range(m):
-                P[i, c] = 0.0
-                P[c, i] = 0.0
-            P[i, i] = D[i - o]
     else:  # m := m + e, alpha := m + d
         if step:
             for i in range(o + p, o + 2 * p):
                 P[i, i] += E[i - o - p]
         for i in range(o, o + p):
             j = i + p
-            a[i] = a[j]
-            for c in range(q):
-                A[i, c] = A[j, c]
             for c in range(m):
                 P[i, c] = P[j, c]
             for c in range(m):
@@ -93,35 +90,83 @@ def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _advance_rows(Phi, G, p, X, work):
-    """Rows ``0..n_x-1`` of ``X`` become ``Phi X[:n_x] + G X[n_x:n_x+p]`` (in place): a step's effect on the dynamic states.
+def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
+    """Draw the force coefficients again at a cycle boundary (in place); they start at row ``n_free``."""
+    q = A.shape[1]
+    o = n_free
+    if code == INDEPENDENT:  # alpha := tau + d: the mean is the template's column of delta
+        for i in range(o, o + p):
+            a[i] = 0.0
+            for c in range(q):
+                A[i, c] = 0.0
+            if i - o < n_template:
+                A[i, i] = 1.0
+    elif code == SMOOTH:  # the coefficients run on; only the timing states are drawn again
+        for i in range(o + n_template, o + p):
+            a[i] = 0.0
+            for c in range(q):
+                A[i, c] = 0.0
+    elif code == BOTH:  # alpha := m + d
+        for i in range(o, o + p):
+            a[i] = a[i + p]
+            for c in range(q):
+                A[i, c] = A[i + p, c]
+    reset_covariance(code, P, p, D, E, o, n_template, step)
 
-    Each column depends only on its own entries, so the columns are updated
-    one by one (``work`` holds one column's new rows). Applied to ``P``
-    (rows: ``T P``), ``P.T`` (columns: ``(T P) T'``), the mean and its
-    ``delta``-columns.
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def step_rows(T, G, X, out, work):
+    """Rows ``0..n_x-1`` of ``out`` become ``[T, G] X[:n_x + p]``: the first ``n_x`` rows of a step's transition
+    times ``X``, with ``T`` (n_x, n_x) and ``G`` (n_x, p).
+
+    Each column depends only on its own entries, so the columns are done one
+    by one (``work``, length ``n_x``, holds one column's new rows) and
+    ``out`` may be ``X`` itself: ``step_rows(T, G, P, P, work)`` is ``T P``
+    in place, on ``P.T`` ``(T P) T'``, and on the mean and its
+    ``delta``-columns their step.
     """
-    nx = Phi.shape[0]
+    nx, p = G.shape
+    m = X.shape[1]
     if nx == 2:  # the person alone (the usual case), written out: twice as fast
-        for c in range(X.shape[1]):
-            v0 = Phi[0, 0] * X[0, c] + Phi[0, 1] * X[1, c]
-            v1 = Phi[1, 0] * X[0, c] + Phi[1, 1] * X[1, c]
+        for c in range(m):
+            v0 = T[0, 0] * X[0, c] + T[0, 1] * X[1, c]
+            v1 = T[1, 0] * X[0, c] + T[1, 1] * X[1, c]
             for i in range(p):
                 v0 += G[0, i] * X[2 + i, c]
                 v1 += G[1, i] * X[2 + i, c]
-            X[0, c] = v0
-            X[1, c] = v1
+            out[0, c] = v0
+            out[1, c] = v1
         return
-    for c in range(X.shape[1]):
+    for c in range(m):
         for r in range(nx):
             v = 0.0
             for j in range(nx):
-                v += Phi[r, j] * X[j, c]
+                v += T[r, j] * X[j, c]
             for i in range(p):
                 v += G[r, i] * X[nx + i, c]
             work[r] = v
         for r in range(nx):
-            X[r, c] = work[r]
+            out[r, c] = work[r]
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def rotate_pairs(X, n_template, r0, r1, f00, f01, f10, f11, columns):
+    """Rows (and, with ``columns``, then columns) ``r0 + i``, ``r1 + i`` of ``X`` move by the 2 x 2 ``f``,
+    ``i < n_template`` (in place): the smooth variation's step of a deviation and its rate."""
+    m = X.shape[1]
+    for i in range(n_template):
+        a, b = r0 + i, r1 + i
+        for c in range(m):
+            x0 = X[a, c]
+            x1 = X[b, c]
+            X[a, c] = f00 * x0 + f01 * x1
+            X[b, c] = f10 * x0 + f11 * x1
+        if columns:
+            for c in range(X.shape[0]):
+                x0 = X[c, a]
+                x1 = X[c, b]
+                X[c, a] = f00 * x0 + f01 * x1
+                X[c, b] = f10 * x0 + f11 * x1
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
@@ -134,31 +179,16 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
     and ``alpha_dot_i`` loses ``phi_10 tau_i``; the step adds the process
     covariance ``D_i smooth_q``.
     """
-    m = P.shape[0]
-    q = A.shape[1]
     f00, f01, f10, f11 = smooth_phi[0, 0], smooth_phi[0, 1], smooth_phi[1, 0], smooth_phi[1, 1]
+    rotate_pairs(P, n_template, nx, nx + p, f00, f01, f10, f11, True)  # T P T'
+    rotate_pairs(A, n_template, nx, nx + p, f00, f01, f10, f11, False)
     for i in range(n_template):
         r0 = nx + i
         r1 = nx + p + i
-        for c in range(m):  # rows: T P
-            x0 = P[r0, c]
-            x1 = P[r1, c]
-            P[r0, c] = f00 * x0 + f01 * x1
-            P[r1, c] = f10 * x0 + f11 * x1
-        for c in range(m):  # columns: (T P) T'
-            x0 = P[c, r0]
-            x1 = P[c, r1]
-            P[c, r0] = f00 * x0 + f01 * x1
-            P[c, r1] = f10 * x0 + f11 * x1
         x0 = a[r0]
         x1 = a[r1]
         a[r0] = f00 * x0 + f01 * x1
         a[r1] = f10 * x0 + f11 * x1
-        for c in range(q):
-            x0 = A[r0, c]
-            x1 = A[r1, c]
-            A[r0, c] = f00 * x0 + f01 * x1
-            A[r1, c] = f10 * x0 + f11 * x1
         A[r0, nx + i] += 1.0 - f00
         A[r1, nx + i] -= f10
         P[r0, r0] += D[i] * smooth_q[0, 0]
@@ -234,11 +264,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
     nx = Phi.shape[1]
     varying = Phi.shape[0] > 1
     r = X_obs.shape[1]
-    m = nx + p
-    if code == BOTH:
-        m = nx + 2 * p
-    elif code == SMOOTH:
-        m = nx + p + n_template
+    m = state_size(code, nx, p, n_template)
     n_free = nx  # delta = [x0 (n_x), template (p), beta (r)]
     q = nx + n_template + r
     a = np.zeros(m)
@@ -280,16 +306,16 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
             G = Gam[k - 1]
             if varying:
                 T = Phi[k - 1]
-            _advance_rows(T, G, p, P, work)  # T P
-            _advance_rows(T, G, p, P.T, work)  # (T P) T'
+            step_rows(T, G, P, P, work)  # T P
+            step_rows(T, G, P.T, P.T, work)  # (T P) T'
             for i in range(nx):
                 for j in range(nx):
                     P[i, j] += Qx[i, j]
-            _advance_rows(T, G, p, a.reshape((m, 1)), work)  # the mean
+            step_rows(T, G, a.reshape((m, 1)), a.reshape((m, 1)), work)  # the mean
             if has_offset:
                 for i in range(nx):
                     a[i] += offset[k - 1, i]
-            _advance_rows(T, G, p, A, work)  # and its delta-columns
+            step_rows(T, G, A, A, work)  # and its delta-columns
             for j in range(r):  # known regressors: the state's dependence on beta
                 for i in range(nx):
                     A[i, nx + n_template + j] += X_tr[k - 1, i, j]

@@ -108,7 +108,7 @@ import math
 import numba
 import numpy as np
 
-from .kalman import BOTH, INDEPENDENT, RANDOM_WALK, SMOOTH
+from .kalman import BOTH, INDEPENDENT, RANDOM_WALK, SMOOTH, reset_covariance, rotate_pairs, state_size, step_rows
 from .model import RecordModel
 
 __all__ = ["DYNAMICS_STEP", "score", "system_derivatives", "sensitivity_pass"]
@@ -125,63 +125,19 @@ def _reset(code, x, P, D, E, p, o, n_template, tau, step):
 
     Every operation is linear in ``(x, P, D, E)`` and the template: applied
     to ``(dx_j, dP_j, dD_j, dE_j)`` with ``tau = 0`` it is the reset's
-    derivative.
+    derivative. The covariance's part is the augmented pass's own
+    (:func:`kalman.reset_covariance`).
     """
-    m = P.shape[0]
     if code == INDEPENDENT:
         for i in range(o, o + p):
             x[i] = tau[i - o] if i - o < n_template else 0.0
-            for c in range(m):
-                P[i, c] = 0.0
-                P[c, i] = 0.0
-            P[i, i] = D[i - o]
-    elif code == RANDOM_WALK:
-        for i in range(o, o + p):
-            P[i, i] += E[i - o]
     elif code == SMOOTH:
         for i in range(o + n_template, o + p):
             x[i] = 0.0
-            for c in range(m):
-                P[i, c] = 0.0
-                P[c, i] = 0.0
-            P[i, i] = D[i - o]
-    else:
-        if step:
-            for i in range(o + p, o + 2 * p):
-                P[i, i] += E[i - o - p]
+    elif code == BOTH:
         for i in range(o, o + p):
-            j = i + p
-            x[i] = x[j]
-            for c in range(m):
-                P[i, c] = P[j, c]
-            for c in range(m):
-                P[c, i] = P[c, j]
-            P[i, i] = P[j, j] + D[i - o]
-
-
-@numba.njit(cache=True, fastmath={"contract"})
-def _rows(T, G, X, out):
-    """``out = [T, G] X[:n_x + p]`` (shape (n_x, m)): the first ``n_x`` rows of a step's transition times ``X``."""
-    nx, p = G.shape
-    m = X.shape[1]
-    if nx == 2:
-        for c in range(m):
-            v0 = T[0, 0] * X[0, c] + T[0, 1] * X[1, c]
-            v1 = T[1, 0] * X[0, c] + T[1, 1] * X[1, c]
-            for i in range(p):
-                v0 += G[0, i] * X[2 + i, c]
-                v1 += G[1, i] * X[2 + i, c]
-            out[0, c] = v0
-            out[1, c] = v1
-        return
-    for c in range(m):
-        for r in range(nx):
-            v = 0.0
-            for j in range(nx):
-                v += T[r, j] * X[j, c]
-            for i in range(p):
-                v += G[r, i] * X[nx + i, c]
-            out[r, c] = v
+            x[i] = x[i + p]
+    reset_covariance(code, P, p, D, E, o, n_template, step)
 
 
 @numba.njit(cache=True, fastmath={"contract"})
@@ -217,25 +173,6 @@ def _write_rows(T, G, Y, U, X, corner):
         for c in range(nx, m):
             X[r, c] = Y[r, c]
             X[c, r] = Y[r, c]
-
-
-@numba.njit(cache=True, fastmath={"contract"})
-def _pairs(X, n_template, r0, r1, f00, f01, f10, f11, columns):
-    """Rows (and, with ``columns``, then columns) ``r0 + i``, ``r1 + i`` of ``X`` move by the 2 x 2 ``f``."""
-    m = X.shape[1]
-    for i in range(n_template):
-        a, b = r0 + i, r1 + i
-        for c in range(m):
-            x0 = X[a, c]
-            x1 = X[b, c]
-            X[a, c] = f00 * x0 + f01 * x1
-            X[b, c] = f10 * x0 + f11 * x1
-        if columns:
-            for c in range(X.shape[0]):
-                x0 = X[c, a]
-                x1 = X[c, b]
-                X[c, a] = f00 * x0 + f01 * x1
-                X[c, b] = f10 * x0 + f11 * x1
 
 
 @numba.njit(cache=True, fastmath={"contract"})
@@ -278,11 +215,7 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
     k = dyn.size
     varying = Phi.shape[0] > 1
     r = X_obs.shape[1]
-    m = nx + p
-    if code == BOTH:
-        m = nx + 2 * p
-    elif code == SMOOTH:
-        m = nx + p + n_template
+    m = state_size(code, nx, p, n_template)
     tau = delta[nx:nx + n_template].copy()
     zero = np.zeros(n_template)
     beta = delta[nx + n_template:].copy()
@@ -339,6 +272,7 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
     U = np.zeros((nx, m))
     Z = np.zeros((nx, nx))
     Yb = np.zeros((nx, m))
+    column = np.zeros(nx)  # step_rows' scratch column
     xn = np.zeros(nx)
     h = np.zeros(m)
     s = np.zeros(m)
@@ -369,7 +303,7 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                 if d >= 0:  # the transition moves too: + dT P (rows) and its transpose
                     dT = d_Phi[d, kk - 1] if varying else d_Phi[d, 0]
                     dG = d_Gam[d, kk - 1]
-                    _rows(dT, dG, P, U)
+                    step_rows(dT, dG, P, U, column)
                     for a in range(nx):
                         for c in range(m):
                             Y[a, j, c] += U[a, c]
@@ -412,7 +346,7 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                     for c in range(nx, m):
                         dP[a, j, c] = Y[a, j, c]
                         dP[c, j, a] = Y[a, j, c]
-            _rows(T, G, P, Yb)
+            step_rows(T, G, P, Yb, column)
             _write_rows(T, G, Yb, U, P, False)
             for a in range(nx):
                 for c in range(nx):
@@ -439,9 +373,9 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                             for c in range(m):
                                 Vs[a, c] = e00 * P[a, c] + e01 * P[b, c]
                                 Vs[b, c] = e10 * P[a, c] + e11 * P[b, c]
-                        _pairs(Vs.T, n_template, nx, nx + p, f00, f01, f10, f11, False)  # (dS P) S'
-                    _pairs(dP[:, j, :], n_template, nx, nx + p, f00, f01, f10, f11, True)
-                    _pairs(dx[j].reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
+                        rotate_pairs(Vs.T, n_template, nx, nx + p, f00, f01, f10, f11, False)  # (dS P) S'
+                    rotate_pairs(dP[:, j, :], n_template, nx, nx + p, f00, f01, f10, f11, True)
+                    rotate_pairs(dx[j].reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
                     if has_smooth_d[j]:
                         for a in range(m):
                             for c in range(m):
@@ -457,8 +391,8 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                         dP[a, j, b] += d_D[j, i] * smooth_q[0, 1] + D[i] * d_sq[j, 0, 1]
                         dP[b, j, a] += d_D[j, i] * smooth_q[1, 0] + D[i] * d_sq[j, 1, 0]
                         dP[b, j, b] += d_D[j, i] * smooth_q[1, 1] + D[i] * d_sq[j, 1, 1]
-                _pairs(P, n_template, nx, nx + p, f00, f01, f10, f11, True)
-                _pairs(x.reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
+                rotate_pairs(P, n_template, nx, nx + p, f00, f01, f10, f11, True)
+                rotate_pairs(x.reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
                 for i in range(n_template):
                     a, b = nx + i, nx + p + i
                     x[a] += (1.0 - f00) * tau[i]

@@ -23,7 +23,8 @@ from __future__ import annotations
 import numpy as np
 from statsmodels.tsa.statespace.mlemodel import MLEModel
 
-from .model import RecordModel
+from .kalman import state_size
+from .model import VARIATIONS, RecordModel
 
 __all__ = ["RecordStateSpace"]
 
@@ -51,7 +52,7 @@ class RecordStateSpace(MLEModel):
         self.record_model = model
         self.delta = np.asarray(delta, dtype=float)
         p, nx = model.n_force_states, model.n_dynamic
-        k_states = {"both": nx + 2 * p, "smooth": nx + p + model.n_coefficients}.get(model.variation, nx + p)
+        k_states = state_size(VARIATIONS[model.variation], nx, p, model.n_coefficients)
         super().__init__(model.y, k_states=k_states, k_posdef=k_states)
         self.ssm.filter_concentrated = True
         self.ssm["selection"] = np.eye(k_states)
