@@ -159,6 +159,38 @@ def test_a_nonlinear_effect_at_zero_is_the_base_model(cubic_record):
                                                                                                        abs=1e-8)
 
 
+def test_a_far_path_keeps_the_force_column_exact():
+    """Linearised about a path metres away (where a search may wander), the force still enters with gain 1:
+    differences of the rates along that path lost it to rounding (gain 1 + 3 at 100x, an error before)."""
+    time = np.arange(300) / FS
+    model = cubic_model(time, np.zeros_like(time), nominal=np.zeros((time.size, 2)))
+    for scale in (1.0, 100.0):
+        far = np.random.default_rng(1).normal(0.0, scale, (time.size, 2)) * [1.0, 10.0]
+        system = model.dynamics.linearise(2.6, 0.3, {"beta_3": 900.0}, far)
+        assert np.allclose(system.b, [[0.0, 1.0]], rtol=1e-12)  # per g of force
+        # and the state columns still follow the spring's slope, -w^2 (1 + 3 beta u^2)
+        w2 = (2 * np.pi * 2.6) ** 2
+        assert np.allclose(system.A[:, 1, 0], -w2 * (1 + 3 * 900.0 * far[:, 0] ** 2), rtol=1e-5)
+
+
+def test_an_effect_that_scales_the_force_is_refused_in_one_line():
+    """The record-level model takes the force of Eq. 4 as it is: an effect multiplying it is named and refused."""
+    from smd_statespace.errors import OptionError
+    from smd_statespace.model import Effect, Slot
+
+    class StiffFoot(Effect):
+        name = "stiff_foot"
+
+        def slots(self, model):
+            return (Slot("k_f", "parameter", "1/m", 0.0, 10.0, nominal=2.0, linear=False),)
+
+        def acceleration(self, model, x, t, inputs):  # force times (1 + k_f u): not Eq. 2's gain of 1
+            return model.value(x, "k_f") * x[..., 0] * model.force(x, t, inputs)
+
+    with pytest.raises(OptionError, match="stiff_foot: one changes how the force enters"):
+        PersonDynamics(SMDModel(n_harmonics=1, effects=[StiffFoot()]), np.arange(100) / FS)
+
+
 @pytest.mark.slow
 def test_the_linearised_likelihood_of_a_cubic_spring_matches_the_exact_one(cubic_record):
     """Re-linearised about its own predicted path, the likelihood of a deterministic record with a cubic spring

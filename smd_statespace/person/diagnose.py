@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import shlex
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -89,7 +90,7 @@ class PersonDiagnosis:
     fits : dict
         Candidate name -> its :class:`~smd_statespace.person.results.PersonResult` (with the effect).
     rows : list of dict
-        One per candidate (:func:`candidate_row`).
+        One per candidate (:func:`candidate_row`), with ``seconds``: the wall time of its fit.
     failed : dict
         Candidate name -> why its fit failed, in words.
     alpha : float
@@ -230,13 +231,14 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     level = alpha / max(len(effects), 1)
     fits, rows, failed = {}, [], {}
     for effect in tqdm(effects, desc="diagnose (record)", unit="effect", disable=not progress, leave=False):
+        started = time.perf_counter()
         try:
             fitted = fit_effects(result, [effect])
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed[effect.name] = " ".join(str(exc).split())
             continue
         fits[effect.name] = fitted
-        rows.append(candidate_row(result, fitted, level))
+        rows.append({**candidate_row(result, fitted, level), "seconds": time.perf_counter() - started})
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha)
     significant = diagnosis.missing
     if len(significant) >= 2:
