@@ -27,9 +27,11 @@ the user's quadratic damper (``quadratic_damping``). The effect's size is
 measured on every record as the RMS of the GRF difference it makes (same
 seed, noise-free, with and without the effect) over the noise sd.
 
-Everything random comes from ``numpy.random.SeedSequence(--seed)`` (one
-child per record, fresh seeds: not those of the tests or of
-``person_accuracy.py``); the rows do not depend on ``--jobs``.
+Everything random comes from ``numpy.random.SeedSequence(--seed)``, one
+child per record keyed by its place (generator, kind, size, index): fresh
+seeds, not those of the tests or of ``person_accuracy.py``. The rows do not
+depend on ``--jobs``, nor on what else is run: ``--records 8 --resume`` on the
+CSV of a ``--records 4`` run adds the records 4-7 of every row.
 """
 
 from __future__ import annotations
@@ -100,12 +102,13 @@ def _load_user_effect():
 def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATORS) -> list:
     """``(kind, size, generator, index, person, sim_seed, effects)`` for every record; clean records twice as many."""
     out = []
-    children = iter(np.random.SeedSequence(seed).spawn(10_000))
-    for generator in GENERATORS:
-        for kind, kind_sizes in KINDS.items():
+    for g, generator in enumerate(GENERATORS):
+        for k, (kind, kind_sizes) in enumerate(KINDS.items()):
             for size, effects in enumerate(kind_sizes):
                 for i in range(records * (2 if kind == "clean" else 1)):
-                    rng = np.random.default_rng(next(children))  # drawn whatever is run: seeds do not shift
+                    # each record's seed from its place (generator, kind, size, index): a record is the same
+                    # person whatever else is run, so a run with more --records extends a smaller one (--resume)
+                    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(g, k, size, i)))
                     person = {"f_b": rng.uniform(1.5, 3.5), "f_h": rng.uniform(1.8, 4.2),
                               "xi_h": rng.uniform(0.1, 0.5), "mass": rng.uniform(50.0, 90.0),
                               "blf": tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))}

@@ -151,6 +151,35 @@ def test_a_fit_at_the_bouncing_frequency_that_mimics_the_force_does_not_determin
     assert result.at_bouncing_frequency is not determined
 
 
+@pytest.mark.parametrize("f_h_over_f_b, xi_h, sd, expected", [
+    (1.3, 0.25, 0.001, "kept"), (1.3, 0.25, 0.5, "yardstick"), (1.02, 0.01, 0.001, "search range")])
+def test_an_undetermined_f_h_gets_an_interval_as_wide_as_the_record_leaves_it(long_sim, f_h_over_f_b, xi_h, sd,
+                                                                            expected):
+    """A determined f_h keeps its interval; a poorly determined one gets at least the yardstick's width (the prior
+    range as an sd); an artefact (an undamped resonance standing in for the force's first harmonic) the whole
+    search range: never a narrow interval around a value the record does not give."""
+    from scipy import stats
+
+    from smd_statespace.person.fit import undetermined_interval
+    from smd_statespace.person.results import PRIOR_SD
+
+    sim = long_sim
+    model = RecordModel(sim.record.time, acceleration(sim), true_timing(sim), variation="independent")
+    params = model.start_params(f_h_over_f_b * float(np.median(model.timing.f_b)), xi_h)
+    narrow = {"f_h": (params[0] - 0.01, params[0] + 0.01), "xi_h": (params[1] - 0.01, params[1] + 0.01)}
+    result = PersonResult(sim.record, model, params, np.eye(params.size) * sd**2, np.ones(params.size, bool), 0.0,
+                          narrow, "wald", 0.9, [])
+    low, high = undetermined_interval(result, "f_h")
+    if expected == "kept":
+        assert (low, high) == narrow["f_h"]
+    elif expected == "yardstick":
+        half = stats.norm.ppf(0.95) * PRIOR_SD["f_h"]
+        assert (low, high) == pytest.approx((params[0] - half, params[0] + half))
+    else:
+        assert (low, high) == tuple(model.bounds[0]) and undetermined_interval(result, "xi_h") == tuple(
+            model.bounds[1])
+
+
 @pytest.mark.slow
 def test_result_reports_the_person_with_intervals_and_tests(long_sim, long_fit):
     result = long_fit

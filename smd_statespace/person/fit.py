@@ -35,7 +35,8 @@ from ..signals import RECORD_RATE, decimate_record, decimation_note
 from .model import VARIATIONS, Regressor, RecordModel
 from .timing import TIMING_METHODS, CycleTiming, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "person_result", "profile_interval"]
+__all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "person_result", "profile_interval",
+           "undetermined_interval"]
 
 MIN_CYCLES = 8
 """Fewest force cycles for the record-level model (the cycle-to-cycle spread needs several)."""
@@ -751,9 +752,43 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
                           if np.isfinite(se[which]) else tuple(model.bounds[which]))
     method = {"profile": "profile", "wald": f"wald ({cov_type})"}.get(
         intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, {factors['xi_h']:g}, "
-                   "with a model-error floor)")
-    return PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
-                        intervals=interval, interval_method=method, level=level, comparison=list(comparison),
-                        n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),
-                        notes=list(notes), **extra)
+                   "with a model-error floor; undetermined: the yardstick's width)")
+    result = PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
+                          intervals=interval, interval_method=method, level=level, comparison=list(comparison),
+                          n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),
+                          notes=list(notes), **extra)
+    if intervals == "calibrated":
+        for name in ("f_h", "xi_h"):
+            result.intervals[name] = undetermined_interval(result, name)
+    return result
+
+
+def undetermined_interval(result, name) -> tuple:
+    """The interval of ``f_h`` or ``xi_h`` that says what a record which does not determine it allows.
+
+    A determined parameter keeps its interval. One the record does not determine
+    (:meth:`PersonResult.determined <smd_statespace.person.results.PersonResult.determined>`)
+    gets at least the width of its yardstick: ``estimate +- z * PRIOR_SD`` (the
+    article's uniform range, ``f_h`` 1-4 Hz, ``xi_h`` 0-1, as a standard deviation:
+    what the record says is then no more than what was known before it), cut at the
+    search bounds. Where the estimate is an artefact, not a poorly determined value
+    (``f_h`` or ``xi_h`` on a search bound, ``xi_h`` over-damped, a resonance standing
+    in for a force harmonic: :meth:`~smd_statespace.person.results.PersonResult.artefact`),
+    the interval is the whole search range.
+
+    Measured before the rule (docs/person-benchmark-generators.md, 60 records): of the 14
+    calibrated ``f_h`` intervals that missed the truth, 8 belonged to estimates already
+    flagged as not determined (3 smooth-drift records, 5 pulse trains).
+    """
+    from .results import PRIOR_SD
+
+    which = {"f_h": 0, "xi_h": 1}[name]
+    low, high = result.intervals[name]
+    bounds = result.model.bounds[which]
+    if result.artefact(name):
+        return float(bounds[0]), float(bounds[1])
+    if result.determined(name):
+        return low, high
+    wide = wald_interval(result.params[which], PRIOR_SD[name], result.level, bounds)
+    return min(low, wide[0]), max(high, wide[1])
 

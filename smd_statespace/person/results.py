@@ -327,6 +327,15 @@ class PersonResult:
         return bool(np.isfinite(self.se[which]) and self.se[which] < DETERMINED_FRACTION * PRIOR_SD[name]
                     and not self.model.at_bound(self.params, which))
 
+    def artefact(self, name) -> bool:
+        """True when the estimate of ``f_h`` or ``xi_h`` is an artefact of the fit, not a value the record
+        determines poorly: on a search bound, ``xi_h`` over-damped (> 1), or ``f_h`` where a resonance stands in
+        for the force (:attr:`at_bouncing_frequency`; a mimicked harmonic takes ``xi_h`` with it)."""
+        which = {"f_h": 0, "xi_h": 1}[name]
+        if self.model.at_bound(self.params, which) or self.xi_h > 1.0:
+            return True
+        return self.at_bouncing_frequency if name == "f_h" else bool(self.mimicked_harmonic)
+
     @property
     def mimicked_harmonic(self) -> int:
         """The force harmonic ``i`` a lightly damped resonance stands in for, 0 when none.
