@@ -180,6 +180,31 @@ def test_an_undetermined_f_h_gets_an_interval_as_wide_as_the_record_leaves_it(lo
             model.bounds[1])
 
 
+@pytest.mark.parametrize("other_f_h, other_aic, spans", [(3.2, 5.2, True), (3.2, 25.0, False),
+                                                         (2.45, 5.2, False)])
+def test_the_f_h_interval_spans_the_variation_models_the_record_cannot_rule_out(long_sim, other_f_h, other_aic,
+                                                                               spans):
+    """Two variation models 5.2 apart in AIC (the record cannot rule either out) that put f_h 2.4 and 3.2 Hz:
+    the interval spans both and the warning says so; a model ruled out (AIC 25 worse) or one that agrees leaves
+    the interval as it was (the unseen-generator record of shared/findings: 2.10-2.26 and 2.84-3.69 Hz, truth
+    2.45)."""
+    from smd_statespace.person.fit import honest_intervals
+
+    sim = long_sim
+    model = RecordModel(sim.record.time, acceleration(sim), true_timing(sim), variation="independent")
+    params = model.start_params(2.4, 0.3)
+    rows = [{"variation": "independent", "timing": "re-placed", "converged": True, "on_bound": False, "aic": 0.0,
+             "f_h": 2.4, "xi_h": 0.3},
+            {"variation": "smooth", "timing": "re-placed", "converged": True, "on_bound": False, "aic": other_aic,
+             "f_h": other_f_h, "xi_h": 0.25}]
+    result = PersonResult(sim.record, model, params, np.eye(params.size) * 1e-6, np.ones(params.size, bool), 0.0,
+                          {"f_h": (2.3, 2.5), "xi_h": (0.25, 0.35)}, "calibrated wald", 0.9, rows)
+    assert honest_intervals(result)["f_h"] == ((2.3, 3.2) if spans else (2.3, 2.5))
+    assert honest_intervals(result)["xi_h"] == (0.25, 0.35)
+    warned = [w for w in result.warnings if "variation models disagree" in w]
+    assert bool(warned) is spans and all("the interval spans them" in w for w in warned)
+
+
 @pytest.mark.slow
 def test_result_reports_the_person_with_intervals_and_tests(long_sim, long_fit):
     result = long_fit

@@ -36,7 +36,7 @@ from .model import VARIATIONS, Regressor, RecordModel
 from .timing import TIMING_METHODS, CycleTiming, estimate_timing
 
 __all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "person_result", "profile_interval",
-           "undetermined_interval"]
+           "honest_intervals", "undetermined_interval"]
 
 MIN_CYCLES = 8
 """Fewest force cycles for the record-level model (the cycle-to-cycle spread needs several)."""
@@ -758,9 +758,31 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
                           n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),
                           notes=list(notes), **extra)
     if intervals == "calibrated":
-        for name in ("f_h", "xi_h"):
-            result.intervals[name] = undetermined_interval(result, name)
+        result.intervals.update(honest_intervals(result))
     return result
+
+
+def honest_intervals(result) -> dict:
+    """The calibrated intervals of ``f_h`` and ``xi_h``, widened where the record leaves more open.
+
+    - A parameter the record does not determine, or whose estimate is an artefact:
+      :func:`undetermined_interval`.
+    - ``f_h`` when the variation models the record cannot rule out
+      (:meth:`~smd_statespace.person.results.PersonResult.plausible_variations`) disagree
+      by more than ``VARIATION_DISAGREEMENT``: the interval spans their estimates too (the
+      answer depends on a modelling choice the record does not settle). On a record from
+      a generator outside this project, "independent" gave 2.10-2.26 Hz and "smooth"
+      2.84-3.69 Hz, 5.2 apart in log-likelihood, for a true 2.45 Hz
+      (``../shared/findings/person-unseen-records.md``).
+    """
+    from .results import VARIATION_DISAGREEMENT
+
+    out = {name: undetermined_interval(result, name) for name in ("f_h", "xi_h")}
+    values = [row["f_h"] for row in result.plausible_variations()]
+    if values and max(values) > (1.0 + VARIATION_DISAGREEMENT) * min(values):
+        low, high = out["f_h"]
+        out["f_h"] = (float(min(low, *values)), float(max(high, *values)))
+    return out
 
 
 def undetermined_interval(result, name) -> tuple:

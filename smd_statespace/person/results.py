@@ -493,19 +493,39 @@ class PersonResult:
         """In words, when variation models fitted at the final cycle starts that the record cannot rule out (AIC
         within :data:`VARIATION_AIC_CLOSE` of the best) put ``f_h`` more than :data:`VARIATION_DISAGREEMENT` apart
         (empty otherwise): the answer then depends on how the force is assumed to vary."""
-        rows = [row for row in self.comparison if row.get("timing") == "re-placed" and row["converged"]
-                and not row["on_bound"]]
-        best = min((row["aic"] for row in rows), default=0.0)
-        rows = [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]  # those the record cannot rule out
+        rows = self.plausible_variations()
         if len(rows) < 2:
             return ""
         values = [row["f_h"] for row in rows]
         if max(values) <= (1.0 + VARIATION_DISAGREEMENT) * min(values):
             return ""
+        best = min(row["aic"] for row in rows)
         parts = ", ".join(f"{row['variation']} {row['f_h']:.3g} Hz (AIC {row['aic'] - best:+.1f})" for row in rows)
+        spans = " (the interval spans them)" if self.interval_method.startswith("calibrated") else ""
         return (f"the variation models disagree on f_h: {parts}; f_h depends on how the force is assumed to vary "
-                f"between cycles, which the record does not settle: read the interval with care, or fix the model "
-                f"with --variation")
+                f"between cycles, which the record does not settle{spans}: read the interval, not the value, or "
+                "fix the model with --variation")
+
+    def plausible_variations(self) -> list:
+        """The variation models' fits at the final cycle starts (rows of :attr:`comparison`) the record cannot
+        rule out: converged, ``f_h`` and ``xi_h`` off their search bounds and not a resonance standing in for
+        the force (as :attr:`at_bouncing_frequency`), AIC within :data:`VARIATION_AIC_CLOSE` of the best of them.
+        Empty for a fit with effects (its comparison is of the person without them)."""
+        if self.effects:
+            return []
+        f_b = float(np.median(self.model.timing.f_b))
+
+        def artefact(row):
+            ratio = row["f_h"] / f_b
+            order = int(round(ratio))
+            mimic = (row["xi_h"] < XI_H_RESONANCE_MIMIC and 1 <= order <= self.model.n_harmonics
+                     and abs(ratio / order - 1.0) < F_B_COINCIDENCE)
+            return mimic or (row["variation"] == "smooth" and abs(ratio - 1.0) < F_B_COINCIDENCE) or row["xi_h"] > 1
+
+        rows = [row for row in self.comparison if row.get("timing") == "re-placed" and row["converged"]
+                and not row["on_bound"] and not artefact(row)]
+        best = min((row["aic"] for row in rows), default=0.0)
+        return [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]
 
     def to_dict(self) -> dict:
         """Flat JSON-able summary (the content of ``person.json``)."""
