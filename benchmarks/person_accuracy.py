@@ -278,7 +278,9 @@ def fit_row(person, generator, timing, sim, intervals, variation) -> dict:
         "f_h_low": float(f_lo), "f_h_high": float(f_hi), "xi_h_low": float(x_lo), "xi_h_high": float(x_hi),
         "ljung_box_p": d["ljung_box_p"], "kurtosis": d["kurtosis"], "noise_bw": d["noise_bw"],
         "n_cycles": d["n_cycles"], "f_b_est": d["f_b"], "warnings": len(d["warnings"]),
-        "variation": result.model.variation,
+        "variation": result.model.variation, "f_h_determined": bool(d["f_h_determined"]),
+        "xi_h_determined": bool(d["xi_h_determined"]), "f_h_artefact": bool(result.artefact("f_h")),
+        "variations_disagree": bool(result.variation_disagreement()),
         "blf1_true": float(sim.truth["blf"][0]), "blf1_est": d["blf_1"], "blf1_low": d["blf_1_low"],
         "blf1_high": d["blf_1_high"],
     })
