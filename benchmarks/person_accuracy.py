@@ -280,7 +280,9 @@ def fit_row(person, generator, timing, sim, intervals, variation) -> dict:
         "n_cycles": d["n_cycles"], "f_b_est": d["f_b"], "warnings": len(d["warnings"]),
         "variation": result.model.variation, "f_h_determined": bool(d["f_h_determined"]),
         "xi_h_determined": bool(d["xi_h_determined"]), "f_h_artefact": bool(result.artefact("f_h")),
-        "variations_disagree": bool(result.variation_disagreement()),
+        "variations_disagree": bool(result.variation_disagreement()), "misfit_share": float(d["misfit_share"]),
+        "f_h_low_narrow": float(result.narrow_intervals.get("f_h", (f_lo, f_hi))[0]),
+        "f_h_high_narrow": float(result.narrow_intervals.get("f_h", (f_lo, f_hi))[1]),
         "blf1_true": float(sim.truth["blf"][0]), "blf1_est": d["blf_1"], "blf1_low": d["blf_1_low"],
         "blf1_high": d["blf_1_high"],
     })

@@ -147,6 +147,7 @@ def test_a_fit_at_the_bouncing_frequency_that_mimics_the_force_does_not_determin
     params = model.start_params(f_h_over_f_b * f_b, xi_h)
     cov = np.eye(params.size) * 1e-6  # a confident fit: sd 0.001
     result = PersonResult(sim.record, model, params, cov, np.ones(params.size, bool), 0.0, {}, "wald", 0.9, [])
+    result.misfit_share = 0.0  # what the model misses is another reason (tested below)
     assert result.determined("f_h") is determined
     assert result.at_bouncing_frequency is not determined
 
@@ -169,6 +170,7 @@ def test_an_undetermined_f_h_gets_an_interval_as_wide_as_the_record_leaves_it(lo
     narrow = {"f_h": (params[0] - 0.01, params[0] + 0.01), "xi_h": (params[1] - 0.01, params[1] + 0.01)}
     result = PersonResult(sim.record, model, params, np.eye(params.size) * sd**2, np.ones(params.size, bool), 0.0,
                           narrow, "wald", 0.9, [])
+    result.misfit_share = 0.0
     low, high = undetermined_interval(result, "f_h")
     if expected == "kept":
         assert (low, high) == narrow["f_h"]
@@ -199,10 +201,53 @@ def test_the_f_h_interval_spans_the_variation_models_the_record_cannot_rule_out(
              "f_h": other_f_h, "xi_h": 0.25}]
     result = PersonResult(sim.record, model, params, np.eye(params.size) * 1e-6, np.ones(params.size, bool), 0.0,
                           {"f_h": (2.3, 2.5), "xi_h": (0.25, 0.35)}, "calibrated wald", 0.9, rows)
+    result.misfit_share = 0.0
     assert honest_intervals(result)["f_h"] == ((2.3, 3.2) if spans else (2.3, 2.5))
     assert honest_intervals(result)["xi_h"] == (0.25, 0.35)
     warned = [w for w in result.warnings if "variation models disagree" in w]
     assert bool(warned) is spans and all("the interval spans them" in w for w in warned)
+
+
+def test_a_model_that_misfits_the_record_does_not_determine_the_person(long_sim, long_fit):
+    """What the model misses goes into f_h and xi_h: when the innovations' predictable part is a visible share
+    of the signal, they are not determined, their intervals take the yardstick's width and the warning says why.
+    The quiet clean record itself (Ljung-Box p about 1e-23 at 0.2 % BW noise) is not a misfit."""
+    import dataclasses
+
+    from scipy import stats
+
+    from smd_statespace.person.fit import honest_intervals
+    from smd_statespace.person.results import MISFIT_SHARE, PRIOR_SD
+
+    assert long_fit.misfit_share < 0.2 * MISFIT_SHARE and not long_fit.misfit
+    assert long_fit.determined("f_h") and long_fit.intervals == long_fit.narrow_intervals
+    bent = dataclasses.replace(long_fit, intervals=dict(long_fit.narrow_intervals))
+    bent.misfit_share = 3 * MISFIT_SHARE
+    bent.test_pvalues = lambda: {**long_fit.test_pvalues(), "ljung_box_p": 1e-30}
+    assert bent.misfit and not bent.determined("f_h") and not bent.determined("xi_h")
+    low, high = honest_intervals(bent)["f_h"]
+    half = stats.norm.ppf(0.95) * PRIOR_SD["f_h"]
+    assert low <= bent.f_h - half + 1e-12 and high >= bent.f_h + half - 1e-12
+    words = " ".join(bent.warnings)
+    assert "not determined (their intervals are as wide as the yardstick)" in words and "diagnose" in words
+    assert "is not determined by this record (sd" not in words  # said once, with the reason
+
+
+def test_the_misfit_share_measures_what_the_innovations_own_past_predicts(long_fit):
+    """White innovations: share about 0; innovations with a predictable echo of known size: that size."""
+    import dataclasses
+
+    def share(innovations):
+        fit = dataclasses.replace(long_fit, model=dataclasses.replace(long_fit.model))
+        fit.model.innovations = lambda params, filtered=None: (innovations, innovations)
+        return fit.misfit_share
+
+    white = np.random.default_rng(3).normal(0.0, 0.1, long_fit.model.y.size)
+    assert share(white) < 0.002
+    echo = white.copy()
+    echo[5:] += 0.8 * white[:-5]  # a part predictable from 5 samples back: variance 0.64 of 1.64
+    expected = np.sqrt(0.64 / 1.64) * np.std(echo) / np.std(long_fit.model.y)
+    assert share(echo) == pytest.approx(expected, rel=0.1)
 
 
 @pytest.mark.slow

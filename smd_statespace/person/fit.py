@@ -758,6 +758,7 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
                           n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),
                           notes=list(notes), **extra)
     if intervals == "calibrated":
+        result.narrow_intervals = dict(result.intervals)
         result.intervals.update(honest_intervals(result))
     return result
 
@@ -765,8 +766,9 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
 def honest_intervals(result) -> dict:
     """The calibrated intervals of ``f_h`` and ``xi_h``, widened where the record leaves more open.
 
-    - A parameter the record does not determine, or whose estimate is an artefact:
-      :func:`undetermined_interval`.
+    - A parameter the record does not determine (a model that misfits the record
+      included: :attr:`PersonResult.misfit <smd_statespace.person.results.PersonResult.misfit>`),
+      or whose estimate is an artefact: :func:`undetermined_interval`.
     - ``f_h`` when the variation models the record cannot rule out
       (:meth:`~smd_statespace.person.results.PersonResult.plausible_variations`) disagree
       by more than ``VARIATION_DISAGREEMENT``: the interval spans their estimates too (the
