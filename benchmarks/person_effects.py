@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -232,18 +233,13 @@ def _key(task) -> tuple:
     return task[0], task[1], task[2], task[3]
 
 
-def _resumed(csv, work) -> tuple:
-    """Rows already in ``csv`` for this run's tasks, and their keys (an absent file: none)."""
-    if csv is None or not csv.exists():
+def _resumed(journal, work) -> tuple:
+    """Rows already in ``journal`` (JSON lines) for this run's tasks, and their keys (an absent file: none)."""
+    if journal is None or not journal.exists():
         return [], set()
     keys = {_key(task) for task in work}
-    frame = pd.read_csv(csv, keep_default_na=False, na_values=[""])
-    frame["size"] = frame["size"].fillna("-")
-    frame["error"] = frame["error"].fillna("")
-    if "proposed" in frame:
-        frame["proposed"] = frame["proposed"].fillna("")
-    rows = [row for row in frame.to_dict(orient="records")
-            if (row["kind"], row["size"], row["generator"], int(row["index"])) in keys]
+    rows = [json.loads(line) for line in journal.read_text(encoding="utf-8").splitlines() if line.strip()]
+    rows = [row for row in rows if (row["kind"], row["size"], row["generator"], int(row["index"])) in keys]
     return rows, {(row["kind"], row["size"], row["generator"], int(row["index"])) for row in rows}
 
 
@@ -266,27 +262,32 @@ def main(argv=None):
     parser.add_argument("--records", type=int, default=8, help="records per kind and size (default 8; clean: 2x)")
     parser.add_argument("--seed", type=int, default=77, help="root of the SeedSequence (default 77)")
     parser.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
-    parser.add_argument("--csv", type=Path, default=None, help="also write every record's row here, as it ends")
-    parser.add_argument("--resume", action="store_true", help="keep the rows already in --csv, run the rest")
+    parser.add_argument("--csv", type=Path, default=None,
+                        help="also write every record's row here (and, as each ends, to the same name .jsonl)")
+    parser.add_argument("--resume", action="store_true", help="keep the rows already in the .jsonl, run the rest")
     parser.add_argument("--sizes", default="small,large", help="effect sizes to run (default small,large)")
     parser.add_argument("--generators", default=",".join(GENERATORS), help="generators of force variation")
     args = parser.parse_args(argv)
     work = tasks(args.records, args.seed, tuple(args.sizes.split(",")), tuple(args.generators.split(",")))
     started = time.perf_counter()
-    rows, done = _resumed(args.csv, work) if args.resume else ([], set())
+    journal = args.csv.with_suffix(".jsonl") if args.csv else None
+    rows, done = _resumed(journal, work) if args.resume else ([], set())
     todo = [task for task in work if _key(task) not in done]
-    if args.csv and not args.resume and args.csv.exists():
-        args.csv.unlink()
+    if journal and not args.resume and journal.exists():
+        journal.unlink()
     with tqdm(total=len(work), initial=len(work) - len(todo), desc="records", unit="record", file=sys.stderr) as bar:
         with ProcessPoolExecutor(args.jobs) if args.jobs > 1 else _Serial() as pool:
             for row in pool.map(one, todo):
                 rows.append(row)
-                if args.csv:  # every record as it ends: a killed run resumes with --resume
-                    pd.DataFrame([row]).to_csv(args.csv, mode="a", index=False, header=not args.csv.exists())
+                if journal:  # every record as it ends (rows differ in their columns): --resume reads them back
+                    with journal.open("a", encoding="utf-8") as out:
+                        out.write(json.dumps(row, default=float) + "\n")
                 bar.update()
     order = {_key(task): i for i, task in enumerate(work)}
     rows.sort(key=lambda row: order[(row["kind"], row["size"], row["generator"], int(row["index"]))])
     frame = pd.DataFrame(rows)
+    if args.csv:
+        frame.to_csv(args.csv, index=False)
     print("\n".join(summary(frame)))
     failed = frame[frame["error"] != ""]
     for _, row in failed.iterrows():
