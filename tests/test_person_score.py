@@ -243,3 +243,19 @@ def test_scoring_reaches_the_maximum_the_difference_search_reaches(record, name)
     inside = np.array([not model.at_bound(scoring["params"], j) for j in range(len(model.param_names))])
     g, info = out["gradient"][inside], out["profile_information"][np.ix_(inside, inside)]
     assert 0.5 * g @ np.linalg.solve(info, g) < 1e-2
+
+
+def test_a_scoring_search_that_runs_out_of_steps_is_finished_by_lbfgs(record, monkeypatch):
+    """Scoring allowed one step only does not converge; fit_model then finishes with L-BFGS-B (exact gradient)
+    from there and reaches the maximum scoring reaches with all its steps."""
+    import functools
+
+    from smd_statespace.person import fit
+
+    model = CASES["independent"](record)
+    start = model.start_params(2.6, 0.3, -3.0)
+    full = fit.fit_model(model, start)
+    monkeypatch.setattr(fit, "_scoring", functools.partial(fit._scoring, max_iterations=1))
+    finished = fit.fit_model(model, start)
+    assert finished["converged"] and "then L-BFGS-B" in finished["message"]
+    assert finished["loglike"] == pytest.approx(full["loglike"], abs=1e-2)

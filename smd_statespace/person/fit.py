@@ -135,7 +135,9 @@ def fit_model(model: RecordModel, start=None, quick=False, method="scoring") -> 
     -------
     dict
         ``params`` (ndarray), ``loglike``, ``n_evaluations`` (likelihoods, with
-        or without derivatives), ``converged`` (bool), ``message``.
+        or without derivatives), ``converged`` (bool), ``message``. A scoring
+        search still gaining after its last allowed step is finished by L-BFGS-B
+        with the exact gradient from where it stopped (the message says so).
     """
     from .score import score
 
@@ -163,16 +165,22 @@ def fit_model(model: RecordModel, start=None, quick=False, method="scoring") -> 
         candidates = [model.start_params(f, x) for f in START_F_H for x in START_XI_H]
         start = min(candidates, key=lambda params: negative(params / scales))
     start = np.asarray(start, dtype=float) / scales
+    prefix = ""
     if method == "scoring":
         params, loglike, n, converged, message = _scoring(model, start * scales, QUICK_GAIN if quick else FINAL_GAIN)
-        return {"params": params, "loglike": loglike, "n_evaluations": count[0] + n, "converged": converged,
-                "message": message}
+        count[0] += n
+        if converged or not np.isfinite(loglike):
+            return {"params": params, "loglike": loglike, "n_evaluations": count[0], "converged": converged,
+                    "message": message}
+        # still gaining after every step allowed: scoring crawls along a ridge (a measured floor's fit took
+        # more than 100 steps); L-BFGS-B with the exact gradient finishes from where it stopped
+        start, method, prefix = params / scales, "lbfgs", f"scoring: {message}; then L-BFGS-B: "
     options = {"ftol": 1e-7} if quick else {}
     fun, jac = (negative_and_gradient, True) if method == "lbfgs" else (negative, None)
     result = optimize.minimize(fun, start, method="L-BFGS-B", jac=jac, bounds=bounds, options=options)
     if quick:
         return {"params": result.x * scales, "loglike": -float(result.fun), "n_evaluations": count[0],
-                "converged": True, "message": str(result.message)}
+                "converged": True, "message": prefix + str(result.message)}
     # L-BFGS-B often stops on its line search at the optimum; a restart from there that gains nothing
     # confirms it
     if not result.success:
@@ -182,7 +190,7 @@ def fit_model(model: RecordModel, start=None, quick=False, method="scoring") -> 
     else:
         converged = True
     return {"params": result.x * scales, "loglike": -float(result.fun), "n_evaluations": count[0],
-            "converged": bool(converged), "message": str(result.message)}
+            "converged": bool(converged), "message": prefix + str(result.message)}
 
 
 def _scoring(model: RecordModel, start, gain, max_iterations=100) -> tuple:
