@@ -120,6 +120,48 @@ def test_modal_slots_priors_and_options():
     assert EFFECTS["floor_mode"] is FloorMode and SMDModel(effects=[measured]).requires == ("floor_disp", "floor_vel")
 
 
+def test_a_searched_floor_frequency_counts_its_trials():
+    """diagnose tests a modal floor found as the best of its grid as that many trials (Bonferroni); a given
+    frequency or a measured floor is one."""
+    from smd_statespace.person.diagnose import candidate_row
+
+    searched = make_effect("floor_mode:source=modal")
+    grid = np.geomspace(2.0, 20.0, searched._trial_count())
+    assert np.all(np.diff(np.log(grid)) <= np.log1p(FloorMode.RECORD_FREQUENCY_STEP) + 1e-12)
+    assert searched.record_search_size(None) == grid.size + 1 and 200 < grid.size < 260
+    assert make_effect("floor_mode:source=modal,frequency=3.48").record_search_size(None) == 1
+    assert make_effect("floor_mode").record_search_size(None) == 1
+    assert make_effect("cubic_stiffness").record_search_size(None) == 1
+
+    class Fit:  # what candidate_row reads of a fit: LR 22 on 5 unknowns, the clean record's false floor
+        effects = (searched,)
+        sigma, f_h, xi_h, settled, loglike = 1.0, 2.4, 0.3, True, 11.0
+        model = type("M", (), {"person_at_bound": staticmethod(lambda params: False), "approximate": False,
+                               "n_harmonics": 4})()
+        params = None
+
+        def effect_test(self):
+            return {"lr": 22.0, "lr_df": 5, "lr_p": 5e-4}
+
+        def effect_estimates(self):
+            import pandas as pd
+            return pd.DataFrame({"value": [2.46], "sd": [0.02], "unit": ["Hz"], "on_bound": [False]}, index=["f_f"])
+
+        def test_pvalues(self):
+            return {"ljung_box_p": 0.5}
+
+        def template_blf(self):
+            return None
+
+    class Base(Fit):
+        effects = ()
+
+    row = candidate_row(Base(), Fit(), 0.01 / 4)
+    assert row["trials"] == grid.size + 1
+    assert row["p_value"] == pytest.approx(min(1.0, 5.3e-4 * (grid.size + 1)), rel=0.1)
+    assert not row["significant"]
+
+
 def test_option_errors_name_the_problem():
     with pytest.raises(OptionError, match="unknown option 'bogus'"):
         make_effect("floor_mode:bogus=1")

@@ -207,6 +207,16 @@ class Effect:
         """
         return []
 
+    def record_search_size(self, result) -> int:
+        """How many separate trials the record-level search of this effect's parameters makes (default 1).
+
+        An effect whose parameter is found by trying many values (a floor
+        mode's frequency over a grid) takes the best of them, so its
+        likelihood ratio is the largest of that many: ``diagnose`` multiplies
+        its p-value by this number (Bonferroni over the trials) before the test.
+        """
+        return 1
+
     def score_terms(self, model: "SMDModel", x, t, inputs: CycleInputs) -> dict:
         """The terms this effect would add to ``u''``, one per unknown coefficient (m/s^2 per unit).
 

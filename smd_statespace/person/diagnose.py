@@ -8,7 +8,9 @@ one SMD model with the effect, its parameters estimated jointly with ``f_h``,
 against the fit without it is referred to chi-square with the candidate's
 true number of added unknowns
 (:meth:`~smd_statespace.person.results.PersonResult.effect_test`), at
-``alpha`` over the number of candidates (Bonferroni). The table shows, before
+``alpha`` over the number of candidates (Bonferroni; a candidate found as the
+best of many trials, a floor mode's frequency grid, is also tested as that many:
+:meth:`Effect.record_search_size <smd_statespace.model.Effect.record_search_size>`). The table shows, before
 and after, ``f_h``, ``xi_h``, the effect's parameters, the noise and the
 whiteness of the innovations: the numbers ``identify --effect`` then gives.
 
@@ -16,8 +18,9 @@ Candidates, by default (:meth:`Effect.record_default
 <smd_statespace.model.Effect.record_default>`): every registered effect
 (a user's too), the floor only as the measured floor when the record has a
 ``floor_acc`` column. An estimated floor mode (``floor_mode:source=modal``)
-is tried only when asked for: its frequency is searched over a fine grid,
-which a chi-square reference does not allow for.
+is tried only when asked for (``--effect floor_mode:source=modal``): its
+frequency is searched over a fine grid of about 230 trials, which costs
+seconds, and its test counts them (Bonferroni).
 
 When two candidates both explain the residual (a cubic spring makes
 harmonics of the bouncing frequency; so does an asymmetric stiffness), the
@@ -47,16 +50,18 @@ def candidate_row(base, fitted, level: float) -> dict:
     """One candidate's row: the test, the person before and after, the effect's parameters, noise, whiteness."""
     test = fitted.effect_test()
     df, lr = test["lr_df"], test["lr"]
-    # a candidate with nothing to estimate (a measured floor) is not nested: it must beat chi-square(1)
-    log_p = float(stats.chi2.logsf(max(lr, 0.0), max(df, 1)))
+    added = fitted.effects[len(base.effects):]  # the candidate, on top of the effects already in the model
+    # a candidate with nothing to estimate (a measured floor) is not nested: it must beat chi-square(1);
+    # one found as the best of many trials (a floor mode's frequency grid) is tested as that many (Bonferroni)
+    trials = int(np.prod([effect.record_search_size(base) for effect in added]))
+    log_p = min(float(stats.chi2.logsf(max(lr, 0.0), max(df, 1))) + math.log(trials), 0.0)
     estimates = fitted.effect_estimates()
     before_tests, after_tests = base.test_pvalues(), fitted.test_pvalues()
     person_on_bound = fitted.model.person_at_bound(fitted.params)
     effect_on_bound = bool(estimates["on_bound"].any()) if len(estimates) else False
-    added = fitted.effects[len(base.effects):]  # the candidate, on top of the effects already in the model
     row = {"effect": "+".join(e.name for e in added),
            "spec": " ".join(e.spec for e in fitted.effects), "df": df, "lr": lr, "p_value": math.exp(log_p),
-           "log_p": log_p, "f_h_before": base.f_h, "f_h": fitted.f_h, "xi_h_before": base.xi_h,
+           "log_p": log_p, "trials": trials, "f_h_before": base.f_h, "f_h": fitted.f_h, "xi_h_before": base.xi_h,
            "xi_h": fitted.xi_h, "noise_change_%": 100.0 * (fitted.sigma / base.sigma - 1.0),
            "ljung_box_p_before": before_tests["ljung_box_p"], "ljung_box_p": after_tests["ljung_box_p"],
            "parameters": _parameters_text(base, fitted, estimates),
@@ -182,7 +187,8 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     for name, other in ((first, second), (second, first)):
         lr = 2.0 * (both.loglike - fits[other].loglike)
         df = max(both.added_unknowns(fits[other]), 1)
-        out[name] = {"lr": float(lr), "p_value": float(stats.chi2.sf(max(lr, 0.0), df))}
+        trials = int(np.prod([e.record_search_size(base) for e in fits[name].effects[present:]]))
+        out[name] = {"lr": float(lr), "p_value": min(float(stats.chi2.sf(max(lr, 0.0), df)) * trials, 1.0)}
     keeps = [name for name in (first, second) if out[name]["p_value"] < level]
     if len(keeps) == 1:
         out["first"] = keeps[0]
