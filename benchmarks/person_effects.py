@@ -100,7 +100,7 @@ def _load_user_effect():
         load_effects_file(path)
 
 
-def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATORS) -> list:
+def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATORS, kinds=tuple(KINDS)) -> list:
     """``(kind, size, generator, index, person, sim_seed, effects)`` for every record; clean records twice as many."""
     out = []
     for g, generator in enumerate(GENERATORS):
@@ -114,7 +114,7 @@ def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATO
                               "xi_h": rng.uniform(0.1, 0.5), "mass": rng.uniform(50.0, 90.0),
                               "blf": tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))}
                     label = ("small", "large")[size] if effects else "-"
-                    if generator in generators and (effects is None or label in sizes):
+                    if generator in generators and kind in kinds and (effects is None or label in sizes):
                         out.append((kind, label, generator, i, person, int(rng.integers(2**31)), effects))
     return out
 
@@ -163,6 +163,10 @@ def one(task) -> dict:
         diagnosis = diagnose_person(base, candidates=candidates)
         row["diagnose_seconds"] = time.perf_counter() - started
         top = diagnosis.missing[0] if diagnosis.missing else None
+        table = diagnosis.table()
+        row["candidates"] = json.dumps({name: {"lr": round(float(r["lr"]), 3), "df": int(r["df"]),
+                                               "p": float(r["p_value"]), "significant": bool(r["significant"])}
+                                        for name, r in table.iterrows()} if not table.empty else {})
         row.update(proposed=top or "", variation=base.model.variation, f_h_before=base.f_h, xi_h_before=base.xi_h,
                    ljung_box_before=base.test_pvalues()["ljung_box_p"])
         if kind in FITTED:
@@ -267,8 +271,10 @@ def main(argv=None):
     parser.add_argument("--resume", action="store_true", help="keep the rows already in the .jsonl, run the rest")
     parser.add_argument("--sizes", default="small,large", help="effect sizes to run (default small,large)")
     parser.add_argument("--generators", default=",".join(GENERATORS), help="generators of force variation")
+    parser.add_argument("--kinds", default=",".join(KINDS), help=f"kinds of record (default all: {', '.join(KINDS)})")
     args = parser.parse_args(argv)
-    work = tasks(args.records, args.seed, tuple(args.sizes.split(",")), tuple(args.generators.split(",")))
+    work = tasks(args.records, args.seed, tuple(args.sizes.split(",")), tuple(args.generators.split(",")),
+                 tuple(args.kinds.split(",")))
     started = time.perf_counter()
     journal = args.csv.with_suffix(".jsonl") if args.csv else None
     rows, done = _resumed(journal, work) if args.resume else ([], set())
