@@ -91,6 +91,22 @@ XI_H_RESONANCE_MIMIC = 0.08
 the variation model (bouncing people show 0.1-0.6, the article's Table 2)."""
 
 
+def mimicked_harmonic(f_h, xi_h, f_b, n_harmonics) -> int:
+    """The force harmonic ``i`` (1 ... ``n_harmonics``) an undamped resonance at ``f_h`` stands in for, 0 when none:
+    ``f_h`` within :data:`F_B_COINCIDENCE` of ``i f_b`` with ``xi_h`` below :data:`XI_H_RESONANCE_MIMIC`."""
+    if xi_h >= XI_H_RESONANCE_MIMIC:
+        return 0
+    order = int(round(f_h / f_b))
+    return order if 1 <= order <= n_harmonics and abs(f_h / (order * f_b) - 1.0) < F_B_COINCIDENCE else 0
+
+
+def stands_in_for_force(f_h, xi_h, f_b, n_harmonics, variation) -> bool:
+    """True where a resonance cannot be told from the force: ``f_h`` within :data:`F_B_COINCIDENCE` of ``f_b``
+    with the smooth variation, or a mimicked harmonic (:func:`mimicked_harmonic`) with any."""
+    near = abs(f_h / f_b - 1.0) < F_B_COINCIDENCE
+    return (near and variation == "smooth") or mimicked_harmonic(f_h, xi_h, f_b, n_harmonics) > 0
+
+
 @dataclass
 class PersonResult:
     """One person identified from one record.
@@ -404,20 +420,16 @@ class PersonResult:
         ``f_h`` 4.39 Hz = 1.92 ``f_b``, ``xi_h`` 0.028, template BLF2 0.009 g against 0.16 g
         (truth ``f_h`` 3.58 Hz, ``xi_h`` 0.26).
         """
-        if self.xi_h >= XI_H_RESONANCE_MIMIC:
-            return 0
-        ratio = self.f_h / float(np.median(self.model.timing.f_b))
-        order = int(round(ratio))
-        return order if 1 <= order <= self.model.n_harmonics and abs(ratio / order - 1.0) < F_B_COINCIDENCE else 0
+        return mimicked_harmonic(self.f_h, self.xi_h, float(np.median(self.model.timing.f_b)),
+                                 self.model.n_harmonics)
 
     @property
     def at_bouncing_frequency(self) -> bool:
         """True when the fit put ``f_h`` where the record cannot tell a resonance from the force: within
         :data:`F_B_COINCIDENCE` of the median ``f_b`` with the smooth variation, or at any harmonic
         ``i f_b`` with ``xi_h`` below :data:`XI_H_RESONANCE_MIMIC` (:attr:`mimicked_harmonic`)."""
-        f_b = float(np.median(self.model.timing.f_b))
-        near = abs(self.f_h / f_b - 1.0) < F_B_COINCIDENCE
-        return (near and self.model.variation == "smooth") or self.mimicked_harmonic > 0
+        return stands_in_for_force(self.f_h, self.xi_h, float(np.median(self.model.timing.f_b)),
+                                   self.model.n_harmonics, self.model.variation)
 
     def derived(self) -> dict:
         """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds."""
@@ -543,8 +555,8 @@ class PersonResult:
                 out.append(f"{name} is not determined by this record (sd {row['sd']:.3g} {row['unit']} against its "
                            f"range {row['range_low']:g}-{row['range_high']:g})")
         tests = self.test_pvalues()
-        if tests["ljung_box_p"] < WHITENESS_ALPHA:
-            command = f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g}`"
+        command = f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g}`"
+        if self.misfit or tests["ljung_box_p"] < WHITENESS_ALPHA:
             if self.misfit:
                 out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}; their "
                            f"predictable part is {100 * self.misfit_share:.1f} % of the signal, over "
@@ -581,16 +593,9 @@ class PersonResult:
         if self.effects:
             return []
         f_b = float(np.median(self.model.timing.f_b))
-
-        def artefact(row):
-            ratio = row["f_h"] / f_b
-            order = int(round(ratio))
-            mimic = (row["xi_h"] < XI_H_RESONANCE_MIMIC and 1 <= order <= self.model.n_harmonics
-                     and abs(ratio / order - 1.0) < F_B_COINCIDENCE)
-            return mimic or (row["variation"] == "smooth" and abs(ratio - 1.0) < F_B_COINCIDENCE) or row["xi_h"] > 1
-
         rows = [row for row in self.comparison if row.get("timing") == "re-placed" and row["converged"]
-                and not row["on_bound"] and not artefact(row)]
+                and not row["on_bound"] and row["xi_h"] <= 1.0
+                and not stands_in_for_force(row["f_h"], row["xi_h"], f_b, self.model.n_harmonics, row["variation"])]
         best = min((row["aic"] for row in rows), default=0.0)
         return [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]
 
