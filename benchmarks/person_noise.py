@@ -69,7 +69,9 @@ def one(task) -> dict:
         row[f"{name}_error"] = float(result.params[which] - person[name])
         row[f"{name}_sd"] = float(result.se[which])
     row["f_h_error_pct"] = 100.0 * row["f_h_error"] / person["f_h"]
-    row["white"] = bool(result.to_dict()["ljung_box_p"] >= 0.01)  # no "the model misses something" warning
+    d = result.to_dict()
+    row["white"] = bool(d["ljung_box_p"] >= 0.01)  # no "the model misses something" warning
+    row.update(misfit_share=float(d["misfit_share"]), misfit=bool(d["misfit"]), f_h_determined=bool(d["f_h_determined"]))
     return row
 
 
