@@ -168,11 +168,14 @@ def one(task) -> dict:
                                                "p": float(r["p_value"]), "significant": bool(r["significant"])}
                                         for name, r in table.iterrows()} if not table.empty else {})
         row.update(proposed=top or "", variation=base.model.variation, f_h_before=base.f_h, xi_h_before=base.xi_h,
-                   ljung_box_before=base.test_pvalues()["ljung_box_p"])
+                   ljung_box_before=base.test_pvalues()["ljung_box_p"], misfit_share_before=base.misfit_share,
+                   f_h_determined_before=base.determined("f_h"),
+                   f_h_covered_before=bool(base.intervals["f_h"][0] <= person["f_h"] <= base.intervals["f_h"][1]))
         if kind in FITTED:
             fitted, seconds = _with_true_effect(base, diagnosis, FITTED[kind])
             row["identify_effect_seconds"] = base_seconds + seconds
             row.update(f_h_after=fitted.f_h, xi_h_after=fitted.xi_h, f_h_sd_after=float(fitted.se[0]),
+                       misfit_share_after=fitted.misfit_share, f_h_determined_after=fitted.determined("f_h"),
                        ljung_box_after=fitted.test_pvalues()["ljung_box_p"],
                        f_h_covered=bool(fitted.intervals["f_h"][0] <= person["f_h"] <= fitted.intervals["f_h"][1]))
             if kind in TRUE_PARAMETER:
