@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..errors import OptionError
 from ..model.core import F_H, TWO_PI, U, Slot
 from ..model.effect import Effect
@@ -52,6 +54,25 @@ class CubicStiffness(Effect):
         omega = TWO_PI * x[..., F_H]
         compression = x[..., U] - model.floor_motion(x, t, inputs)[0]  # the leg acts on u - z (Section 6)
         return -(omega**2) * model.value(x, "beta_3") * compression**3
+
+    STIFFNESS_CHANGE = 2.0
+    """Largest change of the leg's stiffness at the record's RMS displacement that ``diagnose`` searches:
+    ``|beta_3| <= STIFFNESS_CHANGE / (3 u_rms^2)`` (the tangent stiffness is ``K_h (1 + 3 beta_3 u^2)``)."""
+
+    @classmethod
+    def record_default(cls, result):
+        """The candidate ``diagnose`` tries: ``beta_range`` scaled to the record's displacement.
+
+        The fixed default (+-1000 1/m^2) can be too narrow: a spring 2.3 times stiffer at 2 cm
+        (``beta_3`` 1500, a simulated record with ``f_h`` 3.1 Hz) ended on the bound 1000 and was
+        not proposed, where the data asked for more (LR 362). The range is the one in which the
+        stiffness changes by at most :data:`STIFFNESS_CHANGE` (200 %) at the RMS of the COM
+        displacement the fit without the spring predicts (rounded up to 100 1/m^2, at least +-1000).
+        """
+        displacement = result.predicted_path()[:, 0]
+        rms = float(np.sqrt(np.mean(displacement**2)))
+        bound = 1000.0 if rms <= 0 else max(1000.0, 100.0 * np.ceil(cls.STIFFNESS_CHANGE / (3 * rms**2) / 100.0))
+        return cls(beta_range=(-bound, bound))
 
     @property
     def spec(self) -> str:

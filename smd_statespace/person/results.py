@@ -341,6 +341,17 @@ class PersonResult:
         p = float(stats.chi2.sf(max(lr, 0.0), df)) if df > 0 else float("nan")
         return {"lr": float(lr), "lr_df": int(df), "lr_p": p}
 
+    def predicted_path(self) -> np.ndarray:
+        """One-step predicted dynamic states (``u`` in m, ``u'`` in m/s, then any effect's), shape (N, n_x).
+
+        The path a nonlinear effect is linearised about
+        (:func:`~smd_statespace.person.extend.nominal_path`); an effect's
+        :meth:`record_default <smd_statespace.model.Effect.record_default>` may read its size.
+        """
+        from .extend import nominal_path
+
+        return nominal_path(self.model, self.params)
+
     def innovation_line(self) -> float:
         """Frequency (Hz) of the strongest line of the innovations' spectrum away from the bouncing harmonics.
 
