@@ -198,13 +198,13 @@ def summary(frame: pd.DataFrame) -> list:
     lines = ["| hidden effect | size | generator | records (failed) | effect / noise | ranked first | "
              "what came first | \\|f_h error\\| without -> with the true effect | f_h worse with it (by > 1 sd) | "
              "\\|xi_h error\\| without -> with | effect parameter error, covered | Ljung-Box passes before -> after | "
-             "s per record (diagnose, identify --effect) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "f_h determined before -> after; covered | s per record (diagnose, identify --effect) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (kind, size, generator), rows in frame.groupby(["kind", "size", "generator"], sort=False):
         ok = rows[rows["error"] == ""]
         n = len(ok)
         if n == 0:
-            lines.append(f"| {kind} | {size} | {generator} | {len(rows)} ({len(rows)}) |" + " |" * 9)
+            lines.append(f"| {kind} | {size} | {generator} | {len(rows)} ({len(rows)}) |" + " |" * 10)
             continue
         firsts = ", ".join(f"{k} {v}" for k, v in ok["proposed"].replace("", "nothing").value_counts().items())
         effect = f"{ok['effect_size'].median():.1f}" if "effect_size" in ok and ok["effect_size"].notna().any() else "-"
@@ -226,12 +226,19 @@ def summary(frame: pd.DataFrame) -> list:
             parameter = f"{ok['parameter'].iloc[0]} {error:.0f} %, {int(ok['parameter_covered'].sum())}/{n}"
         else:
             parameter = "-"
+        determined = "-"
+        if "f_h_determined_before" in ok and ok["f_h_determined_before"].notna().all():
+            counts = [int(ok[column].astype(bool).sum()) for column in ("f_h_determined_before", "f_h_covered_before")]
+            determined = f"{counts[0]}/{n}; {counts[1]}/{n}"
+            if kind in FITTED and "f_h_determined_after" in ok:
+                after_counts = [int(ok[c].astype(bool).sum()) for c in ("f_h_determined_after", "f_h_covered")]
+                determined = f"{counts[0]}/{n} -> {after_counts[0]}/{n}; {counts[1]}/{n} -> {after_counts[1]}/{n}"
         seconds = f"{ok['diagnose_seconds'].median():.0f}"
         if "identify_effect_seconds" in ok and ok["identify_effect_seconds"].notna().any():
             seconds += f", {ok['identify_effect_seconds'].median():.0f}"
         lines.append(f"| {kind} | {size} | {generator} | {len(rows)} ({len(rows) - n}) | {effect} | "
                      f"{int(ok['correct'].sum())}/{n} ({EXPECTED[kind] or 'nothing'}) | {firsts} | {f_text} | "
-                     f"{worse} | {x_text} | {parameter} | {passes} | {seconds} |")
+                     f"{worse} | {x_text} | {parameter} | {passes} | {determined} | {seconds} |")
     return lines
 
 
