@@ -60,8 +60,9 @@ def add_identify(subparsers):
                              "aligned on the mean cycle (template), or at GRF peaks (the article's cycles)")
     parser.add_argument("--intervals", choices=("calibrated", "wald", "profile"), default="calibrated",
                         help="record estimator: 90 %% intervals of f_h, xi_h from the standard errors widened by "
-                             "factors measured on simulated records (calibrated, default), from the standard errors "
-                             "alone (wald: too narrow) or from the profile likelihood (slower)")
+                             "factors measured on simulated records, and as wide as the yardstick where the record "
+                             "does not determine them or the model misfits it (calibrated, default), from the "
+                             "standard errors alone (wald: too narrow) or from the profile likelihood (slower)")
     add_rate_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
