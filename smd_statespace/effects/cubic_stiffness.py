@@ -63,7 +63,7 @@ class CubicStiffness(Effect):
     def record_default(cls, result):
         """The candidate ``diagnose`` tries: ``beta_range`` scaled to the record's displacement.
 
-        The fixed default (+-1000 1/m^2) can be too narrow: a spring 2.3 times stiffer at 2 cm
+        The fixed default (+-1000 1/m^2) can be too narrow: a spring whose tangent stiffness is 2.8 times K_h at 2 cm
         (``beta_3`` 1500, a simulated record with ``f_h`` 3.1 Hz) ended on the bound 1000 and was
         not proposed, where the data asked for more (LR 362). The range is the one in which the
         stiffness changes by at most :data:`STIFFNESS_CHANGE` (200 %) at the RMS of the COM
