@@ -374,7 +374,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
     return e_out, Ev_out, f_out, S, s, ee
 
 
-def concentrate(S, s, ee, f, n_obs):
+def concentrate(S, s, ee, f, n_obs, held=()):
     """Estimate ``delta`` and ``sigma^2`` by GLS and return the concentrated log-likelihoods.
 
     Parameters
@@ -382,6 +382,9 @@ def concentrate(S, s, ee, f, n_obs):
     S, s, ee, f : as returned by :func:`augmented_pass`.
     n_obs : int
         Number of observations ``N``.
+    held : sequence of int
+        Entries of ``delta`` held at 0, not estimated (their rows and columns
+        of ``delta_cov_unscaled`` are 0).
 
     Returns
     -------
@@ -397,6 +400,12 @@ def concentrate(S, s, ee, f, n_obs):
         q = s.size
         return {"delta": np.full(q, np.nan), "delta_cov_unscaled": np.full((q, q), np.nan), "sigma2": np.nan,
                 "rss": np.nan, "loglike": -math.inf, "loglike_diffuse": -math.inf, "rank": 0}
+    if len(held):
+        free = np.setdiff1d(np.arange(s.size), held)
+        out = concentrate(S[np.ix_(free, free)], s[free], ee, f, n_obs)
+        delta, cov = np.zeros(s.size), np.zeros((s.size, s.size))
+        delta[free], cov[np.ix_(free, free)] = out["delta"], out["delta_cov_unscaled"]
+        return {**out, "delta": delta, "delta_cov_unscaled": cov}
     scale = np.sqrt(np.maximum(np.diag(S), 1e-300))
     Sn = S / np.outer(scale, scale)
     w, V = np.linalg.eigh(Sn)
