@@ -288,7 +288,8 @@ def information(model: RecordModel, params, cov_type="robust") -> tuple:
         profile likelihood by central differences of its exact gradient,
         :func:`_hessian`), right when the model is right. ``"robust"``
         (default): the sandwich ``H^-1 B H^-1`` with ``B`` the outer product
-        of the per-cycle score sums (clustered by force cycle), which stays
+        of the per-cycle sums of the efficient scores (the template, initial
+        state and scale profiled out; clustered by force cycle), which stays
         right when the innovations are not what the model says (heavy tails,
         the cycle timing's own error); never narrower than needed for the
         measured spread of the scores.
@@ -347,10 +348,11 @@ def _robust_core(model, params, index, info):
 
 
 def _cluster_scores(model, params, index):
-    """Per-cycle sums of the exact per-sample scores (:func:`score.score`), shape (J, len(index))."""
+    """Per-cycle sums of the exact efficient scores (:func:`score.score`: ``delta`` and ``sigma^2`` profiled
+    out), shape (J, len(index))."""
     from .score import score
 
-    scores = score(model, params)["per_sample"][:, index]
+    scores = score(model, params)["efficient_per_sample"][:, index]
     cycle = model._phase[0]
     per_cycle = np.zeros((cycle.max() + 1, index.size))
     np.add.at(per_cycle, cycle, scores)
