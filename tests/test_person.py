@@ -475,3 +475,31 @@ def test_load_factor_sds_carry_the_persons_uncertainty_through_eq2(long_fit):
         slope = (blf_at(result.f_h + step) - blf_at(result.f_h - step)) / (2 * step)
         assert person_part[i] == pytest.approx(abs(slope) * sd_f_h, rel=0.15)
     assert result.to_dict()["blf_1_low"] < blf.loc[1, "blf"] < result.to_dict()["blf_1_high"]
+
+
+def test_load_factors_read_through_an_undetermined_person_say_so(long_fit):
+    """When f_h's interval is wider than its information says (not determined), the BLFs' intervals span the
+    template concentrated again across the person's intervals, and a BLF whose interval is then wider than its
+    value is not determined, in the table, person.json, the summary and the warnings."""
+    import dataclasses
+
+    from smd_statespace.model import acceleration_frf
+
+    determined = long_fit.template_blf()
+    assert determined["determined"].all()  # a determined person: intervals from the sds
+    wide = dict(long_fit.intervals, f_h=(0.6 * long_fit.f_h, 1.4 * long_fit.f_h))
+    probe = dataclasses.replace(long_fit, intervals=wide, narrow_intervals=dict(long_fit.intervals))
+    blf = probe.template_blf()
+    f_b = float(np.median(long_fit.model.timing.f_b))
+    for i in (1, 2):  # Eq. 2 at the interval's ends: the BLFs the template gives there lie inside the new interval
+        gain = [abs(acceleration_frf(i * f_b, long_fit.f_h, long_fit.xi_h)) / abs(
+            acceleration_frf(i * f_b, f_h, long_fit.xi_h)) for f_h in wide["f_h"]]
+        for g in gain:
+            assert 0.95 * blf.loc[i, "low"] <= g * determined.loc[i, "blf"] <= 1.05 * blf.loc[i, "high"], (i, g)
+        assert blf.loc[i, "high"] - blf.loc[i, "low"] > determined.loc[i, "high"] - determined.loc[i, "low"]
+    assert not blf["determined"].all()
+    names = [f"BLF{i}" for i in blf.index[~blf["determined"]]]
+    assert any(w.startswith(", ".join(names) + " not determined") for w in probe.warnings)
+    assert "NOT DETERMINED" in probe.summary().splitlines()[4]
+    row = probe.to_dict()
+    assert [row[f"blf_{i}_determined"] for i in blf.index] == list(blf["determined"])
