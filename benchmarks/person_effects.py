@@ -48,11 +48,11 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from smd_statespace.effects import EFFECTS, load_effects_file, make_effect
+from smd_statespace.effects import EFFECTS, load_effects_file
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
 from smd_statespace.person.diagnose import diagnose_person
-from smd_statespace.person.extend import fit_effects
+from smd_statespace.person.extend import configured_for_record, fit_effects
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
 
 REPO = Path(__file__).resolve().parents[1]
@@ -126,12 +126,12 @@ def _with_true_effect(base, diagnosis, spec) -> tuple:
     (:func:`~smd_statespace.person.extend.fit_effects`); diagnose has done both for its
     candidate of the same spec, so its fit is reused, else the effect is fitted here.
     """
-    effect = make_effect(spec)
+    effect = configured_for_record(spec, base)  # as identify_person takes it: a bare name configured for the record
     fitted = diagnosis.fits.get(effect.name)
     if fitted is not None and [e.spec for e in fitted.effects] == [effect.spec]:
         return fitted, float(next(row["seconds"] for row in diagnosis.rows if row["effect"] == effect.name))
     moment = time.perf_counter()
-    fitted = fit_effects(base, [effect])
+    fitted = fit_effects(base, [spec])
     return fitted, time.perf_counter() - moment
 
 

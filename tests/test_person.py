@@ -503,3 +503,16 @@ def test_load_factors_read_through_an_undetermined_person_say_so(long_fit):
     assert "NOT DETERMINED" in probe.summary().splitlines()[4]
     row = probe.to_dict()
     assert [row[f"blf_{i}_determined"] for i in blf.index] == list(blf["determined"])
+
+
+def test_a_bare_effect_name_is_configured_for_the_record_as_diagnose_proposes_it(long_fit):
+    """``identify --effect cubic_stiffness`` searches the range diagnose's candidate has (scaled to the record's
+    displacement), not the fixed default a strong spring ends on; options given are kept."""
+    from smd_statespace.effects import EFFECTS
+    from smd_statespace.person.extend import configured_for_record
+
+    scaled = EFFECTS["cubic_stiffness"].record_default(long_fit)
+    bare = configured_for_record("cubic_stiffness", long_fit)
+    assert bare.spec == scaled.spec and bare.beta_range[1] > 1000.0
+    assert configured_for_record("cubic_stiffness:beta_range=-500/500", long_fit).beta_range == (-500.0, 500.0)
+    assert configured_for_record(scaled, long_fit) is scaled

@@ -61,7 +61,8 @@ class CubicStiffness(Effect):
 
     @classmethod
     def record_default(cls, result):
-        """The candidate ``diagnose`` tries: ``beta_range`` scaled to the record's displacement.
+        """The candidate ``diagnose`` tries, and ``identify --effect cubic_stiffness`` fits: ``beta_range``
+        scaled to the record's displacement.
 
         The fixed default (+-1000 1/m^2) can be too narrow: a spring whose tangent stiffness is 2.8 times K_h at 2 cm
         (``beta_3`` 1500, a simulated record with ``f_h`` 3.1 Hz) ended on the bound 1000 and was

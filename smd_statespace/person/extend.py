@@ -44,7 +44,7 @@ from ..progress import tqdm
 from .dynamics import PersonDynamics
 from .model import RecordModel
 
-__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "split_effects", "record_signals",
+__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "configured_for_record", "split_effects", "record_signals",
            "effect_model", "fit_effects", "nominal_path"]
 
 NOMINAL_ITERATIONS = 6
@@ -75,6 +75,23 @@ def check_effects(effects, record) -> tuple:
                               "without one use floor_mode:source=modal")
     SMDModel(effects=[e for e in effects if not e.record_harmonics(SMDModel())])  # duplicates, bad values
     return effects
+
+
+def configured_for_record(effect, result):
+    """``effect`` as the record-level model takes it: a bare name (no options) as its class configures itself.
+
+    ``identify --effect cubic_stiffness`` then searches the range ``diagnose`` proposed it with
+    (:meth:`Effect.record_default <smd_statespace.model.Effect.record_default>`, from ``result``, the fit
+    without it: a cubic spring's range scaled to the record's displacement), not a fixed default that a
+    strong spring ends on. Specs with options and :class:`Effect` objects are taken as given.
+    """
+    from ..effects import EFFECTS, make_effect
+
+    if isinstance(effect, str) and effect.strip() in EFFECTS:
+        configured = EFFECTS[effect.strip()].record_default(result)
+        if configured is not None and configured.name == effect.strip():
+            return configured
+    return make_effect(effect)
 
 
 def split_effects(effects, n_harmonics: int) -> tuple:
@@ -187,7 +204,8 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
         on top of them, and the comparison (``before``, the likelihood ratio)
         is with ``result``.
     effects : sequence of Effect or str
-        The effects to add (not already in ``result``).
+        The effects to add (not already in ``result``). A bare name takes the
+        options its class chooses for this record (:func:`configured_for_record`).
     intervals, cov_type : str
         As :func:`~smd_statespace.person.fit.identify_person`.
     progress : bool
@@ -202,7 +220,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     from .fit import FitError, fit_model, person_result
 
     present = tuple(result.effects)
-    added = check_effects(effects, result.record)
+    added = check_effects([configured_for_record(effect, result) for effect in effects], result.record)
     already = sorted({e.name for e in present} & {e.name for e in added})
     if already:
         raise OptionError(f"{result.record.source}: the effect {already[0]!r} is in the model already "

@@ -645,7 +645,10 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         person is first identified without them (``result.before``), then with
         them at that fit's variation model and cycle timing, their parameters
         estimated jointly with ``f_h`` and ``xi_h``
-        (:func:`~smd_statespace.person.extend.fit_effects`).
+        (:func:`~smd_statespace.person.extend.fit_effects`). A bare name
+        takes the options its class chooses for the record, as ``diagnose``
+        proposes it (a cubic spring's search range scaled to the record's
+        displacement).
 
     Returns
     -------
@@ -665,7 +668,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     """
     from .extend import check_effects, fit_effects
 
-    effects = check_effects(effects, record)
+    given = tuple(effects)
+    effects = check_effects(given, record)  # bad specs and missing columns fail before any fit
     if variation != "auto" and variation not in VARIATIONS:
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:
@@ -723,8 +727,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
                                comparison=comparison, record_warnings=record_warnings, notes=notes)
         step()
-    if effects:
-        result = fit_effects(result, effects, intervals=intervals, cov_type=cov_type, progress=progress)
+    if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
+        result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress)
     return result
 
 
