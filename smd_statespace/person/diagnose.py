@@ -39,9 +39,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..effects import EFFECTS, make_effect
+from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
-from .extend import fit_effects
+from .extend import configured_for_record, fit_effects
 
 __all__ = ["PersonDiagnosis", "diagnose_person", "candidate_row"]
 
@@ -209,7 +209,8 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
         The fit to diagnose (:func:`~smd_statespace.person.fit.identify_person`), with or without effects:
         each candidate is added on top of those it has.
     candidates : sequence of str or Effect, optional
-        Effects to try (names, ``NAME:key=value`` specs or objects), none of them in ``result`` already.
+        Effects to try (names, ``NAME:key=value`` specs or objects), none of them in ``result`` already;
+        a bare name as its class configures itself for this record (as by default).
         Default: every registered effect not in ``result`` as its class configures itself for this
         record (:meth:`Effect.record_default <smd_statespace.model.Effect.record_default>`).
     alpha : float
@@ -229,7 +230,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
         effects = [effect for name, cls in EFFECTS.items() if name not in present
                    for effect in [cls.record_default(result)] if effect is not None]
     else:
-        effects = [make_effect(candidate) for candidate in candidates]
+        effects = [configured_for_record(candidate, result) for candidate in candidates]
         already = [effect.name for effect in effects if effect.name in present]
         if already:
             raise OptionError(f"candidate {already[0]!r} is in the model already; candidates are effects to try on "
