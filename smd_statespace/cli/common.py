@@ -135,10 +135,39 @@ def rate_of(args):
     return args.rate or None
 
 
-def add_record_arguments(parser):
-    """``REC.csv --mass KG``: the record to identify."""
+def add_record_arguments(parser, accelerometer=False):
+    """``REC.csv --mass KG``: the record to identify (``accelerometer``: also ``--accelerometer``, ``--units``)."""
     parser.add_argument("record", metavar="REC.csv", help="record with columns time,force[,floor_acc]")
-    parser.add_argument("--mass", required=True, type=float, metavar="KG", help="body mass M_h (kg)")
+    parser.add_argument("--mass", required=not accelerometer, type=float, metavar="KG",
+                        help="body mass M_h (kg)" + ("; optional with --accelerometer" if accelerometer else ""))
+    if accelerometer:
+        add_accelerometer_arguments(parser)
+
+
+def add_accelerometer_arguments(parser):
+    """``--accelerometer`` and ``--units``: the record is a body-worn accelerometer's (record-level model)."""
+    parser.add_argument("--accelerometer", action="store_true",
+                        help="REC is a body-worn accelerometer's CSV (phyphox's export, time,ax,ay,az or time,acc, "
+                             "gravity included) instead of a force plate's: the vertical is taken from the record's "
+                             "own gravity, the clock made uniform (record-level model only; --mass optional, K_h "
+                             "and C_h need it)")
+    parser.add_argument("--units", choices=("auto", "m/s^2", "g"), default=None,
+                        help="with --accelerometer: units of a plain CSV (default auto: from gravity's size)")
+
+
+def read_person_record(args):
+    """The record of ``args``: a force plate's (``--mass`` needed) or, with ``--accelerometer``, a phone's."""
+    from ..io import read_record
+
+    if args.units is not None and not args.accelerometer:
+        raise OptionError("--units applies to an accelerometer record (--accelerometer)")
+    if args.accelerometer:
+        from ..accelerometer import accelerometer_record
+
+        return accelerometer_record(args.record, args.mass, units=args.units or "auto")
+    if args.mass is None:
+        raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
+    return read_record(args.record, args.mass)
 
 
 def add_check_argument(parser):

@@ -8,9 +8,10 @@ import shlex
 import pandas as pd
 
 from ..diagnostics.check import INITIAL_STATES
+from ..errors import OptionError
 from ..estimators import ESTIMATORS
 from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments, build_model,
-                     estimator_options, out_dir, prepare_record, rate_of)
+                     estimator_options, out_dir, prepare_record, rate_of, read_person_record)
 from .identify import DEFAULT_ESTIMATOR
 
 
@@ -28,7 +29,7 @@ def add_diagnose(subparsers):
                      "try. With a per-cycle --estimator (the article's method), each cycle is refitted with "
                      "every candidate and the fits compared (free simulation, residual tests)."),
     )
-    add_record_arguments(parser)
+    add_record_arguments(parser, accelerometer=True)
     parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default="record",
                         help="estimator for every fit (default record: the record-level model, each candidate "
                              f"identified with the person); a per-cycle one ({DEFAULT_ESTIMATOR}, ...) refits "
@@ -88,13 +89,12 @@ def _effects_and_candidates(args) -> tuple:
 
 def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
-    from ..io import read_record
     from ..person import identify_person
     from ..person.diagnose import diagnose_person
     from ..person.extend import check_effects
 
     added, candidates = _effects_and_candidates(args)  # a bad --effect or --candidate: one line, nothing read
-    record = read_record(args.record, args.mass)
+    record = read_person_record(args)
     check_effects(added + (candidates or []), record)
     directory = out_dir(args.out)
     base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args),
@@ -140,6 +140,9 @@ def run_diagnose(args) -> int:
 
     if args.estimator == "record":
         return run_person_diagnose(args)
+    if args.accelerometer or args.units is not None:
+        raise OptionError(f"--accelerometer works with the record-level model (--estimator record), not "
+                          f"--estimator {args.estimator}")
     from ..diagnostics.missing import diagnose
     from ..plotting.cycles import plot_before_after
 

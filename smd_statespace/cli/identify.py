@@ -13,8 +13,9 @@ from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError
 from ..identify.runner import DEFAULT_ESTIMATOR
-from .common import (PROG, _count, add_model_arguments, add_rate_argument, add_run_arguments, build_model,
-                     estimator_options, load_truth, out_dir, prepare_record, rate_of, truth_values)
+from .common import (PROG, _count, add_accelerometer_arguments, add_model_arguments, add_rate_argument,
+                     add_run_arguments, build_model, estimator_options, load_truth, out_dir, prepare_record, rate_of,
+                     read_person_record, truth_values)
 
 
 SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
@@ -40,7 +41,9 @@ def add_identify(subparsers):
                         help="a record CSV (time,force[,floor_acc]), a folder of them, or a quoted glob "
                              "('data/*.csv'); may be omitted with --manifest")
     parser.add_argument("--mass", type=float, metavar="KG",
-                        help="body mass M_h (kg); with many records, the mass of those the manifest does not list")
+                        help="body mass M_h (kg); with many records, the mass of those the manifest does not list; "
+                             "optional with --accelerometer (K_h, C_h need it)")
+    add_accelerometer_arguments(parser)
     parser.add_argument("--manifest", metavar="FILE",
                         help="CSV with columns file,mass: one body mass per record (files relative to it)")
     parser.add_argument("--resume", action="store_true",
@@ -226,13 +229,12 @@ def run_batch_identify(args) -> int:
 
 def run_person(args) -> int:
     """``identify --estimator record``: the person from the whole record; person.json, results.csv, figures."""
-    from ..io import read_record
     from ..person import identify_person
     from ..person.extend import check_effects
     from ..person.output import write_person
 
     effects = build_model(args).effects  # an unknown effect or option: one line before anything is read
-    record = read_record(args.record, args.mass)
+    record = read_person_record(args)
     check_effects(effects, record)  # a column the record lacks (floor_acc): one line, nothing written
     truth = truth_values(load_truth(args.truth))  # a bad --truth fails before the fit, not after
     directory = out_dir(args.out)
@@ -252,10 +254,17 @@ def run_person(args) -> int:
 
 def run_identify(args) -> int:
     """Run ``smd-statespace identify``."""
+    if args.units is not None and not args.accelerometer:
+        raise OptionError("--units applies to an accelerometer record (--accelerometer)")
+    if args.accelerometer and is_batch(args):
+        raise OptionError("--accelerometer takes one record file, not a folder, a glob or a manifest")
+    if args.accelerometer and args.estimator not in (None, "record"):
+        raise OptionError(f"--accelerometer works with the record-level model (--estimator record), not "
+                          f"--estimator {args.estimator}")
     if is_batch(args):
         args.estimator = args.estimator or DEFAULT_ESTIMATOR
         return run_batch_identify(args)
-    if args.mass is None:
+    if args.mass is None and not args.accelerometer:
         raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
     args.estimator = args.estimator or "record"
     if args.estimator == "record":

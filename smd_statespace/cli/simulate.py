@@ -1,4 +1,5 @@
-"""``smd-statespace simulate``: write a synthetic GRF record (Eq. 2-4) and the truth behind it."""
+"""``smd-statespace simulate``: write a synthetic GRF record (Eq. 2-4), or a phone's accelerometer record of the
+person (``--accelerometer``), and the truth behind it."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ from pathlib import Path
 
 from ..errors import OptionError, SMDInputError
 from ..simulation import VARIATIONS
+from ..simulation.phone import PHONE_DEFAULTS
 from .common import _nonnegative, _numbers, _positive, _seed
 
 
@@ -45,6 +47,17 @@ def add_simulate(subparsers):
                              "(one squared-sine pulse per cycle, its width, height and timing jittered; the truth "
                              "holds the mean pulse's harmonics) or tempo (a fixed shape under a tempo that ramps "
                              "and wanders by a few --fb-variation over the record; --coef-variation unused)")
+    parser.add_argument("--accelerometer", action="store_true",
+                        help="write a phone's accelerometer record instead of a force plate's: phyphox's CSV "
+                             "export (three axes with gravity, tilted, swaying, biased, noisy, jittered clock, "
+                             "dropped samples; the options below), read by identify --accelerometer")
+    for name, unit, what in (("tilt", "DEG", "tilt of the phone from level"), ("sway", "DEG", "slow sway amplitude"),
+                             ("bias", "M/S2", "per-axis bias bound"), ("phone-noise", "M/S2", "noise sd per axis"),
+                             ("phone-rate", "HZ", "sampling rate, 50-500"), ("jitter", "S", "clock jitter sd"),
+                             ("drop", "FRAC", "fraction of samples dropped")):
+        key = {"phone-noise": "noise", "phone-rate": "fs"}.get(name, name)
+        parser.add_argument(f"--{name}", type=_nonnegative, default=None, metavar=unit,
+                            help=f"with --accelerometer: {what} (default {PHONE_DEFAULTS[key]:g})")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="physical effect, repeatable: any registered effect (floor_mode, harmonics, "
                              "cubic_stiffness, a user's); keys are its options or its parameters' true values "
@@ -69,6 +82,15 @@ def run_simulate(args) -> int:
     for label, path in (("--out", out), ("--truth", truth)):
         if path is not None and not path.parent.is_dir():
             raise OptionError(f"{label} {path}: directory {path.parent} does not exist")
+    phone = {key: getattr(args, attr) for key, attr in (("tilt", "tilt"), ("sway", "sway"), ("bias", "bias"),
+                                                         ("noise", "phone_noise"), ("fs", "phone_rate"),
+                                                         ("jitter", "jitter"), ("drop", "drop"))
+             if getattr(args, attr) is not None}
+    if phone and not args.accelerometer:
+        raise OptionError(f"--{next(iter(phone)).replace('noise', 'phone-noise').replace('fs', 'phone-rate')} "
+                          "applies to a phone's record (--accelerometer)")
+    if args.accelerometer:
+        return _simulate_phone(args, mass, effects, names, out, truth, phone)
     try:
         synthetic = simulate_bouncing(
             mass=mass,
@@ -97,4 +119,27 @@ def run_simulate(args) -> int:
         f"wrote {csv_path}: {record.duration:.2f} s at {record.fs:g} Hz, {info['n_cycles']} force cycles "
         f"(f_b {args.fb:g} Hz, f_h {args.fh:g} Hz, xi_h {args.xi:g}, {seed}{extra}); truth in {truth_path}"
     )
+    return 0
+
+
+def _simulate_phone(args, mass, effects, names, out, truth, phone) -> int:
+    """``simulate --accelerometer``: the person recorded by a phone at the waist, in phyphox's format."""
+    from ..simulation.bouncing import DEFAULT_BLF
+    from ..simulation.phone import simulate_phone
+
+    try:
+        record = simulate_phone(mass=mass, f_b=args.fb, f_h=args.fh, xi_h=args.xi, duration=args.duration,
+                                seed=args.seed, blf=DEFAULT_BLF if args.blf is None else args.blf,
+                                fb_variation=args.fb_variation, coef_variation=args.coef_variation,
+                                effects=effects or None, variation=args.variation, **phone)
+    except SMDInputError as exc:
+        raise type(exc)(str(exc).replace("simulate_bouncing: ", "", 1).replace("simulate_phone: ", "", 1)) from None
+    csv_path, truth_path = record.write(out, truth)
+    settings = record.truth["phone"]
+    extra = f", effects {', '.join(names)}" if effects else ""
+    print(f"wrote {csv_path}: a phone's accelerometer ({settings['fs']:g} Hz, {len(record.time)} samples, "
+          f"{settings['n_dropped']} dropped; tilt {settings['tilt_deg']:g} deg, sway {settings['sway_deg']:g} deg, "
+          f"noise {settings['noise']:g} m/s^2) on a person bouncing {args.duration:g} s (f_b {args.fb:g} Hz, f_h "
+          f"{args.fh:g} Hz, xi_h {args.xi:g}, {args.variation} variation{extra}); truth in {truth_path}; identify it "
+          f"with: smd-statespace identify {csv_path} --accelerometer")
     return 0

@@ -134,13 +134,16 @@ class PersonDiagnosis:
         """True when no candidate is a significant improvement."""
         return not self.missing
 
-    def command(self, record: str, mass: float, extra: str = "") -> str:
-        """The ``identify`` command that adds the best candidate (runs as printed); empty when adequate."""
+    def command(self, record: str, mass, extra: str = "") -> str:
+        """The ``identify`` command that adds the best candidate (runs as printed); empty when adequate.
+
+        ``mass`` may be None for an accelerometer's record identified without one.
+        """
         if self.adequate:
             return ""
         spec = self.table().loc[self.missing[0], "spec"]
         effects = " ".join(f"--effect {shlex.quote(part)}" for part in spec.split(" "))
-        return f"smd-statespace {extra}identify {shlex.quote(str(record))} --mass {mass:g} {effects}"
+        return f"smd-statespace {extra}identify {self.base.record_arguments(record, mass)} {effects}"
 
     def notes(self) -> list:
         """Plain-word notes: refits on a bound, failures, what the joint fit of two candidates separated."""

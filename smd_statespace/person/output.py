@@ -64,7 +64,9 @@ def write_person(directory, result, options: dict, truth=None) -> list:
     table.to_csv(cycles, index=False)
     run = directory / "run.json"
     atomic_write_text(run, json.dumps({"version": __version__, "command": "identify", "estimator": "record",
-                                       "record": str(result.record.source), "mass": result.record.mass,
+                                       "record": str(result.record.source),
+                                       "mass": result.record.mass if result.mass_known else None,
+                                       "sensor": person["sensor"],
                                        "options": options}, indent=2))
     from ..plotting.person import plot_compare, plot_floor_correlation, plot_spectrum
 

@@ -490,9 +490,27 @@ class PersonResult:
         return stands_in_for_force(self.f_h, self.xi_h, float(np.median(self.model.timing.f_b)),
                                    self.model.n_harmonics, self.model.variation)
 
+    def record_arguments(self, record=None, mass=None) -> str:
+        """The command line's record arguments for this result's record: ``REC --mass KG`` or, for an
+        accelerometer's, ``REC --accelerometer`` (with ``--mass`` when it was given). ``record``, ``mass``:
+        as the user gave them (default: the record's source and mass)."""
+        record = self.record.source if record is None else record
+        mass = self.record.mass if mass is None else mass
+        if self.record.extra.get("sensor") == "accelerometer":
+            return f"{shlex.quote(str(record))} --accelerometer" + (f" --mass {mass:g}" if self.mass_known else "")
+        return f"{shlex.quote(str(record))} --mass {mass:g}"
+
+    @property
+    def mass_known(self) -> bool:
+        """False for an accelerometer record identified without a body mass (``K_h``, ``C_h`` left out)."""
+        return bool(self.record.extra.get("mass_known", True))
+
     def derived(self) -> dict:
-        """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds."""
+        """``k_h`` (N/m) and ``c_h`` (N s/m), Eq. 17-18, with delta-method sds; empty without a known mass."""
         from ..model import c_h, k_h
+
+        if not self.mass_known:
+            return {}
 
         mass, f_h, xi_h = self.record.mass, self.f_h, self.xi_h
         cov = self.cov[:2, :2]
@@ -620,7 +638,7 @@ class PersonResult:
                 out.append(f"{name} is not determined by this record (sd {row['sd']:.3g} {row['unit']} against its "
                            f"range {row['range_low']:g}-{row['range_high']:g})")
         tests = self.test_pvalues()
-        command = f"`smd-statespace diagnose {shlex.quote(str(self.record.source))} --mass {self.record.mass:g}`"
+        command = f"`smd-statespace diagnose {self.record_arguments()}`"
         if self.misfit or tests["ljung_box_p"] < WHITENESS_ALPHA:
             if self.misfit:
                 out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}; their "
@@ -677,6 +695,13 @@ class PersonResult:
         out["interval_level"] = self.level
         out["interval_method"] = self.interval_method
         out.update(self.derived())
+        extra = self.record.extra
+        out["sensor"] = extra.get("sensor", "force plate")
+        out["mass_known"] = self.mass_known
+        if out["sensor"] == "accelerometer":
+            out["accelerometer"] = {"format": extra.get("format"), "units_read": extra.get("units_read"),
+                                    **{f"clock_{k}": v for k, v in extra.get("clock", {}).items()},
+                                    **{f"geometry_{k}": v for k, v in extra.get("geometry", {}).items()}}
         blf = self.template_blf()
         for i, row in blf.iterrows():
             out[f"blf_{i}"] = float(row["blf"])
@@ -754,7 +779,9 @@ class PersonResult:
             f"Hz){'' if d['f_h_determined'] else '  NOT DETERMINED'}",
             f"  xi_h = {d['xi_h']:.3f}     (sd {d['xi_h_sd']:.3f}; {pct} % interval {d['xi_h_low']:.2f}-"
             f"{d['xi_h_high']:.2f}){'' if d['xi_h_determined'] else '  NOT DETERMINED'}",
-            f"  K_h  = {d['k_h']:.0f} N/m (sd {d['k_h_sd']:.0f}), C_h = {d['c_h']:.0f} N s/m (sd {d['c_h_sd']:.0f})",
+            (f"  K_h  = {d['k_h']:.0f} N/m (sd {d['k_h_sd']:.0f}), C_h = {d['c_h']:.0f} N s/m (sd {d['c_h_sd']:.0f})"
+             if self.mass_known else "  K_h, C_h: not computed without the body mass (give --mass KG); f_h, xi_h and "
+             "the BLFs do not need it"),
             "  BLF (g): " + ", ".join(
                 (f"{i}: {d[f'blf_{i}']:.3f} ± {d[f'blf_{i}_sd']:.3f}" if self.narrow_intervals == self.intervals
                  else f"{i}: {d[f'blf_{i}']:.3f} ({d[f'blf_{i}_low']:.3f}-{d[f'blf_{i}_high']:.3f}"

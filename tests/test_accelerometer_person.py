@@ -1,0 +1,114 @@
+"""The person from a phone at the waist: the simulated phone, the record the person model reads, the command line.
+
+The phone's record of a simulated person (:func:`~smd_statespace.simulation.phone.simulate_phone`) is read as
+a user's file (:func:`~smd_statespace.accelerometer.accelerometer_record`) and identified by the same
+record-level model as a force plate's; a tilted phone must give the answer of a level one.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from smd_statespace.accelerometer import UNKNOWN_MASS, accelerometer_record
+from smd_statespace.cli.main import main
+from smd_statespace.io import G
+from smd_statespace.person import identify_person
+from smd_statespace.simulation.phone import simulate_phone
+
+PERSON = dict(mass=65.0, f_b=2.1, f_h=2.8, xi_h=0.3, duration=16.0)
+"""The simulated person (kg, Hz, Hz, -, s)."""
+
+
+@pytest.fixture(scope="module")
+def phones(tmp_path_factory):
+    """The same person and phone draws (seed 21), the phone level and tilted 30 degrees: the written files."""
+    folder = tmp_path_factory.mktemp("phone")
+    out = {}
+    for tilt in (0.0, 30.0):
+        phone = simulate_phone(**PERSON, tilt=tilt, bias=0.2, seed=21)
+        out[tilt] = (phone, phone.write(folder / f"tilt{tilt:g}.csv")[0])
+    return out
+
+
+@pytest.fixture(scope="module")
+def people(phones):
+    """The record-level person of each phone's file, without a body mass."""
+    return {tilt: identify_person(accelerometer_record(path)) for tilt, (_, path) in phones.items()}
+
+
+def test_the_phone_sees_the_persons_com_acceleration(phones):
+    """Read back, clock repaired and projected on the record's own vertical, the phone's file gives the person's
+    true COM acceleration to within the sensor's noise (0.05 m/s^2)."""
+    for phone, path in phones.values():
+        record = accelerometer_record(path)
+        assert record.extra["sensor"] == "accelerometer" and not record.extra["mass_known"]
+        assert record.mass == UNKNOWN_MASS
+        a_v = record.force / record.mass - G
+        truth = np.interp(record.time + phone.time[0], phone.time, phone.vertical)
+        inner = slice(int(record.fs), -int(record.fs))
+        error = float(np.sqrt(np.mean((a_v - truth)[inner] ** 2)))
+        assert error < 1.3 * phone.truth["phone"]["noise"], error
+        assert abs(record.extra["geometry"]["tilt_deg"] - phone.truth["phone"]["tilt_deg"]) < 3.0
+
+
+def test_a_tilted_phone_gives_the_answer_of_a_level_one(people):
+    """Same person, same noise and clock, the phone level or tilted 30 degrees: the same f_h, xi_h and BLF1 (a
+    vertical taken wrongly, the z axis of a tilted phone, would scale the signal by cos 30 = 0.87)."""
+    level, tilted = people[0.0], people[30.0]
+    # the sensor noise projects differently on a tilted vertical: the same to well within the estimates' sds
+    assert abs(tilted.f_h - level.f_h) < 0.5 * level.se[0]
+    assert abs(tilted.xi_h - level.xi_h) < 0.5 * level.se[1]
+    blf = tilted.template_blf().loc[1], level.template_blf().loc[1]
+    assert abs(blf[0]["blf"] - blf[1]["blf"]) < 0.5 * blf[1]["sd"] and abs(blf[0]["blf"] / blf[1]["blf"] - 1) < 0.05
+    low, high = tilted.intervals["f_h"]
+    assert low < PERSON["f_h"] < high
+
+
+def test_without_a_mass_k_and_c_are_left_out_and_said_so(people):
+    result = people[30.0]
+    row = result.to_dict()
+    assert "k_h" not in row and "c_h" not in row and row["mass_known"] is False
+    assert row["sensor"] == "accelerometer" and row["accelerometer"]["geometry_tilt_deg"] > 20
+    assert "not computed without the body mass" in result.summary()
+    assert result.record_arguments().endswith("--accelerometer")
+
+
+def test_identify_and_diagnose_an_accelerometer_from_the_command_line(phones, tmp_path, capsys):
+    """``simulate --accelerometer`` writes phyphox's format; ``identify --accelerometer`` without a mass writes
+    person.json with the sensor and without K_h; with a mass K_h comes back (Eq. 17)."""
+    path = tmp_path / "phone.csv"
+    assert main(["simulate", "--out", str(path), "--mass", "70", "--fb", "2", "--fh", "2.6", "--xi", "0.3",
+                 "--duration", "12", "--seed", "4", "--accelerometer", "--tilt", "20"]) == 0
+    assert path.read_text().startswith('"Time (s)","Acceleration x (m/s^2)"')
+    assert "identify it with: smd-statespace identify" in capsys.readouterr().out
+    out = tmp_path / "out"
+    assert main(["identify", str(path), "--accelerometer", "--out", str(out), "--quiet"]) == 0
+    person = json.loads((out / "person.json").read_text())
+    assert person["sensor"] == "accelerometer" and "k_h" not in person
+    assert json.loads((out / "run.json").read_text())["mass"] is None
+    with_mass = tmp_path / "with_mass"
+    assert main(["identify", str(path), "--accelerometer", "--mass", "70", "--out", str(with_mass), "--quiet"]) == 0
+    again = json.loads((with_mass / "person.json").read_text())
+    assert again["f_h"] == pytest.approx(person["f_h"], rel=1e-6)
+    assert again["k_h"] == pytest.approx(70 * (2 * np.pi * again["f_h"]) ** 2, rel=1e-9)
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["identify", "{phone}", "--accelerometer", "--estimator", "ekf"], "--accelerometer works with the record-level"),
+    (["identify", "{phone}", "--units", "g", "--mass", "70"], "--units applies to an accelerometer record"),
+    (["identify", "{phone}"], "--mass KG is needed"),
+    (["diagnose", "{phone}", "--accelerometer", "--estimator", "ekf"], "--accelerometer works with the record-level"),
+    (["simulate", "--out", "{out}", "--mass", "70", "--fb", "2", "--fh", "2.6", "--xi", "0.3", "--duration", "5",
+      "--tilt", "10"], "--tilt applies to a phone's record"),
+    (["simulate", "--out", "{out}", "--mass", "70", "--fb", "2", "--fh", "2.6", "--xi", "0.3", "--duration", "5",
+      "--accelerometer", "--phone-rate", "1000"], "outside 50-500 Hz"),
+])
+def test_bad_accelerometer_options_are_one_line_errors(phones, tmp_path, capsys, arguments, message):
+    phone = phones[0.0][1]
+    out = tmp_path / "written.csv"
+    arguments = [a.format(phone=phone, out=out) for a in arguments]
+    assert main(arguments + ["--out", str(tmp_path / "o")] if arguments[0] != "simulate" else arguments) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not out.exists() and not (tmp_path / "o" / "person.json").exists()
