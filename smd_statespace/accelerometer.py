@@ -39,7 +39,6 @@ valid, like :func:`smd_statespace.io.read_record`.
 
 from __future__ import annotations
 
-import csv
 import math
 import os
 from dataclasses import dataclass
@@ -48,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import OptionError, RecordError
-from .io import G, SAMPLING_TOLERANCE, _check_numeric
+from .io import G, SAMPLING_TOLERANCE, _check_numeric, csv_rows
 
 __all__ = [
     "UNITS",
@@ -237,22 +236,7 @@ def _layout(path, header: list) -> tuple:
 
 def _read_rows(path: Path) -> tuple:
     """The file's header, data rows and delimiter, or a :class:`RecordError`."""
-    if not path.exists():
-        raise RecordError(f"{path}: no such file")
-    if path.is_dir():
-        raise RecordError(f"{path}: is a directory, expected a CSV file")
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            first_line = handle.readline()
-            if not first_line.strip():
-                raise RecordError(f"{path}: file is empty; expected a header ({ACCEPTED_HEADERS}) and data rows")
-            delimiter = _delimiter(path, first_line)
-            handle.seek(0)
-            rows = list(csv.reader(handle, delimiter=delimiter))
-    except UnicodeDecodeError:
-        raise RecordError(f"{path}: not a text CSV file (could not decode as UTF-8)") from None
-    except OSError as exc:
-        raise RecordError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    rows, delimiter = csv_rows(path, f"a header ({ACCEPTED_HEADERS})", _delimiter)
     body = [row for row in rows[1:] if any(cell.strip() for cell in row)]
     return rows[0], body, delimiter
 

@@ -197,6 +197,32 @@ def _sniff_delimiter(path: Path, first_line: str) -> None:
             )
 
 
+def csv_rows(path: Path, expected: str, delimiter_of) -> tuple:
+    """``(rows, delimiter)`` of a CSV file, or a one-line :class:`RecordError`.
+
+    Missing, a directory, empty, not UTF-8 text or unreadable: said so, with ``expected`` (what the
+    header should be) for an empty file. ``delimiter_of(path, first_line)`` returns the delimiter or
+    raises :class:`RecordError` naming the one found.
+    """
+    if not path.exists():
+        raise RecordError(f"{path}: no such file")
+    if path.is_dir():
+        raise RecordError(f"{path}: is a directory, expected a CSV file")
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
+            first_line = handle.readline()
+            if not first_line.strip():
+                raise RecordError(f"{path}: file is empty; expected {expected} and data rows")
+            delimiter = delimiter_of(path, first_line)
+            handle.seek(0)
+            rows = list(csv.reader(handle, delimiter=delimiter))
+    except UnicodeDecodeError:
+        raise RecordError(f"{path}: not a text CSV file (could not decode as UTF-8)") from None
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    return rows, delimiter
+
+
 def read_record(path, mass) -> Record:
     """Read a CSV record and check it (see the module docstring for the format).
 
@@ -221,22 +247,12 @@ def read_record(path, mass) -> Record:
     """
     path = Path(path)
     check_mass(mass)
-    if not path.exists():
-        raise RecordError(f"{path}: no such file")
-    if path.is_dir():
-        raise RecordError(f"{path}: is a directory, expected a CSV file")
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            first_line = handle.readline()
-            if not first_line.strip():
-                raise RecordError(f"{path}: file is empty; expected a header time,force[,floor_acc] and data rows")
-            _sniff_delimiter(path, first_line)
-            handle.seek(0)
-            rows = list(csv.reader(handle))
-    except UnicodeDecodeError:
-        raise RecordError(f"{path}: not a text CSV file (could not decode as UTF-8)") from None
-    except OSError as exc:
-        raise RecordError(f"{path}: cannot read ({exc.strerror or exc})") from None
+
+    def comma(path, first_line):
+        _sniff_delimiter(path, first_line)
+        return ","
+
+    rows, _ = csv_rows(path, "a header time,force[,floor_acc]", comma)
     header = [name.strip().lower() for name in rows[0]]
     missing = [name for name in REQUIRED_COLUMNS if name not in header]
     if missing:

@@ -60,12 +60,34 @@ class PhoneRecord:
         the phone's settings and draws (tilt axis, biases, samples dropped).
     vertical : ndarray, shape (T,)
         The true vertical COM acceleration at the stamps (m/s^2, ``u_ddot``).
+    person : SyntheticRecord
+        The simulated person (noise-free, sampled finely): :meth:`plate_record` gives the force plate's
+        record of the same bounce.
     """
 
     time: np.ndarray
     acc: np.ndarray
     truth: dict
     vertical: np.ndarray
+    person: object = None
+
+    def plate_record(self, fs=100.0, noise=0.01, seed=None):
+        """The same bounce on a force plate: GRF (Eq. 3) at ``fs`` (Hz) with white noise ``noise`` (in body
+        weights), for comparing the phone with the plate on one and the same person.
+
+        ``fs`` must divide the fine simulation's rate.
+        """
+        from ..io import make_record
+
+        fine = float(self.person.truth["fs"])
+        step = int(round(fine / fs))
+        if step < 1 or abs(step * fs - fine) > 1e-9 * fine:
+            raise OptionError(f"plate_record: fs {fs!r} Hz does not divide the simulation's {fine:g} Hz")
+        states = self.person.states.iloc[::step]
+        mass = float(self.person.truth["mass"])
+        rng = np.random.default_rng(seed)
+        force = mass * (G + states["u_ddot"].to_numpy()) + noise * mass * G * rng.normal(size=len(states))
+        return make_record(states["time"].to_numpy(), force, mass, source="plate")
 
     def write(self, csv_path, truth_path=None) -> tuple:
         """Write phyphox's CSV export ("Time (s)", "Acceleration x (m/s^2)", ...) and the truth as JSON.
@@ -164,4 +186,4 @@ def simulate_phone(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30.0, *, fs=P
                       "noise": float(noise), "jitter": float(jitter), "drop": float(drop),
                       "n_dropped": int(n - keep.sum()), "horizontal": float(horizontal),
                       "seed": None if seed is None else int(seed)}
-    return PhoneRecord(time=t, acc=acc, truth=truth, vertical=vertical)
+    return PhoneRecord(time=t, acc=acc, truth=truth, vertical=vertical, person=synthetic)
