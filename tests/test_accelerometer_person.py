@@ -22,11 +22,14 @@ PERSON = dict(mass=65.0, f_b=2.1, f_h=2.8, xi_h=0.3, duration=16.0)
 
 @pytest.fixture(scope="module")
 def phones(tmp_path_factory):
-    """The same person and phone draws (seed 21), the phone level and tilted 30 degrees: the written files."""
+    """The same person and phone draws (seed 21), the phone level and tilted 30 degrees: the written files.
+
+    A quiet sensor (0.01 m/s^2): the phone-frame noise projects differently on a tilted vertical, so the two
+    records' noise is not the same draw; quiet, it moves the estimates by little against their sds."""
     folder = tmp_path_factory.mktemp("phone")
     out = {}
     for tilt in (0.0, 30.0):
-        phone = simulate_phone(**PERSON, tilt=tilt, bias=0.2, seed=21)
+        phone = simulate_phone(**PERSON, tilt=tilt, bias=0.2, noise=0.01, seed=21)
         out[tilt] = (phone, phone.write(folder / f"tilt{tilt:g}.csv")[0])
     return out
 
@@ -48,16 +51,18 @@ def test_the_phone_sees_the_persons_com_acceleration(phones):
         truth = np.interp(record.time + phone.time[0], phone.time, phone.vertical)
         inner = slice(int(record.fs), -int(record.fs))
         error = float(np.sqrt(np.mean((a_v - truth)[inner] ** 2)))
-        assert error < 1.3 * phone.truth["phone"]["noise"], error
+        assert error < 1.3 * phone.truth["phone"]["noise"] + 0.005, error  # the noise, the interpolation
         assert abs(record.extra["geometry"]["tilt_deg"] - phone.truth["phone"]["tilt_deg"]) < 3.0
 
 
 def test_a_tilted_phone_gives_the_answer_of_a_level_one(people):
-    """Same person, same noise and clock, the phone level or tilted 30 degrees: the same f_h, xi_h and BLF1 (a
-    vertical taken wrongly, the z axis of a tilted phone, would scale the signal by cos 30 = 0.87)."""
+    """Same person, same clock and sensor draws, the phone level or tilted 30 degrees: the same f_h, xi_h and
+    BLF1 (a vertical taken wrongly, the z axis of a tilted phone, would scale the signal by cos 30 = 0.87: BLF1
+    13 % off)."""
     level, tilted = people[0.0], people[30.0]
-    # the sensor noise projects differently on a tilted vertical: the same to well within the estimates' sds
-    assert abs(tilted.f_h - level.f_h) < 0.5 * level.se[0]
+    assert abs(tilted.f_h - level.f_h) < 0.25 * level.se[0]
+    # xi_h within half its sd: besides the noise, the horizontal motion and the biases project differently on
+    # the two phones' verticals (measured: 0.41 sd at 0.01 m/s^2 noise, 0.72 sd at 0.05)
     assert abs(tilted.xi_h - level.xi_h) < 0.5 * level.se[1]
     blf = tilted.template_blf().loc[1], level.template_blf().loc[1]
     assert abs(blf[0]["blf"] - blf[1]["blf"]) < 0.5 * blf[1]["sd"] and abs(blf[0]["blf"] / blf[1]["blf"] - 1) < 0.05

@@ -5,7 +5,7 @@
 acceleration ``u_ddot``, Eq. 2) and records it as a phone would: along the
 phone's own three axes, tilted and slowly swaying, with gravity, a little
 horizontal motion, a per-axis bias, white noise, a jittered clock and dropped
-samples. :meth:`PhoneRecord.write` writes it in phyphox's CSV export format
+samples, after the sensor's own anti-aliasing low-pass. :meth:`PhoneRecord.write` writes it in phyphox's CSV export format
 ("Acceleration with g"), which :func:`smd_statespace.accelerometer.read_accelerometer`
 reads, and the truth beside it.
 
@@ -24,16 +24,25 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy import signal
 
 from ..errors import OptionError
 from ..io import G
 
-__all__ = ["PhoneRecord", "simulate_phone", "PHONE_DEFAULTS"]
+__all__ = ["PhoneRecord", "simulate_phone", "PHONE_DEFAULTS", "SENSOR_BANDWIDTH", "SENSOR_FILTER_ORDER"]
 
 PHONE_DEFAULTS = {"fs": 200.0, "tilt": 20.0, "sway": 3.0, "sway_frequency": 0.1, "bias": 0.1, "noise": 0.05,
                   "jitter": 0.3e-3, "drop": 0.005, "horizontal": 0.3}
 """Defaults of :func:`simulate_phone`: rate (Hz), tilt and sway (degrees), sway frequency (Hz), bias bound and
 noise sd (m/s^2), clock jitter sd (s), fraction of dropped samples, horizontal acceleration amplitude (m/s^2)."""
+
+
+SENSOR_BANDWIDTH = 0.4
+"""Cut-off of the simulated sensor's anti-aliasing low-pass as a fraction of its rate (80 Hz at 200 Hz)."""
+
+SENSOR_FILTER_ORDER = 2
+"""Order of that (causal Butterworth) low-pass: its delay, about 2 ms at 200 Hz, is the same for the force and the
+response, so it moves no parameter."""
 
 
 def _rotation(axis, angle) -> np.ndarray:
@@ -59,7 +68,8 @@ class PhoneRecord:
         <smd_statespace.simulation.SyntheticRecord.truth>`) and, under ``"phone"``,
         the phone's settings and draws (tilt axis, biases, samples dropped).
     vertical : ndarray, shape (T,)
-        The true vertical COM acceleration at the stamps (m/s^2, ``u_ddot``).
+        The true vertical COM acceleration at the stamps (m/s^2, ``u_ddot``) as the sensor's anti-aliasing
+        filter passes it (:data:`SENSOR_BANDWIDTH`).
     person : SyntheticRecord
         The simulated person (noise-free, sampled finely): :meth:`plate_record` gives the force plate's
         record of the same bounce.
@@ -161,14 +171,19 @@ def simulate_phone(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30.0, *, fs=P
     synthetic = simulate_bouncing(mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=duration, fs=fine, noise=0.0,
                                   seed=int(person_seed.generate_state(1)[0]), **person)
     rng = np.random.default_rng(phone_seed)
+    states = synthetic.states
+    fine_time = states["time"].to_numpy()
+    # the sensor's own anti-aliasing filter (a MEMS accelerometer low-passes before its output rate): without
+    # it, the simulated force's instant steps at cycle starts, read at jittered instants, put spikes of up to
+    # 0.2 m/s^2 into the record that no real, continuous force makes (one record's f_h moved by +60 %)
+    sos = signal.butter(SENSOR_FILTER_ORDER, SENSOR_BANDWIDTH * fs, fs=fine, output="sos")
+    sensed = signal.sosfilt(sos, states["u_ddot"].to_numpy())
     n = int(np.floor(duration * fs)) + 1
     instants = np.arange(n) / fs + rng.normal(0.0, jitter, n)
     keep = rng.random(n) >= drop
     keep[[0, -1]] = True
-    states = synthetic.states
-    t = np.clip(instants[keep], states["time"].iloc[0], states["time"].iloc[-1])
-    t = np.sort(t)
-    vertical = np.interp(t, states["time"].to_numpy(), states["u_ddot"].to_numpy())
+    t = np.sort(np.clip(instants[keep], fine_time[0], fine_time[-1]))
+    vertical = np.interp(t, fine_time, sensed)
     w = 2.0 * np.pi * f_b
     world = np.column_stack([horizontal * np.sin(w * t + 1.0), 0.7 * horizontal * np.sin(2.0 * w * t),
                              vertical + G])
