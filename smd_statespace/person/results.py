@@ -241,8 +241,9 @@ class PersonResult:
         artefact, a misfit: :func:`~smd_statespace.person.fit.honest_intervals`), the linear ``sd`` does
         not hold across it: the template is concentrated again at a grid across the person's intervals
         (:data:`BLF_GRID`) and ``low``, ``high`` span what it gives; a BLF whose interval is then wider
-        than its value is ``determined`` False (said in :attr:`warnings`). (On a record whose force drifts, ``f_h`` 1.76 Hz NOT DETERMINED with
-        interval 0.50-3.18 Hz, truth 2.41: BLF1 0.068 ± 0.046 g against a truth of 0.25 g.)
+        than its value is ``determined`` False (said in :attr:`warnings`). (On a record whose force drifts,
+        ``f_h`` 1.76 Hz NOT DETERMINED with interval 0.50-3.18 Hz, truth 2.41: BLF1 had been 0.068 ± 0.046 g
+        against a truth of 0.25 g.)
         """
         return self._template_blf
 

@@ -818,6 +818,7 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
     efficient = (per_sample - delta_scores @ (sigma2 * fitted["delta_cov_unscaled"]) @ cross.T
                  + 0.5 * np.outer(1.0 - standard2, total) / N)
     return {"loglike": float(fitted["loglike"]), "sample_loglike": sample, "gradient": per_sample.sum(axis=0),
-            "per_sample": per_sample, "efficient_per_sample": efficient, "expected_information": info, "profile_information": 0.5 * (profile + profile.T),
+            "per_sample": per_sample, "efficient_per_sample": efficient, "expected_information": info,
+            "profile_information": 0.5 * (profile + profile.T),
             "innovations": v, "variances": variance, "d_innovations": dv, "d_log_variances": relative,
             "delta": delta, "sigma2": sigma2}

@@ -5,9 +5,9 @@
 acceleration ``u_ddot``, Eq. 2) and records it as a phone would: along the
 phone's own three axes, tilted and slowly swaying, with gravity, a little
 horizontal motion, a per-axis bias, white noise, a jittered clock and dropped
-samples, after the sensor's own anti-aliasing low-pass. :meth:`PhoneRecord.write` writes it in phyphox's CSV export format
-("Acceleration with g"), which :func:`smd_statespace.accelerometer.read_accelerometer`
-reads, and the truth beside it.
+samples, after the sensor's own anti-aliasing low-pass. :meth:`PhoneRecord.write`
+writes it in phyphox's CSV export format ("Acceleration with g"), which
+:func:`smd_statespace.accelerometer.read_accelerometer` reads, and the truth beside it.
 
 What the phone measures is the *specific force* ``f = a - g_vec``: with ``a`` the
 COM acceleration (``u_ddot`` up, plus the horizontal part) and ``g_vec`` pointing
