@@ -6,7 +6,7 @@ recorded twice from one and the same bounce (:func:`~smd_statespace.simulation.p
 
 - the **plate**: GRF at 100 Hz with 1 % BW noise (:meth:`PhoneRecord.plate_record`),
   identified with the body mass (``identify_person(record)``, the defaults);
-- the **phone**: three axes with gravity at 200 Hz, tilted up to 30 degrees about a random
+- the **phone**: three axes with gravity at 200 Hz (``--phone-rate``), tilted up to 30 degrees about a random
   horizontal axis, swaying 3 degrees at 0.1 Hz, per-axis bias up to 0.2 m/s^2, noise
   0.05 m/s^2 per axis, clock jitter 0.3 ms, 0.5 % of samples dropped, written in phyphox's
   format and read back as a user's file (``accelerometer_record(path)``, no mass).
@@ -59,13 +59,13 @@ def _answer(result, truth) -> dict:
 
 def one(task) -> dict:
     """Simulate one person, record the bounce with a plate and a phone, identify both; never raises."""
-    seed, index = task
+    seed, index, phone_rate = task
     p = person(seed, index)
     row = {"index": index, **{k: v for k, v in p.items() if k not in ("blf", "seed")}}
     started = time.perf_counter()
     try:
         phone = simulate_phone(mass=p["mass"], f_b=p["f_b"], f_h=p["f_h"], xi_h=p["xi_h"], duration=30.0,
-                               blf=p["blf"], tilt=p["tilt"], bias=0.2, noise=0.05, fs=200.0, seed=p["seed"])
+                               blf=p["blf"], tilt=p["tilt"], bias=0.2, noise=0.05, fs=phone_rate, seed=p["seed"])
         truth = {"f_h": p["f_h"], "xi_h": p["xi_h"]}
         row["blf_1_truth"] = p["blf"][0]
         plate = identify_person(phone.plate_record(fs=100.0, noise=0.01, seed=p["seed"] + 1))
@@ -107,9 +107,10 @@ def main(argv=None):
     parser.add_argument("--people", type=int, default=24, help="people (default 24)")
     parser.add_argument("--seed", type=int, default=2026, help="root of the SeedSequence (default 2026)")
     parser.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
+    parser.add_argument("--phone-rate", type=float, default=200.0, help="the phone's rate (Hz, default 200)")
     parser.add_argument("--csv", type=Path, help="also write every person's row here")
     args = parser.parse_args(argv)
-    tasks = [(args.seed, i) for i in range(args.people)]
+    tasks = [(args.seed, i, args.phone_rate) for i in range(args.people)]
     started = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = list(tqdm(pool.map(one, tasks), total=len(tasks), unit="person"))
@@ -121,7 +122,7 @@ def main(argv=None):
         print(f"person {row['index']}: {row['error']}")
     print(f"\n{len(frame)} people, {(time.perf_counter() - started) / 60:.1f} min, {args.jobs} process(es); "
           f"phone per record {frame.get('phone_seconds', pd.Series(dtype=float)).median():.1f} s (median)")
-    print(json.dumps({"seed": args.seed, "people": args.people}))
+    print(json.dumps({"seed": args.seed, "people": args.people, "phone_rate": args.phone_rate}))
 
 
 if __name__ == "__main__":
