@@ -1,6 +1,6 @@
 """The same people identified twice: from a force plate and from a phone at the waist.
 
-Each simulated person bounces for 30 s (``jumps`` variation, people drawn across the
+Each simulated person bounces for 30 s (``jumps`` variation, or ``--variation``, people drawn across the
 article's range: ``f_b`` 1.5-3.5 Hz, ``f_h`` 1.8-4.2 Hz, ``xi_h`` 0.1-0.5, 50-90 kg) and is
 recorded twice from one and the same bounce (:func:`~smd_statespace.simulation.phone.simulate_phone`):
 
@@ -59,13 +59,14 @@ def _answer(result, truth) -> dict:
 
 def one(task) -> dict:
     """Simulate one person, record the bounce with a plate and a phone, identify both; never raises."""
-    seed, index, phone_rate = task
+    seed, index, phone_rate, variation = task
     p = person(seed, index)
     row = {"index": index, **{k: v for k, v in p.items() if k not in ("blf", "seed")}}
     started = time.perf_counter()
     try:
         phone = simulate_phone(mass=p["mass"], f_b=p["f_b"], f_h=p["f_h"], xi_h=p["xi_h"], duration=30.0,
-                               blf=p["blf"], tilt=p["tilt"], bias=0.2, noise=0.05, fs=phone_rate, seed=p["seed"])
+                               blf=p["blf"], tilt=p["tilt"], bias=0.2, noise=0.05, fs=phone_rate, seed=p["seed"],
+                               variation=variation)
         truth = {"f_h": p["f_h"], "xi_h": p["xi_h"]}
         row["blf_1_truth"] = p["blf"][0]
         plate = identify_person(phone.plate_record(fs=100.0, noise=0.01, seed=p["seed"] + 1))
@@ -108,9 +109,12 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=2026, help="root of the SeedSequence (default 2026)")
     parser.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
     parser.add_argument("--phone-rate", type=float, default=200.0, help="the phone's rate (Hz, default 200)")
+    parser.add_argument("--variation", default="jumps",
+                        help="generator of the force's variation (default jumps: instant steps at cycle starts; "
+                             "smooth: no steps)")
     parser.add_argument("--csv", type=Path, help="also write every person's row here")
     args = parser.parse_args(argv)
-    tasks = [(args.seed, i, args.phone_rate) for i in range(args.people)]
+    tasks = [(args.seed, i, args.phone_rate, args.variation) for i in range(args.people)]
     started = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = list(tqdm(pool.map(one, tasks), total=len(tasks), unit="person"))
@@ -122,7 +126,8 @@ def main(argv=None):
         print(f"person {row['index']}: {row['error']}")
     print(f"\n{len(frame)} people, {(time.perf_counter() - started) / 60:.1f} min, {args.jobs} process(es); "
           f"phone per record {frame.get('phone_seconds', pd.Series(dtype=float)).median():.1f} s (median)")
-    print(json.dumps({"seed": args.seed, "people": args.people, "phone_rate": args.phone_rate}))
+    print(json.dumps({"seed": args.seed, "people": args.people, "phone_rate": args.phone_rate,
+                      "variation": args.variation}))
 
 
 if __name__ == "__main__":
