@@ -176,8 +176,11 @@ def simulate_phone(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30.0, *, fs=P
     # the sensor's own anti-aliasing filter (a MEMS accelerometer low-passes before its output rate): without
     # it, the simulated force's instant steps at cycle starts, read at jittered instants, put spikes of up to
     # 0.2 m/s^2 into the record that no real, continuous force makes (one record's f_h moved by +60 %)
+    # started in its steady state at the first value: a real sensor's filter runs before the recording starts
+    # (from zero, its start-up ringing alone moved an undetermined f_h by +165 % on a record of the smooth generator)
     sos = signal.butter(SENSOR_FILTER_ORDER, SENSOR_BANDWIDTH * fs, fs=fine, output="sos")
-    sensed = signal.sosfilt(sos, states["u_ddot"].to_numpy())
+    acceleration = states["u_ddot"].to_numpy()
+    sensed = signal.sosfilt(sos, acceleration, zi=signal.sosfilt_zi(sos) * acceleration[0])[0]
     n = int(np.floor(duration * fs)) + 1
     instants = np.arange(n) / fs + rng.normal(0.0, jitter, n)
     keep = rng.random(n) >= drop
