@@ -487,6 +487,8 @@ def test_load_factors_read_through_an_undetermined_person_say_so(long_fit):
 
     determined = long_fit.template_blf()
     assert determined["determined"].all()  # a determined person: intervals from the sds
+    for plain in (long_fit, dataclasses.replace(long_fit, narrow_intervals={})):  # calibrated, and as "wald" keeps
+        assert not plain.person_widened and "±" in plain.summary().splitlines()[4]
     wide = dict(long_fit.intervals, f_h=(0.6 * long_fit.f_h, 1.4 * long_fit.f_h))
     probe = dataclasses.replace(long_fit, intervals=wide, narrow_intervals=dict(long_fit.intervals))
     blf = probe.template_blf()

@@ -10,6 +10,16 @@ from ..simulation import VARIATIONS
 from ..simulation.phone import PHONE_DEFAULTS
 from .common import _nonnegative, _numbers, _positive, _seed
 
+PHONE_OPTIONS = (("tilt", "tilt", "DEG", "tilt of the phone from level"),
+                 ("sway", "sway", "DEG", "slow sway amplitude"),
+                 ("bias", "bias", "M/S2", "per-axis bias bound"),
+                 ("phone-noise", "noise", "M/S2", "noise sd per axis"),
+                 ("phone-rate", "fs", "HZ", "sampling rate, 50-500"),
+                 ("jitter", "jitter", "S", "clock jitter sd"),
+                 ("drop", "drop", "FRAC", "fraction of samples dropped"))
+"""The phone's options of ``simulate --accelerometer``: (flag, keyword of
+:func:`~smd_statespace.simulation.phone.simulate_phone`, metavar, help)."""
+
 
 def add_simulate(subparsers):
     """Declare ``smd-statespace simulate``."""
@@ -51,12 +61,8 @@ def add_simulate(subparsers):
                         help="write a phone's accelerometer record instead of a force plate's: phyphox's CSV "
                              "export (three axes with gravity, tilted, swaying, biased, noisy, jittered clock, "
                              "dropped samples; the options below), read by identify --accelerometer")
-    for name, unit, what in (("tilt", "DEG", "tilt of the phone from level"), ("sway", "DEG", "slow sway amplitude"),
-                             ("bias", "M/S2", "per-axis bias bound"), ("phone-noise", "M/S2", "noise sd per axis"),
-                             ("phone-rate", "HZ", "sampling rate, 50-500"), ("jitter", "S", "clock jitter sd"),
-                             ("drop", "FRAC", "fraction of samples dropped")):
-        key = {"phone-noise": "noise", "phone-rate": "fs"}.get(name, name)
-        parser.add_argument(f"--{name}", type=_nonnegative, default=None, metavar=unit,
+    for flag, key, unit, what in PHONE_OPTIONS:
+        parser.add_argument(f"--{flag}", type=_nonnegative, default=None, metavar=unit,
                             help=f"with --accelerometer: {what} (default {PHONE_DEFAULTS[key]:g})")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="physical effect, repeatable: any registered effect (floor_mode, harmonics, "
@@ -82,13 +88,10 @@ def run_simulate(args) -> int:
     for label, path in (("--out", out), ("--truth", truth)):
         if path is not None and not path.parent.is_dir():
             raise OptionError(f"{label} {path}: directory {path.parent} does not exist")
-    phone = {key: getattr(args, attr) for key, attr in (("tilt", "tilt"), ("sway", "sway"), ("bias", "bias"),
-                                                         ("noise", "phone_noise"), ("fs", "phone_rate"),
-                                                         ("jitter", "jitter"), ("drop", "drop"))
-             if getattr(args, attr) is not None}
-    if phone and not args.accelerometer:
-        raise OptionError(f"--{next(iter(phone)).replace('noise', 'phone-noise').replace('fs', 'phone-rate')} "
-                          "applies to a phone's record (--accelerometer)")
+    given = [(flag, key) for flag, key, _, _ in PHONE_OPTIONS if getattr(args, flag.replace("-", "_")) is not None]
+    if given and not args.accelerometer:
+        raise OptionError(f"--{given[0][0]} applies to a phone's record (--accelerometer)")
+    phone = {key: getattr(args, flag.replace("-", "_")) for flag, key in given}
     if args.accelerometer:
         return _simulate_phone(args, mass, effects, names, out, truth, phone)
     try:

@@ -294,7 +294,7 @@ class PersonResult:
         spread = self.spread()
         sd = np.sqrt(np.array(given) ** 2 + np.maximum(person, 0.0))
         low, high = stats.norm.interval(self.level, values, np.maximum(sd, 1e-300))
-        low, high = np.maximum(low, 0.0), high
+        low = np.maximum(low, 0.0)
         over = self._blf_over_person_interval()
         widened = np.zeros(values.size, dtype=bool)
         if over is not None:  # the person is not determined: the BLFs read through it are not either
@@ -305,6 +305,14 @@ class PersonResult:
                  "high": float(high[i - 1]), "determined": not bool(widened[i - 1])}
                 for i in range(1, values.size + 1)]
         return pd.DataFrame(rows).set_index("harmonic")
+
+    @property
+    def person_widened(self) -> bool:
+        """True when the interval of ``f_h`` or ``xi_h`` is wider than its information says
+        (:attr:`narrow_intervals`, kept by ``intervals="calibrated"``: not determined, an artefact, a misfit,
+        variation models that disagree)."""
+        return bool(self.narrow_intervals) and not all(
+            np.allclose(self.intervals[name], self.narrow_intervals[name]) for name in ("f_h", "xi_h"))
 
     BLF_GRID = (7, 3)
     """Points of ``f_h`` and ``xi_h`` across their intervals at which :meth:`template_blf` reads the BLFs
@@ -318,8 +326,7 @@ class PersonResult:
         then concentrated again at each point (the other parameters held), and the BLFs' interval spans
         what it gives, since the force is read through Eq. 2 at a person the record does not settle.
         """
-        if not self.narrow_intervals or all(
-                np.allclose(self.intervals[name], self.narrow_intervals[name]) for name in ("f_h", "xi_h")):
+        if not self.person_widened:
             return None
         (f_low, f_high), (x_low, x_high) = self.intervals["f_h"], self.intervals["xi_h"]
         bounds = np.asarray(self.model.bounds)
@@ -784,7 +791,7 @@ class PersonResult:
              if self.mass_known else "  K_h, C_h: not computed without the body mass (give --mass KG); f_h, xi_h and "
              "the BLFs do not need it"),
             "  BLF (g): " + ", ".join(
-                (f"{i}: {d[f'blf_{i}']:.3f} ± {d[f'blf_{i}_sd']:.3f}" if self.narrow_intervals == self.intervals
+                (f"{i}: {d[f'blf_{i}']:.3f} ± {d[f'blf_{i}_sd']:.3f}" if not self.person_widened
                  else f"{i}: {d[f'blf_{i}']:.3f} ({d[f'blf_{i}_low']:.3f}-{d[f'blf_{i}_high']:.3f}"
                  + ("" if d[f"blf_{i}_determined"] else ", NOT DETERMINED") + ")")
                 + f" (cycle spread {d[f'blf_{i}_spread']:.3f})" for i in range(1, self.model.n_harmonics + 1)),
