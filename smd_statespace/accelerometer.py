@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import OptionError, RecordError
-from .io import G, SAMPLING_TOLERANCE, _check_numeric, csv_rows
+from .io import G, SAMPLING_TOLERANCE, numeric_column, csv_rows
 
 __all__ = [
     "UNITS",
@@ -348,7 +348,7 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
         if decimal_comma:
             column = np.char.replace(column, ",", ".")
         try:
-            numbers.append(_check_numeric(column.astype(object), name, source))
+            numbers.append(numeric_column(column.astype(object), name, source))
         except RecordError as exc:
             raise RecordError(f"{exc} (decimal commas read as points)" if decimal_comma else str(exc)) from None
     time = numbers[0]

@@ -113,8 +113,21 @@ def check_mass(mass, source: str = "--mass") -> float:
     return value
 
 
-def _check_numeric(values: np.ndarray, column: str, source: str) -> np.ndarray:
-    """Convert one column to float64, naming the first bad row (1-based data row)."""
+def numeric_column(values: np.ndarray, column: str, source: str) -> np.ndarray:
+    """Convert one column of a file to float64, naming the first bad row (1-based data row).
+
+    Parameters
+    ----------
+    values : ndarray
+        The column as read (strings or numbers).
+    column, source : str
+        Its name and the file's, for the error message.
+
+    Raises
+    ------
+    RecordError
+        When a value is not a finite number.
+    """
     import pandas as pd  # here, not at the top: `import smd_statespace` needs numpy only
 
     numeric = pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=float)
@@ -147,10 +160,10 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
         Name used in error messages.
     """
     mass = check_mass(mass)
-    time = _check_numeric(np.asarray(time).ravel(), "time", source)
-    force = _check_numeric(np.asarray(force).ravel(), "force", source)
+    time = numeric_column(np.asarray(time).ravel(), "time", source)
+    force = numeric_column(np.asarray(force).ravel(), "force", source)
     if floor_acc is not None:
-        floor_acc = _check_numeric(np.asarray(floor_acc).ravel(), "floor_acc", source)
+        floor_acc = numeric_column(np.asarray(floor_acc).ravel(), "floor_acc", source)
         if floor_acc.size != time.size:
             raise RecordError(f"{source}: column 'floor_acc' has {floor_acc.size} rows, 'time' has {time.size}")
     if force.size != time.size:

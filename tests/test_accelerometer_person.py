@@ -118,3 +118,48 @@ def test_bad_accelerometer_options_are_one_line_errors(phones, tmp_path, capsys,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0], err
     assert not out.exists() and not (tmp_path / "o" / "person.json").exists()
+
+
+def test_a_phone_that_leaves_the_ground_is_refused_in_the_phones_words(tmp_path, capsys):
+    """A person jumping: the phone's specific force is ~0 in each flight (0.15 s of free fall per 0.5 s hop).
+    ``identify --accelerometer`` refuses in one line, speaking of the phone and the ground (not of a plate), and
+    writes nothing."""
+    fs, f_jump = 200.0, 2.0
+    t = np.arange(0.0, 20.0, 1.0 / fs)
+    phase = (t * f_jump) % 1.0
+    contact = phase < 0.7
+    # a half-sine of 1/0.7 of a bounce during contact (mean force = body weight over the cycle), 0 in flight
+    specific = np.where(contact, G * np.pi / 2 / 0.7 * np.sin(np.pi * phase / 0.7), 0.0)
+    noise = np.random.default_rng(5).normal(0.0, 0.05, (t.size, 3))
+    path = tmp_path / "jumping.csv"
+    table = np.column_stack([t, noise[:, 0], noise[:, 1], specific + noise[:, 2]])
+    np.savetxt(path, table, delimiter=",", header="time,ax,ay,az", comments="")
+    out = tmp_path / "out"
+    assert main(["identify", str(path), "--accelerometer", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a bouncing record (contact_lost)" in err[0], err
+    assert "free fall" in err[0] and "plate" not in err[0], err
+    assert not (out / "person.json").exists()
+
+
+def test_a_folder_of_phone_records_is_one_batch(phones, people, tmp_path, capsys):
+    """``identify FOLDER --accelerometer`` (no mass): one person per phone, the same as each file alone, with the
+    sensor in results.csv and run.json; ``--resume`` takes them back without recomputing."""
+    import pandas as pd
+
+    folder = tmp_path / "phones"
+    folder.mkdir()
+    for tilt, (_, path) in phones.items():
+        (folder / path.name).write_bytes(path.read_bytes())
+    out = tmp_path / "batch"
+    assert main(["identify", str(folder), "--accelerometer", "--out", str(out), "--quiet"]) == 0
+    table = pd.read_csv(out / "results.csv")
+    assert list(table["status"]) == ["ok", "ok"] and list(table["sensor"]) == ["accelerometer"] * 2
+    assert table["mass"].isna().all() and "k_h" not in table
+    row = table.set_index("record").loc[phones[30.0][1].name]
+    assert row["f_h"] == pytest.approx(people[30.0].f_h, rel=1e-9)
+    run = json.loads((out / "run.json").read_text())
+    assert {r["sensor"] for r in run["records"]} == {"accelerometer"}
+    capsys.readouterr()
+    assert main(["identify", str(folder), "--accelerometer", "--out", str(out), "--quiet", "--resume"]) == 0
+    assert "2 taken from the earlier run" in capsys.readouterr().out

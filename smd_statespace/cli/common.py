@@ -150,7 +150,7 @@ def add_accelerometer_arguments(parser):
                         help="REC is a body-worn accelerometer's CSV (phyphox's export, time,ax,ay,az or time,acc, "
                              "gravity included) instead of a force plate's: the vertical is taken from the record's "
                              "own gravity, the clock made uniform (record-level model only; --mass optional, K_h "
-                             "and C_h need it)")
+                             "and C_h need it; a folder, glob or manifest of phones' records is a batch)")
     parser.add_argument("--units", choices=("auto", "m/s^2", "g"), default=None,
                         help="with --accelerometer: units of a plain CSV (default auto: from gravity's size)")
 

@@ -203,7 +203,8 @@ def run_batch_identify(args) -> int:
         raise OptionError("--truth applies to one record, not to a batch")
     directory = out_dir(args.out)
     model = build_model(args)
-    records = collect_records(args.record, args.mass, args.manifest)
+    records = collect_records(args.record, args.mass, args.manifest, accelerometer=args.accelerometer,
+                              units=args.units or "auto")
     options = dict(max_passes=args.max_passes, seed=args.seed, rate=rate_of(args),
                    **estimator_options(args.estimator, args))
     started = time.perf_counter()
@@ -256,13 +257,11 @@ def run_identify(args) -> int:
     """Run ``smd-statespace identify``."""
     if args.units is not None and not args.accelerometer:
         raise OptionError("--units applies to an accelerometer record (--accelerometer)")
-    if args.accelerometer and is_batch(args):
-        raise OptionError("--accelerometer takes one record file, not a folder, a glob or a manifest")
     if args.accelerometer and args.estimator not in (None, "record"):
         raise OptionError(f"--accelerometer works with the record-level model (--estimator record), not "
                           f"--estimator {args.estimator}")
     if is_batch(args):
-        args.estimator = args.estimator or DEFAULT_ESTIMATOR
+        args.estimator = args.estimator or ("record" if args.accelerometer else DEFAULT_ESTIMATOR)
         return run_batch_identify(args)
     if args.mass is None and not args.accelerometer:
         raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")

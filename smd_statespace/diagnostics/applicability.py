@@ -180,7 +180,19 @@ def _times(time, starts, stops, limit=3) -> str:
     return text + (", ..." if len(starts) > limit else "")
 
 
-def _contact(time, weight_fraction, dt) -> Finding | None:
+_PLATE_WORDS = {"leaves": "the person leaves the plate", "clipped": "plate or amplifier clipped",
+                "force": "the force"}
+_PHONE_WORDS = {"leaves": "the phone is in free fall: the person leaves the ground",
+                "clipped": "accelerometer clipped (its range is too small)",
+                "force": "the specific force M (g + a) from the phone"}
+
+
+def _words(record) -> dict:
+    """What the record's sensor is called in a finding: a force plate or a body-worn accelerometer."""
+    return _PHONE_WORDS if (record.extra or {}).get("sensor") == "accelerometer" else _PLATE_WORDS
+
+
+def _contact(time, weight_fraction, dt, words=_PLATE_WORDS) -> Finding | None:
     starts, stops = _runs(weight_fraction < CONTACT_FRACTION)
     keep = (stops - starts) * dt >= CONTACT_MIN_DURATION
     starts, stops = starts[keep], stops[keep]
@@ -188,12 +200,12 @@ def _contact(time, weight_fraction, dt) -> Finding | None:
         return None
     total = float(np.sum(stops - starts) * dt)
     return Finding("contact_lost", True,
-                   f"the force falls below {CONTACT_FRACTION:.0%} of body weight {starts.size} times "
-                   f"({total:.2f} s in all: {_times(time, starts, stops)}): the person leaves the plate "
+                   f"{words['force']} falls below {CONTACT_FRACTION:.0%} of body weight {starts.size} times "
+                   f"({total:.2f} s in all: {_times(time, starts, stops)}): {words['leaves']} "
                    "(jumping, running, hopping); the SMD model assumes continuous contact")
 
 
-def _saturation(time, force) -> Finding | None:
+def _saturation(time, force, words=_PLATE_WORDS) -> Finding | None:
     span = float(np.ptp(force))
     if span <= 0.0:
         return Finding("not_rhythmic", True, "the force is constant: no measurement to identify")
@@ -204,7 +216,7 @@ def _saturation(time, force) -> Finding | None:
             return Finding("saturated", True,
                            f"the force sits at its {label} value {extreme:.1f} N for {int(keep.sum())} runs of "
                            f"{SATURATION_MIN_RUN} or more samples ({_times(time, starts[keep], stops[keep])}): the "
-                           "plate or amplifier clipped; record again with a larger range")
+                           f"{words['clipped']}; record again with a larger range")
     return None
 
 
@@ -330,7 +342,8 @@ def check_bouncing(record: Record) -> BouncingCheck:
     weight = record.mass * G
     fraction = force / weight
     check = BouncingCheck(source=str(record.source))
-    for finding in (_contact(time, fraction, dt), _saturation(time, force)):
+    words = _words(record)
+    for finding in (_contact(time, fraction, dt, words), _saturation(time, force, words)):
         if finding is not None:
             check.findings.append(finding)
     period, rhythm = _period(fraction, dt)

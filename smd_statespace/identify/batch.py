@@ -38,7 +38,7 @@ import hashlib
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -64,11 +64,28 @@ MANIFEST_COLUMNS = ("file", "mass")
 
 @dataclass(frozen=True)
 class BatchRecord:
-    """One record of a batch: its file, body mass (kg), name in the results and seed key."""
+    """One record of a batch: its file, body mass (kg), name in the results and seed key.
+
+    ``sensor`` is ``"plate"`` (a force record, :func:`~smd_statespace.io.read_record`) or
+    ``"accelerometer"`` (a phone's record, :func:`~smd_statespace.accelerometer.accelerometer_record`,
+    read in ``units``); an accelerometer's ``mass`` may be None (then K_h, C_h are not given).
+    """
 
     path: Path
-    mass: float
+    mass: float | None
     name: str
+    sensor: str = "plate"
+    units: str = "auto"
+
+    def read(self):
+        """The record as the person model reads it (:class:`~smd_statespace.io.Record`)."""
+        if self.sensor == "accelerometer":
+            from ..accelerometer import accelerometer_record
+
+            return accelerometer_record(self.path, self.mass, units=self.units)
+        from ..io import read_record
+
+        return read_record(self.path, self.mass)
 
     @property
     def key(self) -> int:
@@ -165,7 +182,7 @@ def read_manifest(path) -> list[BatchRecord]:
     return records
 
 
-def collect_records(source, mass=None, manifest=None) -> list[BatchRecord]:
+def collect_records(source, mass=None, manifest=None, accelerometer=False, units="auto") -> list[BatchRecord]:
     """The records of a batch, in a fixed order.
 
     Parameters
@@ -178,11 +195,22 @@ def collect_records(source, mass=None, manifest=None) -> list[BatchRecord]:
         Body mass (kg) of every record; needed unless a manifest gives them.
     manifest : path, optional
         CSV ``file,mass``: per-record masses (and, without ``source``, the records).
+    accelerometer : bool, optional
+        The records are phones' (:mod:`smd_statespace.accelerometer`): the mass
+        may be left out, and ``units`` (``"auto"``, ``"g"``, ``"m/s^2"``) says
+        how to read them.
 
     Returns
     -------
     list of BatchRecord
     """
+    records = _collect(source, mass, manifest, accelerometer)
+    if accelerometer:
+        records = [replace(r, sensor="accelerometer", units=units) for r in records]
+    return records
+
+
+def _collect(source, mass, manifest, accelerometer) -> list[BatchRecord]:
     listed = read_manifest(manifest) if manifest is not None else None
     if source is None:
         if listed is None:
@@ -202,19 +230,19 @@ def collect_records(source, mass=None, manifest=None) -> list[BatchRecord]:
         raise RecordError(f"{where}: no record files (*.csv) found")
     names = [str(p.relative_to(base)) if base is not None else str(p) for p in paths]
     if listed is None:
-        if mass is None:
+        if mass is None and not accelerometer:
             raise OptionError("--mass KG (the same for every record) or --manifest FILE (file,mass per record) "
                               "is needed")
-        value = check_mass(mass)
+        value = None if mass is None else check_mass(mass)
         return [BatchRecord(p, value, n) for p, n in zip(paths, names)]
     by_file = {r.path.resolve(): r for r in listed}
     records = []
     for p, n in zip(paths, names):
         entry = by_file.get(p.resolve())
         if entry is None:
-            if mass is None:
+            if mass is None and not accelerometer:
                 raise RecordError(f"--manifest {manifest}: no mass for {n}; add a row '{n},KG' or give --mass")
-            records.append(BatchRecord(p, check_mass(mass), n))
+            records.append(BatchRecord(p, None if mass is None else check_mass(mass), n))
         else:
             records.append(BatchRecord(p, entry.mass, n))
     return records
@@ -239,12 +267,11 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
     (:func:`~smd_statespace.diagnostics.applicability.check_bouncing`) fails with the reason.
     """
     from ..diagnostics.applicability import check_bouncing
-    from ..io import read_record
     from ..signals import RECORD_RATE
     from .runner import CycleRunner
 
     try:
-        measured = read_record(record.path, record.mass)
+        measured = record.read()
         if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row
             from ..person import identify_person
 
@@ -267,7 +294,8 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
 def _settings(records, model, estimator, runner_options) -> dict:
     return {"version": __version__, "command": "identify", "model": repr(model), "estimator": str(estimator),
             "options": {k: v for k, v in sorted(runner_options.items())},
-            "records": [{"name": r.name, "mass": r.mass} for r in records]}
+            "records": [{"name": r.name, "mass": r.mass, **({"sensor": r.sensor, "units": r.units}
+                                                             if r.sensor != "plate" else {})} for r in records]}
 
 
 def _check_settings(sidecar: Path, settings: dict, resume: bool, parts: Path):
