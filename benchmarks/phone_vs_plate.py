@@ -4,7 +4,7 @@ Each simulated person bounces for 30 s (``jumps`` variation, or ``--variation``,
 article's range: ``f_b`` 1.5-3.5 Hz, ``f_h`` 1.8-4.2 Hz, ``xi_h`` 0.1-0.5, 50-90 kg) and is
 recorded twice from one and the same bounce (:func:`~smd_statespace.simulation.phone.simulate_phone`):
 
-- the **plate**: GRF at 100 Hz with 1 % BW noise (:meth:`PhoneRecord.plate_record`),
+- the **plate**: GRF at 100 Hz (``--plate-rate``) with 1 % BW noise (``--plate-noise``) (:meth:`PhoneRecord.plate_record`),
   identified with the body mass (``identify_person(record)``, the defaults);
 - the **phone**: three axes with gravity at 200 Hz (``--phone-rate``), tilted up to 30 degrees about a random
   horizontal axis, swaying 3 degrees at 0.1 Hz, per-axis bias up to 0.2 m/s^2, noise
@@ -59,7 +59,7 @@ def _answer(result, truth) -> dict:
 
 def one(task) -> dict:
     """Simulate one person, record the bounce with a plate and a phone, identify both; never raises."""
-    seed, index, phone_rate, variation = task
+    seed, index, phone_rate, variation, plate_rate, plate_noise, plate_filter = task
     p = person(seed, index)
     row = {"index": index, **{k: v for k, v in p.items() if k not in ("blf", "seed")}}
     started = time.perf_counter()
@@ -69,7 +69,8 @@ def one(task) -> dict:
                                variation=variation)
         truth = {"f_h": p["f_h"], "xi_h": p["xi_h"]}
         row["blf_1_truth"] = p["blf"][0]
-        plate = identify_person(phone.plate_record(fs=100.0, noise=0.01, seed=p["seed"] + 1))
+        plate = identify_person(phone.plate_record(fs=plate_rate, noise=plate_noise, seed=p["seed"] + 1,
+                                                   filtered=plate_filter))
         row.update({f"plate_{k}": v for k, v in _answer(plate, truth).items()})
         with tempfile.TemporaryDirectory() as folder:
             path, _ = phone.write(Path(folder) / "phone.csv")
@@ -109,12 +110,20 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=2026, help="root of the SeedSequence (default 2026)")
     parser.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
     parser.add_argument("--phone-rate", type=float, default=200.0, help="the phone's rate (Hz, default 200)")
+    parser.add_argument("--plate-rate", type=float, default=100.0,
+                        help="the plate's rate (Hz, default 100; the phone's rate compares like with like)")
+    parser.add_argument("--plate-noise", type=float, default=0.01,
+                        help="the plate's noise sd in body weights (default 0.01; 0.005 is the phone's 0.05 m/s^2)")
+    parser.add_argument("--plate-filter", action="store_true",
+                        help="the plate's force through the phone's sensor filter (at the plate's rate)")
     parser.add_argument("--variation", default="jumps",
                         help="generator of the force's variation (default jumps: instant steps at cycle starts; "
                              "smooth: no steps)")
     parser.add_argument("--csv", type=Path, help="also write every person's row here")
     args = parser.parse_args(argv)
-    tasks = [(args.seed, i, args.phone_rate, args.variation) for i in range(args.people)]
+    tasks = [(args.seed, i, args.phone_rate, args.variation, args.plate_rate, args.plate_noise,
+              args.plate_filter)
+             for i in range(args.people)]
     started = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = list(tqdm(pool.map(one, tasks), total=len(tasks), unit="person"))
@@ -127,6 +136,8 @@ def main(argv=None):
     print(f"\n{len(frame)} people, {(time.perf_counter() - started) / 60:.1f} min, {args.jobs} process(es); "
           f"phone per record {frame.get('phone_seconds', pd.Series(dtype=float)).median():.1f} s (median)")
     print(json.dumps({"seed": args.seed, "people": args.people, "phone_rate": args.phone_rate,
+                      "plate_rate": args.plate_rate, "plate_noise": args.plate_noise,
+                      "plate_filter": args.plate_filter,
                       "variation": args.variation}))
 
 

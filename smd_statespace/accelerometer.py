@@ -792,7 +792,7 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
         else:
             raise RecordError(
                 f"{source}: no movement from t = {time[start]:.1f} s for {(stop - start) / fs:.1f} s "
-                f"(RMS below {STILL_FRACTION:.0%} of the record's) while the rest bounces: was the phone put down? "
+                f"(RMS below {STILL_FRACTION:.0%} of the record's) while the rest moves: was the phone put down? "
                 "use a record of continuous bouncing"
             )
     info = {

@@ -29,7 +29,8 @@ from scipy import signal
 from ..errors import OptionError
 from ..io import G
 
-__all__ = ["PhoneRecord", "simulate_phone", "PHONE_DEFAULTS", "SENSOR_BANDWIDTH", "SENSOR_FILTER_ORDER"]
+__all__ = ["PhoneRecord", "simulate_phone", "sensor_filter", "PHONE_DEFAULTS", "SENSOR_BANDWIDTH",
+           "SENSOR_FILTER_ORDER"]
 
 PHONE_DEFAULTS = {"fs": 200.0, "tilt": 20.0, "sway": 3.0, "sway_frequency": 0.1, "bias": 0.1, "noise": 0.05,
                   "jitter": 0.3e-3, "drop": 0.005, "horizontal": 0.3}
@@ -43,6 +44,17 @@ SENSOR_BANDWIDTH = 0.4
 SENSOR_FILTER_ORDER = 2
 """Order of that (causal Butterworth) low-pass: its delay, about 2 ms at 200 Hz, is the same for the force and the
 response, so it moves no parameter."""
+
+
+def sensor_filter(acceleration, fs, fine) -> np.ndarray:
+    """A sensor's anti-aliasing low-pass: causal Butterworth of :data:`SENSOR_FILTER_ORDER` at
+    :data:`SENSOR_BANDWIDTH` ``* fs`` (Hz), applied to ``acceleration`` sampled at ``fine`` Hz.
+
+    It starts in its steady state at the first value: a real sensor's filter runs before the recording
+    starts (started from zero, its start-up ringing alone moved an undetermined ``f_h`` by +165 % on a
+    record of the smooth generator)."""
+    sos = signal.butter(SENSOR_FILTER_ORDER, SENSOR_BANDWIDTH * fs, fs=fine, output="sos")
+    return signal.sosfilt(sos, acceleration, zi=signal.sosfilt_zi(sos) * acceleration[0])[0]
 
 
 def _rotation(axis, angle) -> np.ndarray:
@@ -81,11 +93,13 @@ class PhoneRecord:
     vertical: np.ndarray
     person: object = None
 
-    def plate_record(self, fs=100.0, noise=0.01, seed=None):
+    def plate_record(self, fs=100.0, noise=0.01, seed=None, filtered=False):
         """The same bounce on a force plate: GRF (Eq. 3) at ``fs`` (Hz) with white noise ``noise`` (in body
         weights), for comparing the phone with the plate on one and the same person.
 
-        ``fs`` must divide the fine simulation's rate.
+        ``fs`` must divide the fine simulation's rate. The force is read at the instants, unfiltered, unless
+        ``filtered``: then through the phone's sensor filter at ``fs`` (:func:`sensor_filter`), for comparing
+        like with like.
         """
         from ..io import make_record
 
@@ -96,7 +110,10 @@ class PhoneRecord:
         states = self.person.states.iloc[::step]
         mass = float(self.person.truth["mass"])
         rng = np.random.default_rng(seed)
-        force = mass * (G + states["u_ddot"].to_numpy()) + noise * mass * G * rng.normal(size=len(states))
+        acceleration = self.person.states["u_ddot"].to_numpy()
+        if filtered:
+            acceleration = sensor_filter(acceleration, fs, fine)
+        force = mass * (G + acceleration[::step]) + noise * mass * G * rng.normal(size=len(states))
         return make_record(states["time"].to_numpy(), force, mass, source="plate")
 
     def write(self, csv_path, truth_path=None) -> tuple:
@@ -176,11 +193,7 @@ def simulate_phone(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30.0, *, fs=P
     # the sensor's own anti-aliasing filter (a MEMS accelerometer low-passes before its output rate): without
     # it, the simulated force's instant steps at cycle starts, read at jittered instants, put spikes of up to
     # 0.2 m/s^2 into the record that no real, continuous force makes (one record's f_h moved by +60 %)
-    # started in its steady state at the first value: a real sensor's filter runs before the recording starts
-    # (from zero, its start-up ringing alone moved an undetermined f_h by +165 % on a record of the smooth generator)
-    sos = signal.butter(SENSOR_FILTER_ORDER, SENSOR_BANDWIDTH * fs, fs=fine, output="sos")
-    acceleration = states["u_ddot"].to_numpy()
-    sensed = signal.sosfilt(sos, acceleration, zi=signal.sosfilt_zi(sos) * acceleration[0])[0]
+    sensed = sensor_filter(states["u_ddot"].to_numpy(), fs, fine)
     n = int(np.floor(duration * fs)) + 1
     instants = np.arange(n) / fs + rng.normal(0.0, jitter, n)
     keep = rng.random(n) >= drop
