@@ -37,7 +37,7 @@ from tqdm.auto import tqdm
 from smd_statespace.accelerometer import accelerometer_record
 from smd_statespace.person import identify_person
 from smd_statespace.simulation import DEFAULT_BLF
-from smd_statespace.simulation.phone import simulate_phone
+from smd_statespace.simulation.phone import PHONE_DEFAULTS, simulate_phone
 
 
 def person(seed: int, index: int) -> dict:
@@ -59,14 +59,14 @@ def _answer(result, truth) -> dict:
 
 def one(task) -> dict:
     """Simulate one person, record the bounce with a plate and a phone, identify both; never raises."""
-    seed, index, phone_rate, variation, plate_rate, plate_noise, plate_filter = task
+    seed, index, phone_rate, variation, plate_rate, plate_noise, plate_filter, jitter, drop = task
     p = person(seed, index)
     row = {"index": index, **{k: v for k, v in p.items() if k not in ("blf", "seed")}}
     started = time.perf_counter()
     try:
         phone = simulate_phone(mass=p["mass"], f_b=p["f_b"], f_h=p["f_h"], xi_h=p["xi_h"], duration=30.0,
                                blf=p["blf"], tilt=p["tilt"], bias=0.2, noise=0.05, fs=phone_rate, seed=p["seed"],
-                               variation=variation)
+                               variation=variation, jitter=jitter, drop=drop)
         truth = {"f_h": p["f_h"], "xi_h": p["xi_h"]}
         row["blf_1_truth"] = p["blf"][0]
         plate = identify_person(phone.plate_record(fs=plate_rate, noise=plate_noise, seed=p["seed"] + 1,
@@ -116,13 +116,17 @@ def main(argv=None):
                         help="the plate's noise sd in body weights (default 0.01; 0.005 is the phone's 0.05 m/s^2)")
     parser.add_argument("--plate-filter", action="store_true",
                         help="the plate's force through the phone's sensor filter (at the plate's rate)")
+    parser.add_argument("--jitter", type=float, default=PHONE_DEFAULTS["jitter"],
+                        help=f"the phone's clock jitter sd (s, default {PHONE_DEFAULTS['jitter']:g})")
+    parser.add_argument("--drop", type=float, default=PHONE_DEFAULTS["drop"],
+                        help=f"fraction of the phone's samples dropped (default {PHONE_DEFAULTS['drop']:g})")
     parser.add_argument("--variation", default="jumps",
                         help="generator of the force's variation (default jumps: instant steps at cycle starts; "
                              "smooth: no steps)")
     parser.add_argument("--csv", type=Path, help="also write every person's row here")
     args = parser.parse_args(argv)
     tasks = [(args.seed, i, args.phone_rate, args.variation, args.plate_rate, args.plate_noise,
-              args.plate_filter)
+              args.plate_filter, args.jitter, args.drop)
              for i in range(args.people)]
     started = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
@@ -137,7 +141,7 @@ def main(argv=None):
           f"phone per record {frame.get('phone_seconds', pd.Series(dtype=float)).median():.1f} s (median)")
     print(json.dumps({"seed": args.seed, "people": args.people, "phone_rate": args.phone_rate,
                       "plate_rate": args.plate_rate, "plate_noise": args.plate_noise,
-                      "plate_filter": args.plate_filter,
+                      "plate_filter": args.plate_filter, "jitter": args.jitter, "drop": args.drop,
                       "variation": args.variation}))
 
 
