@@ -455,48 +455,23 @@ def _comparison_row(model, fitted, timing) -> dict:
             "f_h": float(fitted["params"][0]), "xi_h": float(fitted["params"][1])}
 
 
-def _choose_again(model_for, model, fitted, fits) -> tuple:
-    """Fit the other variation models at ``model``'s re-placed cycle starts and phase template; keep the lowest AIC.
+def _choose_with_own_timing(model_for, timing, fits, first_best, step) -> tuple:
+    """Re-place every variation model's cycle starts with its own fit (:func:`_fit_timing`); keep the lowest AIC.
 
-    ``variation="auto"`` first compares the models at the template's cycle
-    starts; the winner's starts are then re-placed (:func:`_fit_timing`). On
-    a record from a generator outside this project, "smooth" won there while
-    "independent" ended 5.2 higher in log-likelihood once the starts were
-    right (``../shared/findings/person-unseen-records.md``): so the losers are
-    fitted again at the final starts (started from their first fit, with the
-    winner's ``f_h``, ``xi_h`` and timing variances) and the choice is made
-    there. Returns ``(model, fitted, rows)``, ``rows`` for ``result.comparison``
-    (timing "re-placed").
+    The choice is made once each model has placed the cycle starts it likes: the starts are estimated as
+    much as ``f_h`` is, by each model. Fitting the losers of the first comparison at the *winner's*
+    re-placed starts (the method up to 2026-11-26) chose "smooth" on records of a wandering tempo where
+    "independent", at its own starts, ended 50-180 higher in log-likelihood: ``f_h`` -33 % and -21 % with
+    intervals that missed the truth (seed 2027, records 27 and 35 of ``person_accuracy.py``; at its own
+    starts -6 % and -2 %). Returns ``(model, fitted, rows)``, ``rows`` for ``result.comparison`` (timing
+    "re-placed"). The first comparison's winner (``first_best``) is kept when no model finishes off its
+    search bounds and converged.
     """
-    rows = [_comparison_row(model, fitted, "re-placed")]
-    candidates = [(model, fitted)]
-    shared = dict(zip(model.param_names, fitted["params"]))
-    for first_model, first_fit in fits:
-        if first_model.variation == model.variation:
-            continue
-        other = model_for(model.timing, first_model.variation, model.phase_template)
-        own = dict(zip(first_model.param_names, first_fit["params"]))
-        timing_variances = {k: v for k, v in shared.items() if k in ("log_var_phase", "log_var_rate")}
-        default = other.start_params(fitted["params"][0], fitted["params"][1])
-
-        def start_with(person):  # the loser's own variances and the winner's timing variances
-            named = {**own, **timing_variances, **person}
-            return np.array([named.get(name, value) for name, value in zip(other.param_names, default)])
-
-        # from its own person or the winner's, whichever the re-placed starts like better
-        starts = [start_with({}), start_with({"f_h": shared["f_h"], "xi_h": shared["xi_h"]})]
-        start = max(starts, key=other.loglike)
-        refit = fit_model(other, start, quick=True)
-        rows.append(_comparison_row(other, refit, "re-placed"))
-        candidates.append((other, refit))
-    eligible = [i for i, row in enumerate(rows) if not row["on_bound"] and row["converged"]] or [0]
+    finished = [_fit_timing(model_for, timing, m.variation, first=(m, f), step=step) for m, f in fits]
+    rows = [_comparison_row(m, f, "re-placed") for m, f in finished]
+    eligible = [i for i, row in enumerate(rows) if not row["on_bound"] and row["converged"]] or [first_best]
     best = min(eligible, key=lambda i: rows[i]["aic"])
-    if best != 0:  # a loser of the first comparison wins: its search is finished to full precision
-        other, refit = candidates[best]
-        refit = fit_model(other, refit["params"])
-        rows[best] = _comparison_row(other, refit, "re-placed")
-        candidates[best] = (other, refit)
-    return candidates[best] + (rows,)
+    return finished[best] + (rows,)
 
 
 def _fit_timing(model_for, timing, variation, first=None, step=lambda: None):
@@ -590,7 +565,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         :data:`AUTO_VARIATIONS` at the first cycle timing and keeps the lowest
         AIC among the fits whose ``f_h`` and ``xi_h`` are off their search
         bounds (the list of fits is ``result.comparison``); with
-        ``timing="model"`` only the winner's cycle starts are then re-placed.
+        ``timing="model"`` each model then re-places the cycle starts with
+        its own fit and the choice is made again there.
     timing : {"model", "template", "peaks"}
         How the force-cycle boundaries are placed: ``"template"`` and
         ``"peaks"`` as :func:`~smd_statespace.person.timing.estimate_timing`
@@ -699,11 +675,11 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
 
     if cov_type not in ("robust", "oim"):
         raise OptionError(f"cov_type {cov_type!r} is not one of: robust, oim")
-    steps = len(names) + (TIMING_ITERATIONS + 2 + (len(names) > 1) if timing == "model" else 0) + 1
+    steps = len(names) * (1 + (TIMING_ITERATIONS + 2 if timing == "model" else 0)) + 1
     with tqdm(total=steps, desc="identify (record)", unit="fit", disable=not progress, leave=False) as bar:
         step = bar.update
-        # every variation model is fitted at the first cycle timing and compared by AIC there; only
-        # the winner's cycle starts are then re-placed (timing="model")
+        # every variation model is fitted at the first cycle timing and compared by AIC there; with
+        # timing="model" each then re-places the cycle starts with its own fit, and the choice is made again
         fits = []
         for name in names:
             model = model_for(cycle_timing, name, None)
@@ -716,11 +692,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         best = min(eligible, key=lambda i: comparison[i]["aic"])
         model, fitted = fits[best]
         if timing == "model":
-            model, fitted = _fit_timing(model_for, cycle_timing, model.variation, first=(model, fitted), step=step)
-            if len(fits) > 1:  # the choice again, at the winner's cycle starts: AIC at the first timing misled
-                model, fitted, refined = _choose_again(model_for, model, fitted, fits)
-                comparison += refined
-                step()
+            model, fitted, refined = _choose_with_own_timing(model_for, cycle_timing, fits, best, step)
+            comparison += refined
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                            "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
