@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import OptionError, RecordError
-from .io import G, SAMPLING_TOLERANCE, numeric_column, csv_rows
+from .io import G, SAMPLING_TOLERANCE, csv_rows, numeric_column
 
 __all__ = [
     "UNITS",
