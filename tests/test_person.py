@@ -539,3 +539,26 @@ def test_auto_chooses_among_the_variation_models_at_their_own_cycle_starts():
     assert auto.model.variation == chosen["variation"] == "independent"
     low, high = auto.intervals["f_h"]
     assert low < 2.5314826062611298 < high
+
+
+def test_the_first_boundary_of_a_record_that_starts_from_rest_is_not_pulled_into_the_cycle():
+    """A person starting from rest (``coefficients`` generator, record 0 of ``person_accuracy.py --seed 2027``):
+    the template alignment put the first inner boundary 0.14 s into a 0.43 s cycle (true start 0.00), which cost
+    f_h 12 % and flagged the record as misfit. The irregular edge cycle is now replaced by one neighbouring period
+    (:data:`~smd_statespace.person.timing.EDGE_TOLERANCE`); the regular ones stay where the alignment put them."""
+    from smd_statespace.person.timing import EDGE_TOLERANCE, _regular_edges
+
+    sim = simulate_bouncing(mass=70.0, f_b=2.3043, f_h=3.038, xi_h=0.202, duration=30.0, fs=100.0,
+                            blf=(0.25, 0.15, 0.05, 0.02), noise=0.01, seed=1, variation="coefficients")
+    boundaries = estimate_timing(sim.record.time, sim.record.force).boundaries
+    true_starts = sim.cycles["t_start"].to_numpy()
+    inner = boundaries[(boundaries > 0) & (boundaries < sim.record.time[-1])]
+    period = np.median(np.diff(inner))
+    assert abs(inner[1] - inner[0] - period) <= EDGE_TOLERANCE * period
+    # every estimated boundary sits on a true cycle start (the template's phase is that of the cycle start here)
+    nearest = np.min(np.abs(inner[:, None] - true_starts[None, :]), axis=1)
+    assert np.median(nearest) < 0.1 * period
+    regular = np.array([0.1, 0.5, 0.9, 1.3, 1.7])
+    assert np.array_equal(_regular_edges(regular), regular)
+    assert _regular_edges(np.array([0.3, 0.5, 0.9, 1.3, 1.7]))[0] == pytest.approx(0.1)
+    assert _regular_edges(np.array([0.1, 0.5, 0.9, 1.3, 1.45]))[-1] == pytest.approx(1.7)
