@@ -4,7 +4,8 @@ Each simulated person bounces for 30 s (``jumps`` variation, or ``--variation``,
 article's range: ``f_b`` 1.5-3.5 Hz, ``f_h`` 1.8-4.2 Hz, ``xi_h`` 0.1-0.5, 50-90 kg) and is
 recorded twice from one and the same bounce (:func:`~smd_statespace.simulation.phone.simulate_phone`):
 
-- the **plate**: GRF at 100 Hz (``--plate-rate``) with 1 % BW noise (``--plate-noise``) (:meth:`PhoneRecord.plate_record`),
+- the **plate**: GRF at 100 Hz (``--plate-rate``) with 1 % BW noise (``--plate-noise``)
+  (:meth:`PhoneRecord.plate_record`),
   identified with the body mass (``identify_person(record)``, the defaults);
 - the **phone**: three axes with gravity at 200 Hz (``--phone-rate``), tilted up to 30 degrees about a random
   horizontal axis, swaying 3 degrees at 0.1 Hz, per-axis bias up to 0.2 m/s^2, noise
@@ -59,18 +60,20 @@ def _answer(result, truth) -> dict:
 
 def one(task) -> dict:
     """Simulate one person, record the bounce with a plate and a phone, identify both; never raises."""
-    seed, index, phone_rate, variation, plate_rate, plate_noise, plate_filter, jitter, drop = task
-    p = person(seed, index)
+    index, options = task
+    p = person(options["seed"], index)
     row = {"index": index, **{k: v for k, v in p.items() if k not in ("blf", "seed")}}
     started = time.perf_counter()
     try:
         phone = simulate_phone(mass=p["mass"], f_b=p["f_b"], f_h=p["f_h"], xi_h=p["xi_h"], duration=30.0,
-                               blf=p["blf"], tilt=p["tilt"], bias=0.2, noise=0.05, fs=phone_rate, seed=p["seed"],
-                               variation=variation, jitter=jitter, drop=drop)
+                               blf=p["blf"], tilt=p["tilt"], bias=0.2, noise=0.05, fs=options["phone_rate"],
+                               seed=p["seed"], variation=options["variation"], jitter=options["jitter"],
+                               drop=options["drop"])
         truth = {"f_h": p["f_h"], "xi_h": p["xi_h"]}
         row["blf_1_truth"] = p["blf"][0]
-        plate = identify_person(phone.plate_record(fs=plate_rate, noise=plate_noise, seed=p["seed"] + 1,
-                                                   filtered=plate_filter))
+        plate_record = phone.plate_record(fs=options["plate_rate"], noise=options["plate_noise"], seed=p["seed"] + 1,
+                                          filtered=options["plate_filter"])
+        plate = identify_person(plate_record)
         row.update({f"plate_{k}": v for k, v in _answer(plate, truth).items()})
         with tempfile.TemporaryDirectory() as folder:
             path, _ = phone.write(Path(folder) / "phone.csv")
@@ -125,9 +128,8 @@ def main(argv=None):
                              "smooth: no steps)")
     parser.add_argument("--csv", type=Path, help="also write every person's row here")
     args = parser.parse_args(argv)
-    tasks = [(args.seed, i, args.phone_rate, args.variation, args.plate_rate, args.plate_noise,
-              args.plate_filter, args.jitter, args.drop)
-             for i in range(args.people)]
+    options = {k: v for k, v in vars(args).items() if k not in ("people", "jobs", "csv")}
+    tasks = [(i, options) for i in range(args.people)]
     started = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = list(tqdm(pool.map(one, tasks), total=len(tasks), unit="person"))
@@ -139,10 +141,7 @@ def main(argv=None):
         print(f"person {row['index']}: {row['error']}")
     print(f"\n{len(frame)} people, {(time.perf_counter() - started) / 60:.1f} min, {args.jobs} process(es); "
           f"phone per record {frame.get('phone_seconds', pd.Series(dtype=float)).median():.1f} s (median)")
-    print(json.dumps({"seed": args.seed, "people": args.people, "phone_rate": args.phone_rate,
-                      "plate_rate": args.plate_rate, "plate_noise": args.plate_noise,
-                      "plate_filter": args.plate_filter, "jitter": args.jitter, "drop": args.drop,
-                      "variation": args.variation}))
+    print(json.dumps({"people": args.people, **options}))
 
 
 if __name__ == "__main__":

@@ -304,4 +304,3 @@ def _regular_edges(inner):
     if abs(b[-1] - b[-2] - period) > EDGE_TOLERANCE * period:
         b[-1] = b[-2] + (b[-2] - b[-3])
     return b
-

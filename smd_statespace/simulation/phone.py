@@ -107,14 +107,14 @@ class PhoneRecord:
         step = int(round(fine / fs))
         if step < 1 or abs(step * fs - fine) > 1e-9 * fine:
             raise OptionError(f"plate_record: fs {fs!r} Hz does not divide the simulation's {fine:g} Hz")
-        states = self.person.states.iloc[::step]
         mass = float(self.person.truth["mass"])
         rng = np.random.default_rng(seed)
         acceleration = self.person.states["u_ddot"].to_numpy()
         if filtered:
             acceleration = sensor_filter(acceleration, fs, fine)
-        force = mass * (G + acceleration[::step]) + noise * mass * G * rng.normal(size=len(states))
-        return make_record(states["time"].to_numpy(), force, mass, source="plate")
+        acceleration = acceleration[::step]
+        force = mass * (G + acceleration) + noise * mass * G * rng.normal(size=acceleration.size)
+        return make_record(self.person.states["time"].to_numpy()[::step], force, mass, source="plate")
 
     def write(self, csv_path, truth_path=None) -> tuple:
         """Write phyphox's CSV export ("Time (s)", "Acceleration x (m/s^2)", ...) and the truth as JSON.
