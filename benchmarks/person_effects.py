@@ -154,7 +154,9 @@ def one(task) -> dict:
             forced = simulate_bouncing(noise=0.0, effects=effects, **common).record.force
             row["effect_size"] = float(np.sqrt(np.mean((forced - plain) ** 2)) / (NOISE * person["mass"] * G))
         moment = time.perf_counter()
-        base = identify_person(record)
+        # the person without any effect, where the loop starts: a record's measured floor, which identify adds by
+        # default (measured_floor), is left out so that diagnose can be asked to find it
+        base = identify_person(record, measured_floor=False)
         base_seconds = time.perf_counter() - moment
         candidates = [cls.record_default(base) for cls in EFFECTS.values()]
         candidates = [c for c in candidates if c is not None]

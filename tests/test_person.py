@@ -319,7 +319,7 @@ def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects,
 
     sim = simulate_bouncing(mass=70, f_b=2.0 if effects is None or "harmonics" in effects else 1.75, f_h=2.5,
                             xi_h=0.3, duration=30, seed=21, effects=effects)
-    base = identify_person(sim.record)
+    base = identify_person(sim.record, measured_floor=False)  # the floor left out, for diagnose to find
     result = diagnose_person(base)
     if expected is None:
         assert result.adequate, result.table()
@@ -338,6 +338,11 @@ def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects,
         assert fitted.template_blf().loc[5, "blf"] == pytest.approx(0.04, rel=0.15)
     else:  # the measured floor: nothing to estimate, the exact model of the leg on a moving floor
         assert row["df"] == 0 and row["lr"] > 20
+        # identify's default person of a record with floor_acc is that fit: the person rides the floor measured
+        default = identify_person(sim.record)
+        assert [e.spec for e in default.effects] == [e.spec for e in fitted.effects]
+        assert default.f_h == pytest.approx(fitted.f_h, rel=1e-9) and default.before.f_h == base.f_h
+        assert any("floor_acc is in the model" in note for note in default.notes)
 
 
 @pytest.mark.slow

@@ -8,6 +8,7 @@
 - identify --effect from the command line: the effect's parameter with its interval, and bad input in one line.
 """
 
+import dataclasses
 import json
 
 import numpy as np
@@ -261,18 +262,43 @@ def test_identify_effect_needing_a_missing_column_names_it_and_writes_nothing(tm
 
 
 @pytest.mark.slow
-def test_identify_with_the_measured_floor_from_the_command_line(floor_record, tmp_path, capsys):
+@pytest.mark.parametrize("options", [[], ["--effect", "floor_mode"]])
+def test_identify_with_the_measured_floor_from_the_command_line(floor_record, tmp_path, capsys, options):
     """The record-level person with the measured floor: the exact model of the leg on a moving floor, the fit
-    without it beside it, and person.json saying so."""
+    without it beside it, and person.json saying so. A record with floor_acc brings its floor by default."""
     out = tmp_path / "out"
-    assert main(["identify", str(floor_record), "--mass", "70", "--effect", "floor_mode", "--out", str(out),
+    assert main(["identify", str(floor_record), "--mass", "70", *options, "--out", str(out),
                  "--quiet", "--truth", str(floor_record.with_name("floor_truth.json"))]) == 0
     printed = capsys.readouterr().out
     assert "with floor_mode" in printed and "without the effect(s): f_h" in printed
+    assert ("note: the record's floor_acc is in the model" in printed) == (not options)
     person = json.loads((out / "person.json").read_text())
     assert person["effects"] == ["floor_mode"] and person["likelihood"] == "exact" and person["lr_df"] == 0
     assert person["log_likelihood"] > person["before"]["log_likelihood"] + 10
     assert abs(person["f_h"] / 2.4 - 1) < 0.05 and person["truth"]["f_h"] == 2.4
+    assert json.loads((out / "run.json").read_text())["options"]["effects"] == ["floor_mode"]
+
+
+@pytest.mark.slow
+def test_no_floor_leaves_the_measured_floor_out(floor_record, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["identify", str(floor_record), "--mass", "70", "--no-floor", "--out", str(out), "--quiet"]) == 0
+    assert "floor_acc is in the model" not in capsys.readouterr().out
+    person = json.loads((out / "person.json").read_text())
+    assert not person.get("effects") and "before" not in person
+
+
+def test_a_record_with_floor_acc_brings_its_floor_unless_one_is_given_or_it_is_left_out(floor_record):
+    from smd_statespace.io import read_record
+    from smd_statespace.person.extend import record_effects
+
+    on_floor = read_record(floor_record, 70.0)
+    plain = dataclasses.replace(on_floor, floor_acc=None)
+    assert record_effects(on_floor) == ("floor_mode",)
+    assert record_effects(on_floor, ["cubic_stiffness"]) == ("floor_mode", "cubic_stiffness")
+    assert record_effects(on_floor, ["floor_mode:source=modal"]) == ("floor_mode:source=modal",)
+    assert record_effects(on_floor, measured_floor=False) == ()
+    assert record_effects(plain, ["harmonics"]) == ("harmonics",)
 
 
 @pytest.mark.slow

@@ -40,6 +40,9 @@ def add_diagnose(subparsers):
     parser.add_argument("--candidate", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="a candidate effect to try, repeatable (default: every registered effect not in the "
                              "model; floor_mode:source=modal only when named here)")
+    parser.add_argument("--no-floor", action="store_true",
+                        help="record estimator: leave a record's measured floor (floor_acc) out of the person's "
+                             "model and try it as a candidate (by default the person rides it, as in identify)")
     parser.add_argument("--json", metavar="FILE", help="write the report as JSON")
     parser.add_argument("--alpha", type=float, default=0.01, metavar="P",
                         help="significance level of the candidates' F-tests (default 0.01, Bonferroni-corrected)")
@@ -98,8 +101,9 @@ def run_person_diagnose(args) -> int:
     check_effects(added + (candidates or []), record)
     directory = out_dir(args.out)
     base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args),
-                           progress=not args.quiet, effects=added)
-    print(f"{record.source}: record-level model" + (f" with {', '.join(e.spec for e in added)}" if added else ""))
+                           progress=not args.quiet, effects=added, measured_floor=not args.no_floor)
+    print(f"{record.source}: record-level model" + (f" with {', '.join(e.spec for e in base.effects)}"
+                                                    if base.effects else ""))
     print(base.summary())
     result = diagnose_person(base, candidates=candidates, alpha=args.alpha, progress=not args.quiet)
     table = result.table()

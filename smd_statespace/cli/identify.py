@@ -66,6 +66,10 @@ def add_identify(subparsers):
                              "factors measured on simulated records, and as wide as the yardstick where the record "
                              "does not determine them or the model misfits it (calibrated, default), from the "
                              "standard errors alone (wald: too narrow) or from the profile likelihood (slower)")
+    parser.add_argument("--no-floor", action="store_true",
+                        help="record estimator: leave a record's measured floor (its floor_acc column) out of the "
+                             "person's model; by default the person rides it (Eq. 2 relative to the floor, a known "
+                             "input, no unknown added)")
     add_rate_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
@@ -207,6 +211,8 @@ def run_batch_identify(args) -> int:
                               units=args.units or "auto")
     options = dict(max_passes=args.max_passes, seed=args.seed, rate=rate_of(args),
                    **estimator_options(args.estimator, args))
+    if args.estimator == "record" and args.no_floor:
+        options["measured_floor"] = False
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
                         progress=not args.quiet, check=not args.ignore_checks)
@@ -242,12 +248,12 @@ def run_person(args) -> int:
     started = time.perf_counter()
     result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
                              intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args),
-                             progress=not args.quiet, effects=effects)
+                             progress=not args.quiet, effects=effects, measured_floor=not args.no_floor)
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary(verbose=args.verbose))
     options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
-               "harmonics": args.harmonics, "rate": rate_of(args), "effects": [e.spec for e in effects]}
+               "harmonics": args.harmonics, "rate": rate_of(args), "effects": [e.spec for e in result.effects]}
     written = write_person(directory, result, options, truth=truth)
     print("wrote " + ", ".join(str(path) for path in written))
     return 0

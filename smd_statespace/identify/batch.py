@@ -276,7 +276,8 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
             from ..person import identify_person
 
             person = identify_person(measured, n_harmonics=model.n_harmonics, check=check,
-                                     rate=runner_options.get("rate", RECORD_RATE), effects=model.effects)
+                                     rate=runner_options.get("rate", RECORD_RATE), effects=model.effects,
+                                     measured_floor=runner_options.get("measured_floor", True))
             table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
         else:
             runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
@@ -337,8 +338,9 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
         Estimator name (default :data:`~smd_statespace.identify.runner.DEFAULT_ESTIMATOR`).
     runner_options : dict, optional
         :class:`~smd_statespace.identify.runner.CycleRunner` options (``max_passes``,
-        ``seed``, ``rate``, ``n_particles``, ...); with ``estimator="record"`` only ``rate`` is
-        used (default :data:`~smd_statespace.signals.RECORD_RATE`).
+        ``seed``, ``rate``, ``n_particles``, ...); with ``estimator="record"`` only ``rate`` (default
+        :data:`~smd_statespace.signals.RECORD_RATE`) and ``measured_floor`` (default True: see
+        :func:`~smd_statespace.person.fit.identify_person`) are used.
     jobs : int
         Records identified in parallel processes (results do not depend on it); ignored with ``executor``.
     resume : bool
