@@ -44,8 +44,8 @@ from ..progress import tqdm
 from .dynamics import PersonDynamics
 from .model import RecordModel
 
-__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "record_effects", "configured_for_record", "split_effects",
-           "record_signals", "effect_model", "fit_effects", "nominal_path"]
+__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "record_effects", "configured_for_record",
+           "split_effects", "record_signals", "effect_model", "fit_effects", "nominal_path"]
 
 NOMINAL_ITERATIONS = 6
 """Most re-linearisations of a nonlinear effect about the new predicted path."""

@@ -711,7 +711,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress)
-        if len(given) > len(tuple(effects_asked)):  # the record brought its floor
+        if len(given) > len(effects_asked):  # the record brought its floor
             result.notes.append(f"the record's floor_acc is in the model (floor_mode, measured: the person rides "
                                 f"the floor, no unknown added; likelihood ratio against the person without it "
                                 f"{result.effect_test()['lr']:.1f}); --no-floor (measured_floor=False) leaves it out")
