@@ -415,3 +415,27 @@ def test_diagnose_bad_candidates_are_one_line_errors(floor_record, capsys, optio
     """--effect puts an effect in the model, --candidate names one to try; a bad one is one line, exit 2."""
     assert main(["diagnose", str(floor_record), "--mass", "70", "--quiet", *options]) == 2
     assert message in error_line(capsys)
+
+
+@pytest.mark.slow
+def test_identify_effect_re_places_the_cycle_starts_with_the_effect_and_tests_it_where_the_person_was_fitted():
+    """identify --effect estimates the cycle starts and the variation model again with the effect in the model
+    (the starts placed by a model missing large harmonics are not the best for the model that has them); the
+    likelihood ratio stays the one at the person's own starts, what diagnose screens with."""
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.extend import fit_effects
+    from smd_statespace.simulation import simulate_bouncing
+
+    sim = simulate_bouncing(mass=70, f_b=2.0, f_h=2.6, xi_h=0.3, duration=15, seed=12,
+                            effects={"harmonics": {"blf": (0.06, 0.045)}})
+    fitted = identify_person(sim.record, intervals="wald", effects=["harmonics:count=2"])  # identify --effect
+    base = fitted.before
+    screened = fit_effects(base, ["harmonics:count=2"], intervals="wald", timing=False)
+    assert np.array_equal(screened.model.timing.boundaries, base.model.timing.boundaries)
+    moved = np.abs(fitted.model.timing.boundaries - base.model.timing.boundaries)
+    assert moved.max() > 0.002 and fitted.loglike > screened.loglike + 1.0
+    assert fitted.effect_test() == pytest.approx(screened.effect_test())
+    assert {row["variation"] for row in fitted.comparison} == {row["variation"] for row in base.comparison}
+    assert all(row["effects"] == ["harmonics:count=2"] for row in fitted.comparison)
+    assert fitted.model.variation == min((row for row in fitted.comparison if not row["on_bound"]),
+                                         key=lambda row: row["aic"])["variation"]

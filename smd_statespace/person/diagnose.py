@@ -12,7 +12,12 @@ true number of added unknowns
 best of many trials, a floor mode's frequency grid, is also tested as that many:
 :meth:`Effect.record_search_size <smd_statespace.model.Effect.record_search_size>`). The table shows, before
 and after, ``f_h``, ``xi_h``, the effect's parameters, the noise and the
-whiteness of the innovations: the numbers ``identify --effect`` then gives.
+whiteness of the innovations. Every candidate is screened at the person's
+cycle starts and variation model (``fit_effects(..., timing=False)``, one search
+each); the one proposed first is then identified as ``identify --effect`` does
+it, the cycle starts re-placed and the variation model chosen again with it in
+the model, so that its row shows the numbers ``identify --effect`` gives (its
+test stays the screening's, made where the person without it was fitted).
 
 Candidates, by default (:meth:`Effect.record_default
 <smd_statespace.model.Effect.record_default>`): every registered effect
@@ -185,7 +190,8 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     """Fit the two best candidates together and test each on top of the other."""
     first, second = names[:2]
     present = len(base.effects)
-    both = fit_effects(base, list(fits[first].effects[present:]) + list(fits[second].effects[present:]))
+    both = fit_effects(base, list(fits[first].effects[present:]) + list(fits[second].effects[present:]),
+                       timing=False)
     out = {"effects": [first, second], "loglike": both.loglike}
     for name, other in ((first, second), (second, first)):
         lr = 2.0 * (both.loglike - fits[other].loglike)
@@ -243,7 +249,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     for effect in tqdm(effects, desc="diagnose (record)", unit="effect", disable=not progress, leave=False):
         started = time.perf_counter()
         try:
-            fitted = fit_effects(result, [effect])
+            fitted = fit_effects(result, [effect], timing=False)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed[effect.name] = " ".join(str(exc).split())
             continue
@@ -251,6 +257,18 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
         rows.append({**candidate_row(result, fitted, level), "seconds": time.perf_counter() - started})
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha)
     significant = diagnosis.missing
+    if significant:  # the proposed effect as identify --effect gives it: the cycle starts re-placed with it
+        name = significant[0]
+        started = time.perf_counter()
+        try:
+            fitted = fit_effects(result, fits[name].effects[len(result.effects):])
+        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            failed[name] = " ".join(str(exc).split())
+        else:
+            index = next(i for i, row in enumerate(rows) if row["effect"] == name)
+            fits[name] = fitted
+            rows[index] = {**candidate_row(result, fitted, level),
+                           "seconds": rows[index]["seconds"] + time.perf_counter() - started}
     if len(significant) >= 2:
         try:
             diagnosis.joint = _joint(result, fits, significant, level)

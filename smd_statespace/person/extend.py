@@ -1,13 +1,15 @@
 """The person with physical effects: the one SMD model's effects added to a record-level fit.
 
 ``identify_person(record, effects=[...])`` and ``identify REC --effect SPEC``
-end here: the person is identified without the effects first (its variation
-model and cycle timing are chosen there, and it is the "before" of the
-comparison), then the record-level model is rebuilt from
+end here: the person is identified without the effects first (the "before"
+of the comparison), then the record-level model is rebuilt from
 ``SMDModel(n_harmonics, effects=[...])`` (:mod:`smd_statespace.person.dynamics`)
 and every static parameter — ``f_h``, ``xi_h``, the effects' parameters, the
 variation and noise variances — is estimated again by maximum likelihood
-over the whole record. A fit that has effects already can take more
+over the whole record, first at the person's cycle starts and variation model
+(where the likelihood ratio is taken, and where ``diagnose`` screens its
+candidates), then with the cycle starts re-placed and the variation model
+chosen again by the model with the effects, as ``identify`` does without them. A fit that has effects already can take more
 (``diagnose REC --effect A`` tries each candidate on top of ``A``): the
 comparison is then with the fit that has ``A``.
 
@@ -234,16 +236,16 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     return out
 
 
-def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", progress=False):
+def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", progress=False, timing=True):
     """Identify the person of ``result`` again with ``effects`` added to its model.
 
     Parameters
     ----------
     result : PersonResult
-        The fit to extend (its variation model and cycle timing are kept). It
-        may hold effects already (``result.effects``): the new ones are added
-        on top of them, and the comparison (``before``, the likelihood ratio)
-        is with ``result``.
+        The fit to extend: the search starts from its variation model, cycle
+        timing and estimates. It may hold effects already (``result.effects``):
+        the new ones are added on top of them, and the comparison (``before``,
+        the likelihood ratio) is with ``result``.
     effects : sequence of Effect or str
         The effects to add (not already in ``result``). A bare name takes the
         options its class chooses for this record (:func:`configured_for_record`).
@@ -251,6 +253,19 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
         As :func:`~smd_statespace.person.fit.identify_person`.
     progress : bool
         A progress bar over the searches (one per linearisation).
+    timing : bool
+        True (default; ``identify --effect``): when ``result`` placed its cycle
+        starts with its own fit (``identify_person``'s default ``timing="model"``),
+        they and the variation model are estimated again with the effects in the
+        model, as :func:`~smd_statespace.person.fit.identify_person` estimates
+        them without effects: every variation model ``result`` compared re-places
+        the starts with its own fit and the lowest AIC off the search bounds is
+        kept (``result.comparison`` then lists these fits). False (``diagnose``'s
+        screening of candidates, one search each): ``result``'s variation model
+        and cycle starts are kept. Starts placed by a model that misses an
+        effect can be wrong for the model that has it: on 4 records with large
+        hidden harmonics 5-6 the re-placed starts raised the log-likelihood with
+        the harmonics by 220-400 and ``f_h`` left its search bound on one.
 
     Returns
     -------
@@ -273,6 +288,37 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     model = effect_model(root, effects, path=result)
     fitted = max((fit_model(model, start, quick=model.approximate) for start in _starts(model, result, root, added)),
                  key=lambda fit: fit["loglike"])
+    model, fitted, linearisations, settled = _settle_path(model, fitted, progress)
+    comparison, tested = result.comparison, fitted["loglike"]  # the test is made at result's starts
+    if timing and any(row.get("timing") == "re-placed" for row in result.comparison):
+        model, fitted, comparison = _with_own_timing(model, fitted, result, effects, progress)
+        if model.approximate:  # the starts moved: the path is predicted again about them
+            model, fitted, more, settled = _settle_path(model, fitted, progress)
+            linearisations += more
+    if not fitted["converged"]:
+        raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
+                       f"did not converge ({fitted['message']})")
+    notes, warnings = list(root.notes), list(root.record_warnings)
+    if model.approximate:
+        notes.append(f"the likelihood is approximate: {', '.join(e.name for e in effects)} linearised about the "
+                     f"one-step predicted path, {linearisations} time(s) (an extended Kalman filter at the fixed "
+                     "point)")
+        if not settled:
+            warnings.append(f"the path of {', '.join(e.name for e in effects)} had not settled after "
+                            f"{NOMINAL_ITERATIONS} linearisations: its estimates are approximate")
+    return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
+                         comparison=comparison, record_warnings=warnings, notes=notes,
+                         before=result, effects=tuple(effects), linearisations=linearisations,
+                         settled=settled, tested_loglike=tested)
+
+
+def _settle_path(model: RecordModel, fitted, progress=False) -> tuple:
+    """A nonlinear effect's model linearised again about each new fit's predicted path until it settles.
+
+    Returns ``(model, fitted, linearisations, settled)``; a linear model comes back as it is (0, True).
+    """
+    from .fit import fit_model
+
     linearisations, settled = 0, True
     with tqdm(total=NOMINAL_ITERATIONS, desc="effects (record)", unit="fit", disable=not progress or not
               model.approximate, leave=False) as bar:
@@ -287,18 +333,40 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
                 break
         if linearisations:  # the last path's search run to the full tolerance
             fitted = fit_model(model, fitted["params"])
-    if not fitted["converged"]:
-        raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
-                       f"did not converge ({fitted['message']})")
-    notes, warnings = list(root.notes), list(root.record_warnings)
-    if model.approximate:
-        notes.append(f"the likelihood is approximate: {', '.join(e.name for e in effects)} linearised about the "
-                     f"one-step predicted path, {linearisations} time(s) (an extended Kalman filter at the fixed "
-                     "point)")
-        if not settled:
-            warnings.append(f"the path of {', '.join(e.name for e in effects)} had not settled after "
-                            f"{NOMINAL_ITERATIONS} linearisations: its estimates are approximate")
-    return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
-                         comparison=result.comparison, record_warnings=warnings, notes=notes,
-                         before=result, effects=tuple(effects), linearisations=linearisations,
-                         settled=settled)
+    return model, fitted, linearisations, settled
+
+
+def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False) -> tuple:
+    """Re-place the cycle starts and choose the variation model again, with the effects in the model.
+
+    The same procedure as :func:`~smd_statespace.person.fit.identify_person`'s
+    (:func:`~smd_statespace.person.fit._choose_with_own_timing`) over the
+    variation models ``result`` compared, started at ``result``'s cycle starts:
+    ``model`` (``result``'s variation, fitted as ``fitted``) from its fit, the
+    others from the coarse start search. Returns ``(model, fitted, rows)``,
+    ``rows`` for the result's ``comparison``, each marked with the effects'
+    specs.
+    """
+    from .fit import TIMING_ITERATIONS, _choose_with_own_timing, fit_model
+
+    def model_for(timing_, variation_, template):
+        return replace(model, timing=timing_, variation=variation_, phase_template=template)
+
+    variations = list(dict.fromkeys(row["variation"] for row in result.comparison)) or [model.variation]
+    if model.variation not in variations:
+        variations.insert(0, model.variation)
+    fits = []
+    with tqdm(total=len(variations) * (TIMING_ITERATIONS + 3), desc="effects: cycle starts", unit="fit",
+              disable=not progress, leave=False) as bar:
+        for variation in variations:
+            if variation == model.variation:
+                fits.append((model, fitted))
+            else:
+                other = model_for(model.timing, variation, None)
+                fits.append((other, fit_model(other, quick=True)))
+            bar.update()
+        first = variations.index(model.variation)
+        chosen, chosen_fit, rows = _choose_with_own_timing(model_for, model.timing, fits, first, bar.update)
+    specs = [effect.spec for effect in effects]
+    rows = [{**row, "effects": specs} for row in rows]
+    return chosen, chosen_fit, rows

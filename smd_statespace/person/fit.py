@@ -619,9 +619,9 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         ``NAME:key=value`` specs, as ``--effect``): the same effects every
         estimator and the simulator use (:mod:`smd_statespace.effects`). The
         person is first identified without them (``result.before``), then with
-        them at that fit's variation model and cycle timing, their parameters
-        estimated jointly with ``f_h`` and ``xi_h``
-        (:func:`~smd_statespace.person.extend.fit_effects`). A bare name
+        them, their parameters estimated jointly with ``f_h`` and ``xi_h``, the
+        cycle starts and the variation model chosen again with the effects in
+        the model (:func:`~smd_statespace.person.extend.fit_effects`). A bare name
         takes the options its class chooses for the record, as ``diagnose``
         proposes it (a cubic spring's search range scaled to the record's
         displacement).

@@ -153,6 +153,9 @@ class PersonResult:
         False when a nonlinear effect's path was still moving after the last linearisation: the
         approximate likelihood kept rising as the path followed the data, so its likelihood ratio is
         not evidence (``diagnose`` does not propose such an effect).
+    tested_loglike : float or None
+        With effects: the log-likelihood with them at :attr:`before`'s cycle starts and variation
+        model, where :meth:`effect_test` compares the two (None: :attr:`loglike`, the starts kept).
     narrow_intervals : dict
         The calibrated intervals of ``f_h`` and ``xi_h`` as the record's information gives them,
         before :func:`~smd_statespace.person.fit.honest_intervals` widened them (empty for other
@@ -176,6 +179,7 @@ class PersonResult:
     effects: tuple = ()
     linearisations: int = 0
     settled: bool = True
+    tested_loglike: float | None = None
     narrow_intervals: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------------ estimates
@@ -389,10 +393,16 @@ class PersonResult:
         nothing is estimated) the two models are not nested and ``p`` is NaN;
         compare the log-likelihoods (equal parameter counts: AIC alike).
         Empty without effects.
+
+        The ratio is taken at :attr:`before`'s cycle starts and variation model
+        (:attr:`tested_loglike`): the fit with the effects that re-placed the
+        starts (:func:`~smd_statespace.person.extend.fit_effects`, ``timing=True``)
+        searched more than :attr:`before` did, and would be favoured for that alone.
         """
         if self.before is None:
             return {}
-        lr = 2.0 * (self.loglike - self.before.loglike)
+        tested = self.loglike if self.tested_loglike is None else self.tested_loglike
+        lr = 2.0 * (tested - self.before.loglike)
         df = self.added_unknowns(self.before)
         p = float(stats.chi2.sf(max(lr, 0.0), df)) if df > 0 else float("nan")
         return {"lr": float(lr), "lr_df": int(df), "lr_p": p}
@@ -680,11 +690,12 @@ class PersonResult:
         """The variation models' fits at the final cycle starts (rows of :attr:`comparison`) the record cannot
         rule out: converged, ``f_h`` and ``xi_h`` off their search bounds and not a resonance standing in for
         the force (as :attr:`at_bouncing_frequency`), AIC within :data:`VARIATION_AIC_CLOSE` of the best of them.
-        Empty for a fit with effects (its comparison is of the person without them)."""
-        if self.effects:
-            return []
+        For a fit with effects, the fits with the same effects only (none when its cycle starts were kept from
+        the person without them: :func:`~smd_statespace.person.extend.fit_effects` with ``timing=False``)."""
+        specs = [effect.spec for effect in self.effects]
         f_b = float(np.median(self.model.timing.f_b))
         rows = [row for row in self.comparison if row.get("timing") == "re-placed" and row["converged"]
+                and row.get("effects", []) == specs
                 and not row["on_bound"] and row["xi_h"] <= 1.0
                 and not stands_in_for_force(row["f_h"], row["xi_h"], f_b, self.model.n_harmonics, row["variation"])]
         best = min((row["aic"] for row in rows), default=0.0)
