@@ -123,12 +123,14 @@ def _with_true_effect(base, diagnosis, spec) -> tuple:
     """The person with the true effect (what ``identify --effect SPEC`` gives) and the seconds its fit took.
 
     ``identify --effect`` identifies the person without the effect, then adds it
-    (:func:`~smd_statespace.person.extend.fit_effects`); diagnose has done both for its
-    candidate of the same spec, so its fit is reused, else the effect is fitted here.
+    (:func:`~smd_statespace.person.extend.fit_effects`, the cycle starts re-placed with it);
+    diagnose has done both for the candidate it proposes first, so that fit is reused when it is
+    the same spec; the others diagnose only screened, and the effect is fitted here.
     """
     effect = configured_for_record(spec, base)  # as identify_person takes it: a bare name configured for the record
     fitted = diagnosis.fits.get(effect.name)
-    if fitted is not None and [e.spec for e in fitted.effects] == [effect.spec]:
+    proposed = bool(diagnosis.missing) and diagnosis.missing[0] == effect.name
+    if proposed and [e.spec for e in fitted.effects] == [effect.spec]:
         return fitted, float(next(row["seconds"] for row in diagnosis.rows if row["effect"] == effect.name))
     moment = time.perf_counter()
     fitted = fit_effects(base, [spec])
