@@ -250,6 +250,18 @@ def test_identify_effect_bad_specs_are_one_line_errors(floor_record, tmp_path, c
     assert message in error_line(capsys) and not out.exists()
 
 
+@pytest.mark.parametrize("command", [["identify", "--estimator", "ekf"], ["diagnose", "--estimator", "ekf"],
+                                     ["identify", "--estimator", "pf", "--jobs", "1"]])
+def test_no_floor_with_a_per_cycle_estimator_is_a_one_line_error(floor_record, tmp_path, capsys, command):
+    """--no-floor leaves out what the record-level model adds by default; a per-cycle estimator never adds it, so the
+    option would do nothing there: refused in one line, nothing written."""
+    out = tmp_path / "out"
+    target = [str(floor_record)] if command[0] == "diagnose" or "--jobs" not in command else [str(floor_record.parent)]
+    assert main([command[0], *target, "--mass", "70", *command[1:], "--no-floor", "--out", str(out)]) == 2
+    line = error_line(capsys)
+    assert "--no-floor" in line and "--estimator record" in line and not out.exists()
+
+
 def test_identify_effect_needing_a_missing_column_names_it_and_writes_nothing(tmp_path, capsys):
     plain = tmp_path / "plain.csv"
     assert main(["simulate", "--out", str(plain), "--mass", "70", "--fb", "2", "--fh", "2.5", "--xi", "0.3",

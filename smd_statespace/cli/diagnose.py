@@ -147,6 +147,9 @@ def run_diagnose(args) -> int:
     if args.accelerometer or args.units is not None:
         raise OptionError(f"--accelerometer works with the record-level model (--estimator record), not "
                           f"--estimator {args.estimator}")
+    if args.no_floor:
+        raise OptionError(f"--no-floor applies to the record-level model (--estimator record), which adds a record's "
+                          f"measured floor by default; --estimator {args.estimator} tries it as a candidate anyway")
     from ..diagnostics.missing import diagnose
     from ..plotting.cycles import plot_before_after
 

@@ -211,7 +211,7 @@ def run_batch_identify(args) -> int:
                               units=args.units or "auto")
     options = dict(max_passes=args.max_passes, seed=args.seed, rate=rate_of(args),
                    **estimator_options(args.estimator, args))
-    if args.estimator == "record" and args.no_floor:
+    if args.no_floor:
         options["measured_floor"] = False
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
@@ -259,6 +259,13 @@ def run_person(args) -> int:
     return 0
 
 
+def _check_no_floor(args):
+    """``--no-floor`` leaves the measured floor out of the record-level model; the per-cycle estimators never add it."""
+    if args.no_floor and args.estimator != "record":
+        raise OptionError(f"--no-floor applies to the record-level model (--estimator record), which adds a record's "
+                          f"measured floor by default; --estimator {args.estimator} adds a floor only with --effect")
+
+
 def run_identify(args) -> int:
     """Run ``smd-statespace identify``."""
     if args.units is not None and not args.accelerometer:
@@ -268,10 +275,12 @@ def run_identify(args) -> int:
                           f"--estimator {args.estimator}")
     if is_batch(args):
         args.estimator = args.estimator or ("record" if args.accelerometer else DEFAULT_ESTIMATOR)
+        _check_no_floor(args)
         return run_batch_identify(args)
     if args.mass is None and not args.accelerometer:
         raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
     args.estimator = args.estimator or "record"
+    _check_no_floor(args)
     if args.estimator == "record":
         return run_person(args)
     directory = out_dir(args.out)
