@@ -257,8 +257,13 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
         rows.append({**candidate_row(result, fitted, level), "seconds": time.perf_counter() - started})
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha)
     significant = diagnosis.missing
-    if significant:  # the proposed effect as identify --effect gives it: the cycle starts re-placed with it
-        name = significant[0]
+    if len(significant) >= 2:
+        try:
+            diagnosis.joint = _joint(result, fits, significant, level)
+        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            failed[" + ".join(significant[:2])] = " ".join(str(exc).split())
+    if diagnosis.missing:  # the proposed effect as identify --effect gives it: the cycle starts re-placed with it
+        name = diagnosis.missing[0]  # (after the joint test, which compares the screened fits)
         started = time.perf_counter()
         try:
             fitted = fit_effects(result, fits[name].effects[len(result.effects):])
@@ -269,9 +274,4 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
             fits[name] = fitted
             rows[index] = {**candidate_row(result, fitted, level),
                            "seconds": rows[index]["seconds"] + time.perf_counter() - started}
-    if len(significant) >= 2:
-        try:
-            diagnosis.joint = _joint(result, fits, significant, level)
-        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            failed[" + ".join(significant[:2])] = " ".join(str(exc).split())
     return diagnosis
