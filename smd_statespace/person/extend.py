@@ -9,9 +9,10 @@ variation and noise variances — is estimated again by maximum likelihood
 over the whole record, first at the person's cycle starts and variation model
 (where the likelihood ratio is taken, and where ``diagnose`` screens its
 candidates), then with the cycle starts re-placed and the variation model
-chosen again by the model with the effects, as ``identify`` does without them. A fit that has effects already can take more
-(``diagnose REC --effect A`` tries each candidate on top of ``A``): the
-comparison is then with the fit that has ``A``.
+chosen again by the model with the effects, as ``identify`` does without
+them. A fit that has effects already can take more (``diagnose REC --effect
+A`` tries each candidate on top of ``A``): the comparison is then with the
+fit that has ``A``.
 
 How an effect enters:
 
@@ -263,9 +264,10 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
         kept (``result.comparison`` then lists these fits). False (``diagnose``'s
         screening of candidates, one search each): ``result``'s variation model
         and cycle starts are kept. Starts placed by a model that misses an
-        effect can be wrong for the model that has it: on 4 records with large
+        effect can be wrong for the model that has it: on 8 records with large
         hidden harmonics 5-6 the re-placed starts raised the log-likelihood with
-        the harmonics by 220-400 and ``f_h`` left its search bound on one.
+        the harmonics by 170-700, Ljung-Box passed on 5 (0 at the person's
+        starts) and ``f_h`` left its search bound on one (docs/person.md).
 
     Returns
     -------

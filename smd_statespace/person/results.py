@@ -823,7 +823,8 @@ class PersonResult:
             p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
             lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
                          f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}; "
-                         f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})")
+                         f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})"
+                         + (" at its cycle starts" if self.tested_loglike not in (None, self.loglike) else ""))
         lines += [f"note: {n}" for n in d["notes"]]
         lines += [f"warning: {w}" for w in d["warnings"]]
         return "\n".join(lines)
