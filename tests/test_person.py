@@ -316,6 +316,7 @@ def test_constant_offset_absorbs_a_wrong_body_mass():
 def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects, expected):
     """Hidden extra harmonics and a floor with an accelerometer are ranked first; a clean record is adequate."""
     from smd_statespace.person.diagnose import diagnose_person
+    from smd_statespace.person.extend import fit_effects
 
     sim = simulate_bouncing(mass=70, f_b=2.0 if effects is None or "harmonics" in effects else 1.75, f_h=2.5,
                             xi_h=0.3, duration=30, seed=21, effects=effects)
@@ -326,8 +327,14 @@ def test_diagnose_finds_the_hidden_effect_and_nothing_on_a_clean_record(effects,
         return
     assert result.missing[0] == expected
     row = result.table().loc[expected]
-    assert row["noise_change_%"] < 0 and row["likelihood"] == "exact"
+    assert row["likelihood"] == "exact"
     fitted = result.fits[expected]
+    # the effect explains part of what was noise where the test is made (the person's cycle starts); the proposal's
+    # row is the fit identify --effect gives, its starts re-placed, at a higher likelihood still (there the noise may
+    # trade with the force's variation: +0.015 % on the floor record)
+    screened = fit_effects(base, fitted.effects, timing=False)
+    assert screened.sigma < base.sigma and fitted.loglike >= screened.loglike - 1e-6
+    assert screened.effect_test()["lr"] == pytest.approx(row["lr"])
     # the person with the effect: its interval holds the truth (with the 5th and 6th harmonics, f_h is 2.41 Hz,
     # 0.8 sd below 2.5, at a log-likelihood 311 above where L-BFGS-B with difference gradients had stopped with
     # 2.53 Hz: issue 21's "f_h never worse with the true effect" is missed on this record, see its note)
