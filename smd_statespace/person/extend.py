@@ -354,9 +354,9 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
     def model_for(timing_, variation_, template):
         return replace(model, timing=timing_, variation=variation_, phase_template=template)
 
-    variations = list(dict.fromkeys(row["variation"] for row in result.comparison)) or [model.variation]
-    if model.variation not in variations:
-        variations.insert(0, model.variation)
+    # called only when result re-placed its starts: its comparison lists every variation model it fitted,
+    # the one it kept among them
+    variations = list(dict.fromkeys(row["variation"] for row in result.comparison))
     fits = []
     with tqdm(total=len(variations) * (TIMING_ITERATIONS + 3), desc="effects: cycle starts", unit="fit",
               disable=not progress, leave=False) as bar:
