@@ -81,6 +81,47 @@ def test_floor_mode_likelihood_equals_an_independent_linear_system():
     assert model.loglike(params) == pytest.approx(profile_loglike(columns, y), abs=1e-6)
 
 
+def test_the_modal_floor_is_searched_beyond_the_per_cycle_prior_and_its_zero_damping_is_a_limit():
+    """A light floor (700 kg under a 70 kg person: mass ratio 0.1) lies beyond the per-cycle prior (0.001-0.05);
+    the record-level search reaches 0.2 and a damping ratio of 0, where an estimate is an upper limit (a 30 s
+    record cannot tell 0.001 from 0.004), not a run-away fit. A range the user gives is searched as given."""
+    duration = 4.0
+    time = np.arange(int(duration * FS)) / FS
+    y = np.sin(2 * np.pi * F_B * time)
+
+    def record_model(spec):
+        dynamics = PersonDynamics(SMDModel(n_harmonics=1, effects=[make_effect(spec)]), time)
+        return RecordModel(time, y, regular_timing(duration), n_harmonics=1, dynamics=dynamics)
+
+    floor = make_effect("floor_mode:source=modal")
+    prior = {slot.name: (slot.low, slot.high) for slot in SMDModel(effects=[floor]).slots if slot.kind == "parameter"}
+    assert prior["mass_ratio"] == (0.001, 0.05) and prior["xi_f"] == (0.001, 0.05)  # the per-cycle prior is kept
+    model = record_model("floor_mode:source=modal")
+    bounds = dict(zip(model.param_names, model.bounds))
+    assert bounds["mass_ratio"] == (0.001, 0.2) and bounds["xi_f"] == (0.0, 0.05)
+    params = model.start_params()
+    where = {name: model.param_names.index(name) for name in ("xi_f", "mass_ratio")}
+    for name, value, on_bound in (("xi_f", 0.0, False), ("xi_f", 0.05, True), ("mass_ratio", 0.1, False),
+                                  ("mass_ratio", 0.2, True), ("mass_ratio", 0.001, True)):
+        trial = params.copy()
+        trial[where[name]] = value
+        assert model.at_bound(trial, where[name]) is on_bound, (name, value)
+    given = record_model("floor_mode:source=modal,mass_ratio_range=0.002/0.03,damping_range=0.005/0.04")
+    bounds = dict(zip(given.param_names, given.bounds))
+    assert bounds["mass_ratio"] == (0.002, 0.03) and bounds["xi_f"] == (0.005, 0.04)
+    trial = params.copy()
+    trial[where["xi_f"]] = 0.005
+    assert given.at_bound(trial, where["xi_f"])
+
+
+def test_a_slot_whose_search_range_does_not_hold_its_prior_is_refused():
+    from smd_statespace.errors import OptionError
+    from smd_statespace.model import Slot
+
+    with pytest.raises(OptionError, match="search range"):
+        Slot("k", "parameter", "-", 0.1, 1.0, nominal=0.5, search=(0.2, 2.0))
+
+
 @pytest.fixture(scope="module")
 def cubic_record():
     """A short deterministic record of a person with a cubic spring: one harmonic, constant, small noise."""

@@ -107,10 +107,13 @@ class FloorMode(Effect):
         ``"modal"`` only: the prior range of ``f_f`` (Hz) given directly;
         default 2-20 Hz when no ``frequency`` is given.
     damping_range : (float, float), optional
-        ``"modal"`` only: prior range of ``xi_f`` (default 0.001-0.05).
+        ``"modal"`` only: prior range of ``xi_f`` (default 0.001-0.05). The
+        record-level model searches 0-0.05 unless it is given.
     mass_ratio_range : (float, float), optional
         ``"modal"`` only: prior range of ``M_h / m_f`` (default 0.001-0.05;
-        one 70 kg person on the article's plate, 8583 kg: 0.008).
+        one 70 kg person on the article's plate, 8583 kg: 0.008). The
+        record-level model searches up to :data:`RECORD_MASS_RATIO_HIGH`
+        (0.2) unless it is given.
     damping, mass_ratio : float, optional
         ``"modal"``: a *known* mode. With ``frequency`` and ``damping``
         (and ``mass_ratio``, default 0.008: 70 kg on mode 1 of the article's
@@ -274,6 +277,17 @@ class FloorMode(Effect):
             return cls("measured")
         return cls("modal", **options)
 
+    RECORD_MASS_RATIO_HIGH = 0.2
+    """Upper end of ``M_h / m_f`` searched by the record-level model (unless ``mass_ratio_range`` is given).
+
+    The per-cycle prior stops at 0.05 (a 70 kg person on a 1.4 t mode); a light
+    floor or platform goes beyond: on eight simulated records of a 700 kg mode
+    (ratios 0.07-0.13) the record-level fit ended on 0.05 on seven and nothing
+    was proposed. A search range only boxes the optimiser, so it is wider than
+    the prior. Its damping ratio is searched down to 0 (a physical limit, not a
+    runaway): a 30 s record cannot tell 0.001 from 0.004 at 3.5 Hz.
+    """
+
     CANDIDATE_DAMPING = 0.01
     """Damping ratio of the modal floor candidate seeded from the residual spectrum (floors: about 0.3-3 %)."""
 
@@ -413,9 +427,12 @@ class FloorMode(Effect):
             Slot("f_f", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
                  description="floor modal frequency", linear=False),
             Slot("xi_f", "parameter", "-", d_lo, d_hi, nominal=0.5 * (d_lo + d_hi),
-                 description="floor modal damping ratio", linear=False),
+                 description="floor modal damping ratio", linear=False,
+                 **({} if "damping_range" in self.given else {"search": (0.0, d_hi), "limit": True})),
             Slot("mass_ratio", "parameter", "-", m_lo, m_hi, nominal=0.5 * (m_lo + m_hi),
-                 description="person mass over floor modal mass", linear=False),
+                 description="person mass over floor modal mass", linear=False,
+                 **({} if "mass_ratio_range" in self.given
+                    else {"search": (m_lo, max(m_hi, self.RECORD_MASS_RATIO_HIGH))})),
         )
 
     def floor_motion(self, model, x, t, inputs):

@@ -206,6 +206,17 @@ class Slot:
         non-linear slots are fixed (``f_h`` and ``xi_h`` are not linear; ``u``,
         ``u_dot`` and the Fourier coefficients are). Rao-Blackwellised
         estimators sample the non-linear slots and Kalman-filter the rest.
+    search : (float, float), optional
+        A parameter's search range in the record-level maximum likelihood
+        (:class:`~smd_statespace.person.model.RecordModel`), where it differs
+        from the prior range ``low``-``high`` of the per-cycle estimators. A
+        prior is information (a particle filter spreads its particles over it);
+        a search range only boxes the optimiser, so it may be wider.
+    limit : bool
+        True when the lower end of the search range is a physical limit (a
+        damping ratio of 0): an estimate there says "no more than the record
+        can tell apart from it", not that the fit ran away, and is not
+        counted as sitting on a search bound.
     """
 
     name: str
@@ -217,12 +228,17 @@ class Slot:
     scale: str | None = None
     description: str = ""
     linear: bool = True
+    search: tuple | None = None
+    limit: bool = False
 
     def __post_init__(self):
         if self.kind not in ("dynamic", "parameter"):
             raise OptionError(f"slot {self.name!r}: kind must be 'dynamic' or 'parameter', got {self.kind!r}")
         if self.kind == "parameter" and (self.low is None or self.high is None or not self.low < self.high):
             raise OptionError(f"slot {self.name!r}: a parameter needs a prior range low < high")
+        if self.search is not None and not self.search[0] <= self.low < self.high <= self.search[1]:
+            raise OptionError(f"slot {self.name!r}: the search range {tuple(self.search)} must hold the prior "
+                              f"range ({self.low}, {self.high})")
         if self.nominal is None and self.scale is None:
             raise OptionError(f"slot {self.name!r}: give a nominal magnitude or a data channel to scale by")
 

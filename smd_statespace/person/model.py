@@ -333,7 +333,7 @@ class RecordModel:
     def bounds(self) -> list:
         """Search bounds of the parameters, in the order of :attr:`param_names`."""
         smooth = (np.log(SMOOTH_MIN_CYCLES / np.mean(self.timing.f_b)), np.log(LONGEST_SMOOTH_TIME))
-        effects = {slot.name: (slot.low, slot.high) for slot in self.dynamics.parameters}
+        effects = {slot.name: tuple(slot.search or (slot.low, slot.high)) for slot in self.dynamics.parameters}
         return [F_H_BOUNDS, XI_H_BOUNDS] + [
             smooth if name == "log_smooth_time" else effects.get(name, LOG_VAR_BOUNDS)
             for name in self.param_names[2:]]
@@ -345,9 +345,20 @@ class RecordModel:
         return np.array([nominal.get(name, 1.0) for name in self.param_names])
 
     def at_bound(self, params, which) -> bool:
-        """True when parameter ``which`` is within 0.1 % of its search range from a bound (not an estimate)."""
+        """True when parameter ``which`` is within 0.1 % of its search range from a bound (not an estimate).
+
+        A lower end that is a physical limit (:attr:`Slot.limit <smd_statespace.model.Slot>`: a floor's
+        damping ratio of 0) does not count: an estimate there is an upper limit of what the record tells.
+        """
         low, high = self.bounds[which]
-        return bool(min(params[which] - low, high - params[which]) < 1e-3 * (high - low))
+        limit = self._limits.get(self.param_names[which], False)
+        near_low = params[which] - low < 1e-3 * (high - low) and not limit
+        return bool(near_low or high - params[which] < 1e-3 * (high - low))
+
+    @property
+    def _limits(self) -> dict:
+        """Whether each effect parameter's lower search bound is a physical limit, by name."""
+        return {slot.name: slot.limit for slot in self.dynamics.parameters}
 
     def person_at_bound(self, params) -> bool:
         """True when ``f_h`` or ``xi_h`` sits on a search bound."""
