@@ -155,6 +155,24 @@ def add_accelerometer_arguments(parser):
                         help="with --accelerometer: units of a plain CSV (default auto: from gravity's size)")
 
 
+def check_record_level_options(args, floor_elsewhere: str):
+    """One-line errors for the record-level model's own options given with a per-cycle ``--estimator``.
+
+    ``--accelerometer`` and ``--units`` read a phone's record, which only the record-level model takes;
+    ``--no-floor`` leaves out the measured floor that only it adds by default (``floor_elsewhere``: what the
+    command's per-cycle estimators do with a floor instead).
+    """
+    if args.estimator in (None, "record"):
+        return
+    if getattr(args, "accelerometer", False) or getattr(args, "units", None) is not None:
+        option = "--accelerometer" if args.accelerometer else "--units"
+        raise OptionError(f"{option} works with the record-level model (--estimator record), not "
+                          f"--estimator {args.estimator}")
+    if getattr(args, "no_floor", False):
+        raise OptionError(f"--no-floor applies to the record-level model (--estimator record), which adds a record's "
+                          f"measured floor by default; --estimator {args.estimator} {floor_elsewhere}")
+
+
 def read_person_record(args):
     """The record of ``args``: a force plate's (``--mass`` needed) or, with ``--accelerometer``, a phone's."""
     from ..io import read_record

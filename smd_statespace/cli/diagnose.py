@@ -8,10 +8,10 @@ import shlex
 import pandas as pd
 
 from ..diagnostics.check import INITIAL_STATES
-from ..errors import OptionError
 from ..estimators import ESTIMATORS
-from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments, build_model,
-                     estimator_options, out_dir, prepare_record, rate_of, read_person_record)
+from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments,
+                     build_model, check_record_level_options, estimator_options, out_dir, prepare_record, rate_of,
+                     read_person_record)
 from .identify import DEFAULT_ESTIMATOR
 
 
@@ -144,12 +144,7 @@ def run_diagnose(args) -> int:
 
     if args.estimator == "record":
         return run_person_diagnose(args)
-    if args.accelerometer or args.units is not None:
-        raise OptionError(f"--accelerometer works with the record-level model (--estimator record), not "
-                          f"--estimator {args.estimator}")
-    if args.no_floor:
-        raise OptionError(f"--no-floor applies to the record-level model (--estimator record), which adds a record's "
-                          f"measured floor by default; --estimator {args.estimator} tries it as a candidate anyway")
+    check_record_level_options(args, "tries it as a candidate anyway")
     from ..diagnostics.missing import diagnose
     from ..plotting.cycles import plot_before_after
 

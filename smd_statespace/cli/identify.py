@@ -14,8 +14,8 @@ from ..estimators import ESTIMATORS
 from ..errors import OptionError
 from ..identify.runner import DEFAULT_ESTIMATOR
 from .common import (PROG, _count, add_accelerometer_arguments, add_model_arguments, add_rate_argument,
-                     add_run_arguments, build_model, estimator_options, load_truth, out_dir, prepare_record, rate_of,
-                     read_person_record, truth_values)
+                     add_run_arguments, build_model, check_record_level_options, estimator_options, load_truth,
+                     out_dir, prepare_record, rate_of, read_person_record, truth_values)
 
 
 SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
@@ -259,28 +259,19 @@ def run_person(args) -> int:
     return 0
 
 
-def _check_no_floor(args):
-    """``--no-floor`` leaves the measured floor out of the record-level model; the per-cycle estimators never add it."""
-    if args.no_floor and args.estimator != "record":
-        raise OptionError(f"--no-floor applies to the record-level model (--estimator record), which adds a record's "
-                          f"measured floor by default; --estimator {args.estimator} adds a floor only with --effect")
-
-
 def run_identify(args) -> int:
     """Run ``smd-statespace identify``."""
     if args.units is not None and not args.accelerometer:
         raise OptionError("--units applies to an accelerometer record (--accelerometer)")
-    if args.accelerometer and args.estimator not in (None, "record"):
-        raise OptionError(f"--accelerometer works with the record-level model (--estimator record), not "
-                          f"--estimator {args.estimator}")
+    floor = "adds a floor only with --effect"
     if is_batch(args):
         args.estimator = args.estimator or ("record" if args.accelerometer else DEFAULT_ESTIMATOR)
-        _check_no_floor(args)
+        check_record_level_options(args, floor)
         return run_batch_identify(args)
+    args.estimator = args.estimator or "record"
+    check_record_level_options(args, floor)
     if args.mass is None and not args.accelerometer:
         raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
-    args.estimator = args.estimator or "record"
-    _check_no_floor(args)
     if args.estimator == "record":
         return run_person(args)
     directory = out_dir(args.out)
