@@ -19,6 +19,10 @@ interval coverage, the Ljung-Box pass rate after, and the seconds per record::
     python benchmarks/person_effects.py --records 2 --sizes large   # a smaller run
     python benchmarks/person_effects.py --jobs 2 --csv rows.csv --resume   # after a kill: the rest only
 
+A run longer than a session keeps its rows in ``benchmarks/results/`` (``--csv
+benchmarks/results/person_effects_seed90.csv --resume``: the ``.jsonl`` beside it
+is the journal); every row carries the commit of the code that made it (``code``).
+
 Effects (:data:`KINDS`): extra harmonics 5-6 (``harmonics``), a cubic spring
 (``cubic_stiffness``), a floor mode with the floor acceleration measured
 (``floor_measured``: the record's ``floor_acc`` kept) and without it
@@ -246,6 +250,18 @@ def summary(frame: pd.DataFrame) -> list:
     return lines
 
 
+def code_version() -> str:
+    """The library's commit (``git describe``), with ``+changes`` when its files differ from it: stamped on every
+    row, so that a run resumed across sessions says which code made each row."""
+    import subprocess
+
+    def git(*args):
+        return subprocess.run(["git", *args], cwd=REPO, capture_output=True, text=True).stdout.strip()
+
+    commit = git("rev-parse", "--short", "HEAD") or "unknown"
+    return commit + ("+changes" if git("status", "--porcelain", "--", "smd_statespace") else "")
+
+
 def _key(task) -> tuple:
     """A task's identity in the CSV: ``(kind, size, generator, index)``."""
     return task[0], task[1], task[2], task[3]
@@ -290,6 +306,7 @@ def main(argv=None):
     work = tasks(args.records, args.seed, tuple(args.sizes.split(",")), tuple(args.generators.split(",")),
                  tuple(args.kinds.split(",")))
     started = time.perf_counter()
+    code = code_version()
     journal = args.csv.with_suffix(".jsonl") if args.csv else None
     rows, done = _resumed(journal, work) if args.resume else ([], set())
     todo = [task for task in work if _key(task) not in done]
@@ -298,6 +315,7 @@ def main(argv=None):
     with tqdm(total=len(work), initial=len(work) - len(todo), desc="records", unit="record", file=sys.stderr) as bar:
         with ProcessPoolExecutor(args.jobs) if args.jobs > 1 else _Serial() as pool:
             for row in pool.map(one, todo):
+                row["code"] = code
                 rows.append(row)
                 if journal:  # every record as it ends (rows differ in their columns): --resume reads them back
                     with journal.open("a", encoding="utf-8") as out:
