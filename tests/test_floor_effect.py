@@ -121,8 +121,9 @@ def test_modal_slots_priors_and_options():
 
 
 def test_a_searched_floor_frequency_counts_its_trials():
-    """diagnose tests a modal floor found as the best of its grid as that many trials (Bonferroni); a given
-    frequency or a measured floor is one."""
+    """diagnose tests a modal floor found as the best of its grid as that many trials (Bonferroni), or as the
+    frequencies the record resolves (band x duration) where those are more; a given frequency or a measured floor
+    is one."""
     from smd_statespace.person.diagnose import candidate_row
 
     searched = make_effect("floor_mode:source=modal")
@@ -155,11 +156,14 @@ def test_a_searched_floor_frequency_counts_its_trials():
 
     class Base(Fit):
         effects = ()
+        record = type("R", (), {"time": np.arange(500) / 100.0})()  # 5 s: the 1 % grid has more trials
 
     row = candidate_row(Base(), Fit(), 0.01 / 4)
     assert row["trials"] == grid.size + 1
     assert row["p_value"] == pytest.approx(min(1.0, 5.3e-4 * (grid.size + 1)), rel=0.1)
     assert not row["significant"]
+    Base.record.time = np.arange(3000) / 100.0  # 30 s resolve 18 Hz / (1 / 29.99 s) = 540 frequencies
+    assert searched.record_search_size(Base()) == 540 + 1
 
 
 def test_option_errors_name_the_problem():
