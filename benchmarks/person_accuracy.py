@@ -283,6 +283,8 @@ def fit_row(person, generator, timing, sim, intervals, variation) -> dict:
         "variations_disagree": bool(result.variation_disagreement()), "misfit_share": float(d["misfit_share"]),
         "f_h_low_narrow": float(result.narrow_intervals.get("f_h", (f_lo, f_hi))[0]),
         "f_h_high_narrow": float(result.narrow_intervals.get("f_h", (f_lo, f_hi))[1]),
+        "xi_h_low_narrow": float(result.narrow_intervals.get("xi_h", (x_lo, x_hi))[0]),
+        "xi_h_high_narrow": float(result.narrow_intervals.get("xi_h", (x_lo, x_hi))[1]),
         "blf1_true": float(sim.truth["blf"][0]), "blf1_est": d["blf_1"], "blf1_low": d["blf_1_low"],
         "blf1_high": d["blf_1_high"],
     })
