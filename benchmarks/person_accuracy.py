@@ -457,6 +457,57 @@ def extra_table(frame: pd.DataFrame, generators) -> list:
     return lines
 
 
+def held_out_coverage(frame: pd.DataFrame, held: str, name: str, floor: bool = True) -> tuple:
+    """Coverage (%) on generator ``held`` of ``name``'s intervals calibrated on the *other* generators' records.
+
+    As :data:`~smd_statespace.person.fit.CALIBRATION` was made: per variation model chosen, the factor on the
+    record's sd is the 90th percentile of ``|estimate - truth| / sd`` over the other generators' records divided
+    by the normal quantile; the model-error floor (:data:`~smd_statespace.person.fit.MODEL_ERROR_FLOOR`, or none
+    with ``floor=False``) is added in quadrature; where the library widened a record's interval (not determined,
+    an artefact, variation models that disagree) the widened interval is kept around it. Returns
+    ``(coverage, factors)``, ``factors`` a dict by variation model (a model the others never chose: the pooled
+    factor).
+    """
+    ok = frame[(frame["timing"] == DEFAULT_TIMING) & (frame["error"] == "")]
+    train, test = ok[ok["generator"] != held], ok[ok["generator"] == held]
+    if test.empty or f"{name}_low_narrow" not in test or test[f"{name}_low_narrow"].isna().all():
+        return np.nan, {}
+    z = stats.norm.ppf(0.5 + LEVEL / 2.0)
+    ratio = (train[f"{name}_est"] - train[name]).abs() / train[f"{name}_se"]
+    pooled = float(np.nanpercentile(ratio, 90) / z)
+    factors = {v: float(np.nanpercentile(ratio[train["variation"] == v], 90) / z) for v in train["variation"].unique()}
+    factor = test["variation"].map(factors).fillna(pooled)
+    extra = (person_fit.MODEL_ERROR_FLOOR[name] * (test[f"{name}_est"] if name == "f_h" else 1.0)) if floor else 0.0
+    half = z * np.sqrt((factor * test[f"{name}_se"]) ** 2 + extra ** 2)
+    low, high = test[f"{name}_est"] - half, test[f"{name}_est"] + half
+    widened = ((test[f"{name}_low"] < test[f"{name}_low_narrow"] - 1e-12)
+               | (test[f"{name}_high"] > test[f"{name}_high_narrow"] + 1e-12))
+    low = np.where(widened, np.minimum(low, test[f"{name}_low"]), low)
+    high = np.where(widened, np.maximum(high, test[f"{name}_high"]), high)
+    covered = (low <= test[name]) & (test[name] <= high)
+    return 100.0 * float(covered.mean()), factors
+
+
+def held_out_table(frame: pd.DataFrame, generators) -> list:
+    """Markdown rows: every generator held out in turn, its coverage with the intervals calibrated on the others."""
+    lines = ["| held out | f_h factor from the others (by variation model) | f_h coverage: shipped, calibrated on the "
+             "others, same without the floor | xi_h factor from the others | xi_h coverage: shipped, calibrated on "
+             "the others, same without the floor |", "|---|---|---|---|---|"]
+    ok = frame[(frame["timing"] == DEFAULT_TIMING) & (frame["error"] == "")]
+    for held in generators:
+        if held not in set(ok["generator"]) or len(set(ok["generator"])) < 2:
+            continue
+        cells = []
+        for name in ("f_h", "xi_h"):
+            coverage, factors = held_out_coverage(frame, held, name)
+            bare, _ = held_out_coverage(frame, held, name, floor=False)
+            shipped = 100.0 * float(ok.loc[ok["generator"] == held, f"{name}_covered"].mean())
+            cells += [", ".join(f"{v} {f:.2f}" for v, f in sorted(factors.items())) or "-",
+                      f"{shipped:.0f} %, {coverage:.0f} %, {bare:.0f} %"]
+        lines.append(f"| {held} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def timing_table(frame: pd.DataFrame, generators) -> list:
     """Markdown rows of the timing experiment."""
     labels = {t: TIMING_LABELS[t] + (" (default)" if t == DEFAULT_TIMING else "") for t in TIMINGS}
@@ -755,6 +806,15 @@ def write_report(path: Path, frame: pd.DataFrame, args, generators, command: str
         "",
         *extra_table(frame, generators),
         "",
+        "### Calibrated on the others",
+        "",
+        "Each generator held out in turn: the intervals' factors measured on the other generators' records, as "
+        "the library's were on its two (the 90th percentile of |error| / sd per variation model chosen, over "
+        "1.645), the model-error floor added, the library's widening of undetermined answers kept; their coverage "
+        "on the held-out generator's records, beside the shipped intervals' and the same without the floor.",
+        "",
+        *held_out_table(frame, generators),
+        "",
     ]
     if "figure" in rel:
         lines += [f"![estimated against true f_h and xi_h]({rel['figure']})", ""]
@@ -827,6 +887,9 @@ def parse_args(argv=None):
                         help="Markdown page (default docs/person-benchmark.md; with --quick a temporary directory); "
                              "figures go to figures/ beside it")
     parser.add_argument("--csv", type=Path, default=None, help="also write every fit's row to this CSV")
+    parser.add_argument("--rows", type=Path, default=None,
+                        help="write the page from the rows of an earlier run (its --csv, run with the same options) "
+                             "instead of fitting again")
     parser.add_argument("--no-timing-experiment", action="store_true",
                         help="fit every record with the default timing only (no true-boundary, other-timing or "
                              "one-drift fits)")
@@ -844,6 +907,8 @@ def parse_args(argv=None):
         args.records = 3 if args.quick else 50
     if args.records < 1:
         parser.error("--records must be at least 1")
+    if args.rows is not None and not args.rows.is_file():
+        parser.error(f"--rows {args.rows}: no such file (the --csv of an earlier run)")
     generators = tuple(g.strip() for g in args.generators.split(",") if g.strip())
     unknown = [g for g in generators if g not in GENERATORS]
     if unknown or not generators:
@@ -858,12 +923,18 @@ def main(argv=None):
     args, generators = parse_args(argv)
     command = "python benchmarks/person_accuracy.py " + shlex.join(sys.argv[1:] if argv is None else argv)
     start = time.perf_counter()
-    people = draw_people(args.records, args.seed, args.people)
-    frame = run(people, generators, args.intervals, not args.no_timing_experiment,
-                0 if args.no_timing_experiment else min(args.ablation_records, args.records), args.variation,
-                args.jobs)
-    wall = time.perf_counter() - start
-    if args.csv is not None:
+    if args.rows is not None:  # the page again from an earlier run's rows (same options), nothing refitted
+        frame = pd.read_csv(args.rows, keep_default_na=True)
+        frame["error"] = frame["error"].fillna("").astype(str)
+        wall = float(frame["seconds"].sum())
+        command += f" (tables rebuilt from the rows of {args.rows.name}; wall time: the fits' seconds summed)"
+    else:
+        people = draw_people(args.records, args.seed, args.people)
+        frame = run(people, generators, args.intervals, not args.no_timing_experiment,
+                    0 if args.no_timing_experiment else min(args.ablation_records, args.records), args.variation,
+                    args.jobs)
+        wall = time.perf_counter() - start
+    if args.csv is not None and args.rows is None:
         frame.to_csv(args.csv, index=False)
     figure_dir = args.out.parent / "figures"
     figure_dir.mkdir(parents=True, exist_ok=True)
