@@ -37,7 +37,7 @@ _BLOCK = re.compile(r"^```(python|console)\n(.*?)^```", flags=re.S | re.M)
 
 
 def make_figures(page: str) -> list[Path]:
-    """Run ``page``'s Python blocks until its figures exist; copy them to ``docs/figures/``; return their paths."""
+    """Run ``page``'s code and commands until its figures exist; copy them to ``docs/figures/``; return their paths."""
     wanted = FIGURES[page]
     blocks = _BLOCK.findall((DOCS / page).read_text(encoding="utf-8"))
     here = Path.cwd()
@@ -45,11 +45,15 @@ def make_figures(page: str) -> list[Path]:
         os.chdir(folder)
         try:
             namespace = {"__name__": "__main__"}
-            for kind, block in blocks:  # the page's own code and commands, as the notebook runs them
+            # the commands find this Python's smd-statespace, as the notebook's !-lines do in its kernel
+            env = {**os.environ, "PATH": os.pathsep.join([str(Path(sys.executable).parent), os.environ["PATH"]])}
+            for kind, block in blocks:  # the page's own code and commands, in the page's order
                 if kind == "python":
                     exec(compile(block, page, "exec"), namespace)
-                for command in (line[2:] for line in block.splitlines() if kind == "console" and line.startswith("$ ")):
-                    subprocess.run(command, shell=True, check=True, stdout=subprocess.DEVNULL)
+                    continue
+                for line in block.splitlines():
+                    if line.startswith("$ "):
+                        subprocess.run(line[2:], shell=True, check=True, stdout=subprocess.DEVNULL, env=env)
                 if all(Path(name).exists() for name in wanted):
                     break
             missing = [name for name in wanted if not Path(name).exists()]
