@@ -285,7 +285,9 @@ class FloorMode(Effect):
     (ratios 0.07-0.13) the record-level fit ended on 0.05 on seven and nothing
     was proposed. A search range only boxes the optimiser, so it is wider than
     the prior. Its damping ratio is searched down to 0 (a physical limit, not a
-    runaway): a 30 s record cannot tell 0.001 from 0.004 at 3.5 Hz.
+    runaway): at 3.5 Hz a damping of 0.004 has a half-power band ``2 xi_f f_f``
+    of 0.03 Hz, below the 0.033 Hz a 30 s record resolves, so the record cannot
+    tell it from 0.001 (the eight fits of a 0.0037 floor ended on 0.001).
     """
 
     CANDIDATE_DAMPING = 0.01
