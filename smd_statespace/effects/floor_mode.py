@@ -287,7 +287,7 @@ class FloorMode(Effect):
     the prior. Its damping ratio is searched down to 0 (a physical limit, not a
     runaway): at 3.5 Hz a damping of 0.004 has a half-power band ``2 xi_f f_f``
     of 0.03 Hz, below the 0.033 Hz a 30 s record resolves, so the record cannot
-    tell it from 0.001 (the eight fits of a 0.0037 floor ended on 0.001).
+    tell it from 0.001 (fits of a 0.0037 floor ended on the old bound 0.001).
     """
 
     CANDIDATE_DAMPING = 0.01
