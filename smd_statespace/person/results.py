@@ -648,12 +648,13 @@ class PersonResult:
         if disagreement:
             out.append(disagreement)
         for name, row in self.effect_estimates().iterrows():
+            unit = _unit(row["unit"])
             if row["on_bound"]:
-                out.append(f"{name} = {row['value']:.4g} {row['unit']} sits on its search bound ({row['range_low']:g}-"
+                out.append(f"{name} = {row['value']:.4g}{unit} sits on its search bound ({row['range_low']:g}-"
                            f"{row['range_high']:g}): not an estimate; the record does not show this effect as "
                            "modelled")
             elif not np.isfinite(row["sd"]) or row["sd"] > 0.25 * (row["range_high"] - row["range_low"]):
-                out.append(f"{name} is not determined by this record (sd {row['sd']:.3g} {row['unit']} against its "
+                out.append(f"{name} is not determined by this record (sd {row['sd']:.3g}{unit} against its "
                            f"range {row['range_low']:g}-{row['range_high']:g})")
         tests = self.test_pvalues()
         command = f"`smd-statespace diagnose {self.record_arguments()}`"
@@ -817,8 +818,8 @@ class PersonResult:
         if self.effects:
             lines[0] = lines[0][:-1] + f" with {', '.join(e.spec for e in self.effects)}:"
             for name, row in self.effect_estimates().iterrows():
-                lines.append(f"  {name} = {row['value']:.4g} {row['unit']}  (sd {row['sd']:.3g}; {pct} % interval "
-                             f"{row['low']:.4g}-{row['high']:.4g})")
+                lines.append(f"  {name} = {row['value']:.4g}{_unit(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
+                             f"interval {row['low']:.4g}-{row['high']:.4g})")
             before, test = d["before"], self.effect_test()
             p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
             lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
@@ -902,3 +903,8 @@ class PersonResult:
         if path is not None:
             fig.savefig(path, dpi=110)
         return fig
+
+
+def _unit(unit: str) -> str:
+    """A unit as printed after a value: `` Hz``, nothing for a dimensionless one (``"-"``)."""
+    return "" if unit in ("-", "") else f" {unit}"
