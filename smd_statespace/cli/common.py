@@ -164,8 +164,9 @@ def check_record_level_options(args, floor_elsewhere: str):
     """
     if args.estimator in (None, "record"):
         return
-    if getattr(args, "accelerometer", False) or getattr(args, "units", None) is not None:
-        option = "--accelerometer" if args.accelerometer else "--units"
+    accelerometer, units = getattr(args, "accelerometer", False), getattr(args, "units", None)
+    if accelerometer or units is not None:
+        option = "--accelerometer" if accelerometer else "--units"
         raise OptionError(f"{option} works with the record-level model (--estimator record), not "
                           f"--estimator {args.estimator}")
     if getattr(args, "no_floor", False):
