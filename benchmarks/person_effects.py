@@ -251,8 +251,8 @@ def summary(frame: pd.DataFrame) -> list:
 
 
 def code_version() -> str:
-    """The library's commit (``git describe``), with ``+changes`` when its files differ from it: stamped on every
-    row, so that a run resumed across sessions says which code made each row."""
+    """The library's commit (``git rev-parse --short HEAD``), with ``+changes`` when its files differ from it:
+    stamped on every row, so that a run resumed across sessions says which code made each row."""
     import subprocess
 
     def git(*args):
