@@ -190,11 +190,12 @@ def draw_people(n: int, seed: int, spread: str = "article") -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def simulate(person, generator: str, **overrides):
-    """The person's 30 s record with the given variation generator (``overrides``: other simulator arguments)."""
+def simulate(person, generator: str, noise=NOISE, **overrides):
+    """The person's 30 s record with the given variation generator and GRF noise (fraction of body weight;
+    ``overrides``: other simulator arguments)."""
     blf = [person[f"blf{i}"] for i in range(1, len(DEFAULT_BLF) + 1)]
     return simulate_bouncing(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"],
-                             duration=DURATION, fs=FS, blf=blf, noise=NOISE, seed=int(person["sim_seed"]),
+                             duration=DURATION, fs=FS, blf=blf, noise=noise, seed=int(person["sim_seed"]),
                              variation=generator, **overrides)
 
 
@@ -305,25 +306,27 @@ def _simulation_failed(person, generator, timing, exc) -> dict:
 
 
 def _task_rows(task) -> list:
-    """The rows of one task ``(person, generator, timings, overrides, intervals, variation)``: simulate, fit each timing."""
-    person, generator, timings, overrides, intervals, variation = task
+    """The rows of one task ``(person, generator, timings, overrides, intervals, variation, noise)``: simulate, fit
+    each timing; every row carries the record's GRF noise (``noise``, fraction of body weight)."""
+    person, generator, timings, overrides, intervals, variation, noise = task
     try:
-        sim = simulate(person, "smooth" if overrides else generator, **overrides)
+        sim = simulate(person, "smooth" if overrides else generator, noise=noise, **overrides)
+        rows = [fit_row(person, generator, timing, sim, intervals, variation) for timing in timings]
     except Exception as exc:  # noqa: BLE001 - one record must never kill the run
-        return [_simulation_failed(person, generator, timing, exc) for timing in timings]
-    return [fit_row(person, generator, timing, sim, intervals, variation) for timing in timings]
+        rows = [_simulation_failed(person, generator, timing, exc) for timing in timings]
+    return [{**row, "noise": noise} for row in rows]
 
 
 def run(people: pd.DataFrame, generators, intervals, timing_experiment, ablation_records=0,
-        variation=DEFAULT_VARIATION, jobs=1) -> pd.DataFrame:
+        variation=DEFAULT_VARIATION, jobs=1, noise=NOISE) -> pd.DataFrame:
     """Simulate and fit every record (``jobs`` processes; the rows do not depend on it); one progress bar."""
     def timings_of(generator):
         return EXPERIMENT_TIMINGS[generator] if timing_experiment else (DEFAULT_TIMING,)
 
     ablation = people.iloc[:ablation_records] if "smooth" in generators else people.iloc[:0]
-    tasks = [(person, generator, timings_of(generator), {}, intervals, variation)
+    tasks = [(person, generator, timings_of(generator), {}, intervals, variation, noise)
              for generator in generators for _, person in people.iterrows()]
-    tasks += [(person, name, ("true",), overrides, intervals, variation)
+    tasks += [(person, name, ("true",), overrides, intervals, variation, noise)
               for name, overrides in ABLATIONS.items() for _, person in ablation.iterrows()]
     rows = []
     with tqdm(total=sum(len(t[2]) for t in tasks), desc="fits", unit="fit", file=sys.stderr,
@@ -682,8 +685,9 @@ def accuracy_figure(frame: pd.DataFrame, generators, path: Path, intervals: str)
                      "bars cut at the frame)", fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)  # below: off the points
+    noise = float(frame["noise"].iloc[0]) if "noise" in frame else NOISE  # rows of older runs: the default
     fig.suptitle(f"Record-level identification on simulated {DURATION:g} s records at {FS:g} Hz "
-                 f"(f_b {RANGES['f_b'][0]}-{RANGES['f_b'][1]} Hz, noise {NOISE:.0%} BW)")
+                 f"(f_b {RANGES['f_b'][0]}-{RANGES['f_b'][1]} Hz, noise {noise:.1%} BW)")
     fig.savefig(path, dpi=110)
 
 
@@ -782,7 +786,7 @@ def write_report(path: Path, frame: pd.DataFrame, args, generators, command: str
         f"load average {os.getloadavg()[0]:.1f} at the end)",
         f"- Machine: {machine_line(args.intervals)}",
         f"- Records: {n} people per generator (the same people and simulator seeds for every generator), "
-        f"seed {args.seed}; {DURATION:g} s at {FS:g} Hz, GRF noise {NOISE:.0%} of body weight; f_b uniform "
+        f"seed {args.seed}; {DURATION:g} s at {FS:g} Hz, GRF noise {args.noise:.1%} of body weight; f_b uniform "
         f"{RANGES['f_b'][0]}-{RANGES['f_b'][1]} Hz, "
         + (f"f_h uniform {RANGES['f_h'][0]}-{RANGES['f_h'][1]} Hz, xi_h uniform {RANGES['xi_h'][0]}-{RANGES['xi_h'][1]}"
            if args.people == "article" else
@@ -900,6 +904,9 @@ def parse_args(argv=None):
     parser.add_argument("--jobs", type=int, default=1,
                         help="processes (default 1); each record is seeded on its own, so the rows do not change")
     parser.add_argument("--quick", action="store_true", help="3 records per generator: a smoke run")
+    parser.add_argument("--noise", type=float, default=NOISE,
+                        help=f"GRF noise as a fraction of body weight (default {NOISE:g}, the calibration's; "
+                             "real plates are often quieter: 0.003)")
     parser.add_argument("--people", choices=("article", "wide"), default="article",
                         help="article: f_h 1.8-4.2 Hz, xi_h 0.1-0.5 (default); wide: f_h/f_b 1.05-1.6, xi_h 0.08-0.6")
     args = parser.parse_args(argv)
@@ -907,6 +914,8 @@ def parse_args(argv=None):
         args.records = 3 if args.quick else 50
     if args.records < 1:
         parser.error("--records must be at least 1")
+    if not 0.0 <= args.noise < 0.2:
+        parser.error(f"--noise {args.noise:g}: give the GRF noise as a fraction of body weight, 0 to 0.2")
     if args.rows is not None and not args.rows.is_file():
         parser.error(f"--rows {args.rows}: no such file (the --csv of an earlier run)")
     generators = tuple(g.strip() for g in args.generators.split(",") if g.strip())
@@ -932,7 +941,7 @@ def main(argv=None):
         people = draw_people(args.records, args.seed, args.people)
         frame = run(people, generators, args.intervals, not args.no_timing_experiment,
                     0 if args.no_timing_experiment else min(args.ablation_records, args.records), args.variation,
-                    args.jobs)
+                    args.jobs, args.noise)
         wall = time.perf_counter() - start
     if args.csv is not None and args.rows is None:
         frame.to_csv(args.csv, index=False)
