@@ -16,7 +16,7 @@ calibrated sds alone, as ``--floor 0,0`` would give) and with it; the median sig
 (%), which the noise level does not remove; the median calibrated sd of
 ``f_h`` (Hz); the share of records whose innovations pass the Ljung-Box test
 (p >= 0.01: no "the model misses something" warning). ``--floor F,X`` sets ``person.fit.MODEL_ERROR_FLOOR`` for the
-run (relative for ``f_h``, absolute for ``xi_h``).
+run, for every variation model (relative for ``f_h``, absolute for ``xi_h``).
 
 Everything random comes from ``SeedSequence(--seed)`` through ``draw_people``;
 the rows do not depend on ``--jobs``.
@@ -52,7 +52,8 @@ def one(task) -> dict:
     """Simulate and identify one record; never raises."""
     person, (label, fs, noise), generator, floor = task
     if floor is not None:
-        person_fit.MODEL_ERROR_FLOOR.update(f_h=floor[0], xi_h=floor[1])
+        for floors in person_fit.MODEL_ERROR_FLOOR.values():  # the same floor for every variation model
+            floors.update(f_h=floor[0], xi_h=floor[1])
     row = {"condition": label, "generator": generator, "record": int(person["record"]), "error": ""}
     blf = [person[f"blf{i}"] for i in range(1, 5)]
     try:
@@ -122,8 +123,10 @@ def main(argv=None) -> int:
     frame = pd.DataFrame(rows)
     if args.csv is not None:
         frame.to_csv(args.csv, index=False)
-    used = floor or (person_fit.MODEL_ERROR_FLOOR["f_h"], person_fit.MODEL_ERROR_FLOOR["xi_h"])
-    print(f"model-error floor: f_h {used[0]:g} (relative), xi_h {used[1]:g}; seed {args.seed}")
+    used = (f"f_h {floor[0]:g} (relative), xi_h {floor[1]:g}" if floor else
+            "; ".join(f"{v}: f_h {f['f_h']:g} (relative), xi_h {f['xi_h']:g}"
+                      for v, f in person_fit.MODEL_ERROR_FLOOR.items()))
+    print(f"model-error floor: {used}; seed {args.seed}")
     print("\n".join(summary(frame)))
     for _, row in frame[frame["error"] != ""].iterrows():
         print(f"failed: {row['condition']} {row['generator']} #{row['record']}: {row['error']}")

@@ -456,8 +456,8 @@ def test_calibrated_intervals_add_the_model_error_floor_and_the_sd_stays_the_rec
     from smd_statespace.person.fit import MODEL_ERROR_FLOOR
 
     z = stats.norm.ppf(0.95)
-    for which, name, floor in ((0, "f_h", MODEL_ERROR_FLOOR["f_h"] * long_fit.f_h),
-                               (1, "xi_h", MODEL_ERROR_FLOOR["xi_h"])):
+    floors = MODEL_ERROR_FLOOR[long_fit.model.variation]
+    for which, name, floor in ((0, "f_h", floors["f_h"] * long_fit.f_h), (1, "xi_h", floors["xi_h"])):
         low, high = long_fit.intervals[name]
         half = z * np.hypot(long_fit.se[which], floor)
         assert high == pytest.approx(long_fit.params[which] + half)

@@ -266,7 +266,7 @@ class PersonResult:
         cov = np.array(self.cov, dtype=float)
         if self.interval_method.startswith("calibrated"):
             for which, name in enumerate(("f_h", "xi_h")):
-                cov[which, which] += model_error_floor(name, self.f_h) ** 2
+                cov[which, which] += model_error_floor(name, self.f_h, self.model.variation) ** 2
         return cov
 
     @cached_property
