@@ -26,7 +26,7 @@ calibrated ``f_h_se``, ``xi_h_se`` divided by the factors of the time
 
 Schemes:
 
-- ``shipped``: the rows' own intervals (the library's calibration at the time of the run);
+- ``as fitted``: the rows' own intervals (the library's calibration at the time of the run);
 - ``by variation``: factors per variation model chosen, as the library's were made, and a
   floor chosen held out;
 - ``by variation, no floor``: the same without a floor;
@@ -69,7 +69,7 @@ WHITE_P = 0.01
 FLOORS = {"f_h": np.round(np.arange(0.0, 0.101, 0.005), 3), "xi_h": np.round(np.arange(0.0, 0.101, 0.005), 3)}
 """Floors tried (relative to ``f_h`` for ``f_h``, absolute for ``xi_h``)."""
 
-SCHEMES = {"shipped": None, "by variation": ("variation",), "by variation, no floor": ("variation",),
+SCHEMES = {"as fitted": None, "by variation": ("variation",), "by variation, no floor": ("variation",),
            "by variation and whiteness": ("variation", "white"), "by variation, floors held out": ("variation",)}
 """Scheme name -> the record features its factors are measured per (None: the rows' own intervals)."""
 WITH_FLOOR = {"by variation"}
@@ -237,7 +237,9 @@ def table(results: pd.DataFrame, name: str) -> list:
         below = (by["coverage"] < TARGET[0]).sum()
         texts = list(dict.fromkeys(_floor_text(f) for f in by["floor"]))
         floor = texts[0] if len(texts) == 1 else "; ".join(texts)
-        cells = [f"{by.loc[c, 'coverage']:.0f} % ({by.loc[c, 'half-width']:.3f})" for c in columns]
+        cells = [f"{by.loc[c, 'coverage']:.0f} % ("
+                 + ("-" if np.isnan(by.loc[c, "half-width"]) else f"{by.loc[c, 'half-width']:.3f}") + ")"
+                 for c in columns]
         lines.append(f"| {scheme} | {floor} | " + " | ".join(cells) + f" | {within}/{len(columns)} | {below} |")
     return lines
 
