@@ -279,12 +279,50 @@ def check(frame: pd.DataFrame, name: str) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def check_figure(fresh: pd.DataFrame, path: Path) -> None:
+    """Coverage and half-width per generator and noise level on fresh records: the shipped calibration against the
+    one before it, for ``f_h`` and ``xi_h`` (a PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(12, 7), sharex=True)
+    for row, name in enumerate(("f_h", "xi_h")):
+        results = check(fresh, name)
+        results["column"] = results["held out"] + "\n" + (100 * results["noise"]).map("{:g} %".format)
+        columns = list(dict.fromkeys(results["column"]))
+        x = np.arange(len(columns))
+        for offset, (scheme, colour) in zip((-0.2, 0.2), (("before (rebuilt)", "tab:grey"),
+                                                          ("shipped (as fitted)", "tab:blue"))):
+            by = results[results["scheme"] == scheme].set_index("column").reindex(columns)
+            axes[row, 0].bar(x + offset, by["coverage"], width=0.4, color=colour, label=scheme)
+            axes[row, 1].bar(x + offset, by["half-width"], width=0.4, color=colour, label=scheme)
+        axes[row, 0].axhspan(*TARGET, color="tab:green", alpha=0.15, label="target 85-95 %")
+        axes[row, 0].set_ylim(50, 102)
+        axes[row, 0].set_ylabel(f"{name}: 90 % coverage (%)")
+        axes[row, 1].set_ylabel(f"{name}: median half-width" + (" (of f_h)" if name == "f_h" else ""))
+        for ax in axes[row]:
+            ax.set_xticks(x)
+            ax.set_xticklabels(columns, fontsize=7, rotation=30)
+            ax.grid(axis="y", alpha=0.3)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="upper right", ncol=3)
+    fig.suptitle("Fresh records: the intervals' coverage and width, calibration before and shipped\n"
+                 "(half-width over determined answers; pulses has none)", fontsize=10, x=0.3)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("rows", nargs="+", type=Path, help="CSV rows of person_accuracy.py runs (their --csv)")
     parser.add_argument("--check", nargs="+", type=Path, default=(), metavar="CSV",
                         help="rows of fresh runs fitted with the shipped calibration: their coverage and width, "
                              "beside the calibration before it rebuilt on the same fits")
+    parser.add_argument("--figure", type=Path, default=None, metavar="PNG",
+                        help="with --check: draw the fresh records' coverage and widths here")
     args = parser.parse_args(argv)
     for path in (*args.rows, *args.check):
         if not path.is_file():
@@ -308,6 +346,9 @@ def main(argv=None) -> int:
               + "): the shipped calibration as fitted, and the one before rebuilt on the same fits:\n")
         for name in ("f_h", "xi_h"):
             print("\n".join(table(check(fresh, name), name)).replace("chosen on the others", "") + "\n")
+        if args.figure is not None:
+            check_figure(fresh, args.figure)
+            print(f"wrote {args.figure}")
     return 0
 
 
