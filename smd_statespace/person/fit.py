@@ -66,7 +66,7 @@ not an artefact): measured with ``benchmarks/person_calibration.py`` on the rows
 ``benchmarks/person_accuracy.py`` runs with all five generators of force variation
 (jumps, smooth, coefficients, pulses, tempo), 30 s at 100 Hz, at 1 % BW noise (seed
 2027, 40 records each) and 0.3 % BW (seed 2028, 24 each): 504 records, "independent"
-chosen on 280, "smooth" on 224 (docs/person-benchmark-generators.md, "Calibration").
+chosen on 280, "smooth" on 224 (docs/person-calibration.md).
 "random_walk" and "both" were not measured: they take the pooled factors. The factors
 before (1.89, 2.63 and 3.21, 1.96) were measured on the jumps and smooth generators
 alone at 1 % BW, with an earlier search.
