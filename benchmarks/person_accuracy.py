@@ -693,7 +693,7 @@ def accuracy_figure(frame: pd.DataFrame, generators, path: Path, intervals: str)
     noise = float(frame["noise"].iloc[0]) if "noise" in frame else NOISE  # rows of older runs: the default
     fig.suptitle(f"Record-level identification on simulated {DURATION:g} s records at {FS:g} Hz "
                  f"(f_b {RANGES['f_b'][0]}-{RANGES['f_b'][1]} Hz, noise {noise:.1%} BW)")
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")  # the legends sit below the axes
 
 
 def timing_figure(frame: pd.DataFrame, generators, path: Path):
