@@ -33,7 +33,10 @@ Schemes:
 - ``by variation and whiteness``: factors per variation model and per whether the
   record's innovations pass the Ljung-Box test (p >= 0.01, the library's warning "the
   model misses something"): a record that shows its misfit gets the factor of records
-  that show theirs; no floor.
+  that show theirs; no floor;
+- ``by variation, floors held out``: factors per variation model and a floor per variation
+  model, the largest any generator needs when it is left out (:func:`held_out_floors`):
+  the rule the library ships (``person.fit.MODEL_ERROR_FLOOR``).
 
 ::
 
@@ -69,11 +72,12 @@ WHITE_P = 0.01
 FLOORS = {"f_h": np.round(np.arange(0.0, 0.101, 0.005), 3), "xi_h": np.round(np.arange(0.0, 0.101, 0.005), 3)}
 """Floors tried (relative to ``f_h`` for ``f_h``, absolute for ``xi_h``)."""
 
-SCHEMES = {"as fitted": None, "by variation": ("variation",), "by variation, no floor": ("variation",),
-           "by variation and whiteness": ("variation", "white"), "by variation, floors held out": ("variation",)}
-"""Scheme name -> the record features its factors are measured per (None: the rows' own intervals)."""
-WITH_FLOOR = {"by variation"}
-HELD_OUT_FLOORS = {"by variation, floors held out"}
+SCHEMES = {"as fitted": (None, None), "by variation": (("variation",), "one"),
+           "by variation, no floor": (("variation",), "none"),
+           "by variation and whiteness": (("variation", "white"), "none"),
+           "by variation, floors held out": (("variation",), "held out")}
+"""Scheme name -> (the record features its factors are measured per, its floor: :func:`scheme_floor`); ``(None,
+None)``: the rows' own intervals."""
 MIN_RECORDS = 8
 """A generator's records of one variation model count for the held-out floors from this many on."""
 
@@ -189,18 +193,25 @@ def held_out_floors(frame: pd.DataFrame, name: str, by) -> dict:
     return floors
 
 
+def scheme_floor(rule: str, train: pd.DataFrame, name: str, factors, by):
+    """A scheme's floor measured on ``train``: ``"none"`` 0; ``"one"`` one floor for all (:func:`choose_floor`);
+    ``"held out"`` one per variation model (:func:`held_out_floors`)."""
+    if rule == "one":
+        return choose_floor(train, name, factors, by)
+    return held_out_floors(train, name, by) if rule == "held out" else 0.0
+
+
 def held_out(frame: pd.DataFrame, name: str) -> pd.DataFrame:
     """One row per scheme, held-out generator and noise level."""
     out = []
     for held in frame["generator"].unique():
         train, test = frame[frame["generator"] != held], frame[frame["generator"] == held]
-        for scheme, by in SCHEMES.items():
+        for scheme, (by, rule) in SCHEMES.items():
             if by is None:
                 factors, floor = ({}, np.nan), np.nan
             else:
                 factors = measure_factors(train, name, by)
-                floor = (choose_floor(train, name, factors, by) if scheme in WITH_FLOOR else
-                         held_out_floors(train, name, by) if scheme in HELD_OUT_FLOORS else 0.0)
+                floor = scheme_floor(rule, train, name, factors, by)
             for noise, rows in test.groupby("noise"):
                 if by is None:
                     low, high = rows[f"{name}_low"].to_numpy(), rows[f"{name}_high"].to_numpy()
@@ -208,7 +219,7 @@ def held_out(frame: pd.DataFrame, name: str) -> pd.DataFrame:
                 else:
                     low, high, determined, _ = rebuild(rows, name, factors, by, floor)
                 out.append({"scheme": scheme, "held out": held, "noise": noise, "floor": floor,
-                            "factors": factors[0], **cell(rows, name, low, high, determined)})
+                            **cell(rows, name, low, high, determined)})
     return pd.DataFrame(out)
 
 
@@ -248,12 +259,11 @@ def on_all(frame: pd.DataFrame, name: str) -> tuple:
     """Each scheme calibrated on every generator (what the library would ship): Markdown bullets of its factors and
     floor, and the rows of its coverage per generator and noise level (in-sample)."""
     lines, out = [], []
-    for scheme, by in SCHEMES.items():
+    for scheme, (by, rule) in SCHEMES.items():
         if by is None:
             continue
         factors, pooled = measure_factors(frame, name, by)
-        floor = (choose_floor(frame, name, (factors, pooled), by) if scheme in WITH_FLOOR else
-                 held_out_floors(frame, name, by) if scheme in HELD_OUT_FLOORS else 0.0)
+        floor = scheme_floor(rule, frame, name, (factors, pooled), by)
         lines.append(f"- {name}, {scheme}: {_factor_text(factors)} (pooled {pooled:.2f}); floor "
                      f"{_floor_text(floor)}")
         for (generator, noise), rows in frame.groupby(["generator", "noise"]):
