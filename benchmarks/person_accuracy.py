@@ -92,6 +92,8 @@ from smd_statespace.person.timing import TIMING_METHODS, CycleTiming  # noqa: E4
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing  # noqa: E402
 from smd_statespace.simulation.variation import VARIATIONS  # noqa: E402
 
+import person_calibration  # noqa: E402  (beside this script: the held-out calibration)
+
 REPO = Path(__file__).resolve().parents[1]
 
 RANGES = {"f_b": (1.5, 3.5), "f_h": (1.8, 4.2), "xi_h": (0.1, 0.5), "mass": (50.0, 90.0)}
@@ -464,54 +466,34 @@ def extra_table(frame: pd.DataFrame, generators) -> list:
     return lines
 
 
-def held_out_coverage(frame: pd.DataFrame, held: str, name: str, floor: bool = True) -> tuple:
-    """Coverage (%) on generator ``held`` of ``name``'s intervals calibrated on the *other* generators' records.
-
-    As :data:`~smd_statespace.person.fit.CALIBRATION` was made: per variation model chosen, the factor on the
-    record's sd is the 90th percentile of ``|estimate - truth| / sd`` over the other generators' records divided
-    by the normal quantile; the model-error floor (:data:`~smd_statespace.person.fit.MODEL_ERROR_FLOOR`, or none
-    with ``floor=False``) is added in quadrature; where the library widened a record's interval (not determined,
-    an artefact, variation models that disagree) the widened interval is kept around it. Returns
-    ``(coverage, factors)``, ``factors`` a dict by variation model (a model the others never chose: the pooled
-    factor).
-    """
-    ok = frame[(frame["timing"] == DEFAULT_TIMING) & (frame["error"] == "")]
-    train, test = ok[ok["generator"] != held], ok[ok["generator"] == held]
-    if test.empty or f"{name}_low_narrow" not in test or test[f"{name}_low_narrow"].isna().all():
-        return np.nan, {}
-    z = stats.norm.ppf(0.5 + LEVEL / 2.0)
-    ratio = (train[f"{name}_est"] - train[name]).abs() / train[f"{name}_se"]
-    pooled = float(np.nanpercentile(ratio, 90) / z)
-    factors = {v: float(np.nanpercentile(ratio[train["variation"] == v], 90) / z) for v in train["variation"].unique()}
-    factor = test["variation"].map(factors).fillna(pooled)
-    shipped = test["variation"].map({v: f[name] for v, f in person_fit.MODEL_ERROR_FLOOR.items()})
-    extra = (shipped * (test[f"{name}_est"] if name == "f_h" else 1.0)) if floor else 0.0
-    half = z * np.sqrt((factor * test[f"{name}_se"]) ** 2 + extra ** 2)
-    low, high = test[f"{name}_est"] - half, test[f"{name}_est"] + half
-    widened = ((test[f"{name}_low"] < test[f"{name}_low_narrow"] - 1e-12)
-               | (test[f"{name}_high"] > test[f"{name}_high_narrow"] + 1e-12))
-    low = np.where(widened, np.minimum(low, test[f"{name}_low"]), low)
-    high = np.where(widened, np.maximum(high, test[f"{name}_high"]), high)
-    covered = (low <= test[name]) & (test[name] <= high)
-    return 100.0 * float(covered.mean()), factors
-
-
 def held_out_table(frame: pd.DataFrame, generators) -> list:
-    """Markdown rows: every generator held out in turn, its coverage with the intervals calibrated on the others."""
-    lines = ["| held out | f_h factor from the others (by variation model, on the calibrated sd) | f_h coverage: shipped, calibrated on the "
-             "others, same without the floor | xi_h factor from the others | xi_h coverage: shipped, calibrated on "
-             "the others, same without the floor |", "|---|---|---|---|---|"]
-    ok = frame[(frame["timing"] == DEFAULT_TIMING) & (frame["error"] == "")]
+    """Markdown rows: every generator held out in turn, its coverage with the intervals calibrated on the others.
+
+    The calibration is rebuilt by ``person_calibration.py`` (:func:`person_calibration.held_out`) as the library's
+    was made: factors per variation model on the raw sds of the other generators' records, a model-error floor per
+    variation model sized on them by leaving each of them out in turn, the "determined" rule on the new sds.
+    """
+    rows = person_calibration.prepare(frame)
+    if rows["generator"].nunique() < 2:
+        return []
+    schemes = ("as fitted", "by variation, floors held out", "by variation, no floor")
+    lines = ["| held out | f_h factor from the others (by variation model, on the raw sd) | f_h coverage: shipped, "
+             "calibrated on the others, same without the floor | xi_h factor from the others | xi_h coverage: "
+             "shipped, calibrated on the others, same without the floor |", "|---|---|---|---|---|"]
+    results = {name: person_calibration.held_out(rows, name, schemes) for name in ("f_h", "xi_h")}
     for held in generators:
-        if held not in set(ok["generator"]) or len(set(ok["generator"])) < 2:
+        if held not in set(rows["generator"]):
             continue
         cells = []
-        for name in ("f_h", "xi_h"):
-            coverage, factors = held_out_coverage(frame, held, name)
-            bare, _ = held_out_coverage(frame, held, name, floor=False)
-            shipped = 100.0 * float(ok.loc[ok["generator"] == held, f"{name}_covered"].mean())
-            cells += [", ".join(f"{v} {f:.2f}" for v, f in sorted(factors.items())) or "-",
-                      f"{shipped:.0f} %, {coverage:.0f} %, {bare:.0f} %"]
+        for name, result in results.items():
+            train = rows[rows["generator"] != held]
+            factors, _ = person_calibration.measure_factors(train, name, ("variation",))
+            mine = result[result["held out"] == held]
+            coverage = [100.0 * float(np.average(mine.loc[mine["scheme"] == scheme, "coverage"] / 100.0,
+                                                 weights=mine.loc[mine["scheme"] == scheme, "records"]))
+                        for scheme in schemes]
+            cells += [", ".join(f"{v[0]} {f:.2f}" for v, f in sorted(factors.items())) or "-",
+                      ", ".join(f"{c:.0f} %" for c in coverage)]
         lines.append(f"| {held} | " + " | ".join(cells) + " |")
     return lines
 
@@ -672,12 +654,12 @@ def accuracy_figure(frame: pd.DataFrame, generators, path: Path, intervals: str)
             for rel in (0.03, 0.08):
                 ax.plot(lims, np.multiply(lims, 1 + rel), "k:", lw=0.6)
                 ax.plot(lims, np.multiply(lims, 1 - rel), "k:", lw=0.6)
-            ax.text(lims[1], lims[1] * 0.92 - 0.02 * width, "±3 %, ±8 %", ha="right", va="top", fontsize=8)
+            ax.plot([], [], "k:", lw=0.6, label="dotted: ±3 %, ±8 %")  # in the legend: a label on the lines hid points
         else:
             for delta in (0.04,):
                 ax.plot(lims, np.add(lims, delta), "k:", lw=0.6)
                 ax.plot(lims, np.subtract(lims, delta), "k:", lw=0.6)
-            ax.text(lims[1], lims[1] - 0.06, "±0.04", ha="right", va="top", fontsize=8)
+            ax.plot([], [], "k:", lw=0.6, label="dotted: ±0.04")
         ax.set_xlim(lims)
         # the estimates' range, not the widest interval's: a bar cut at the frame runs on beyond it
         estimates = frame.loc[(frame["timing"] == DEFAULT_TIMING) & (frame["error"] == ""), f"{name}_est"]
@@ -689,7 +671,7 @@ def accuracy_figure(frame: pd.DataFrame, generators, path: Path, intervals: str)
         ax.set_title(f"{name}: estimate and {LEVEL:.0%} {intervals} interval\n(timing={DEFAULT_TIMING}; "
                      "bars cut at the frame)", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)  # below: off the points
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2)  # below: off the points
     noise = float(frame["noise"].iloc[0]) if "noise" in frame else NOISE  # rows of older runs: the default
     fig.suptitle(f"Record-level identification on simulated {DURATION:g} s records at {FS:g} Hz "
                  f"(f_b {RANGES['f_b'][0]}-{RANGES['f_b'][1]} Hz, noise {noise:.1%} BW)")
@@ -817,12 +799,13 @@ def write_report(path: Path, frame: pd.DataFrame, args, generators, command: str
         "",
         "### Calibrated on the others",
         "",
-        "Each generator held out in turn: the intervals' factors measured on the other generators' records, as "
-        "the library's were on its two (the 90th percentile of |error| / sd per variation model chosen, over "
-        "1.645), the model-error floor added, the library's widening of undetermined answers kept; their coverage "
-        "on the held-out generator's records, beside the shipped intervals' and the same without the floor. The "
-        "factors multiply the rows' sds, which carry the library's factor of the time (1 = the shipped factor); "
-        "`benchmarks/person_calibration.py` measures factors on the raw sds and sizes the floor held out.",
+        "Each generator held out in turn, the intervals rebuilt as the library's were made "
+        "(`benchmarks/person_calibration.py`, [person-calibration.md](person-calibration.md)), but from the "
+        "*other* generators' records only: factors per variation model chosen on the raw sds (the 90th "
+        "percentile of |error| / sd over 1.645), a model-error floor per variation model sized on the others by "
+        "leaving each of them out in turn, the \"determined\" rule on the new sds and the library's widening of "
+        "artefacts kept. Their coverage on the held-out generator's records, beside the shipped intervals' and "
+        "the same without the floor.",
         "",
         *held_out_table(frame, generators),
         "",

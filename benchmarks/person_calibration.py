@@ -42,6 +42,8 @@ Schemes:
 
     python benchmarks/person_calibration.py benchmarks/results/person_accuracy_seed2027.csv \\
         benchmarks/results/person_accuracy_seed2028_quiet.csv
+
+``--rules`` compares instead the "determined" rules of :data:`RULES` on the rows' own intervals.
 """
 
 from __future__ import annotations
@@ -83,14 +85,17 @@ MIN_RECORDS = 8
 
 
 def load(paths) -> pd.DataFrame:
-    """The default-timing rows of ``person_accuracy.py`` runs that fitted (a run without ``noise``: 1 % BW)."""
-    frames = []
-    for path in paths:
-        frame = pd.read_csv(path)
-        if "noise" not in frame:
-            frame["noise"] = 0.01
-        frames.append(frame)
-    frame = pd.concat(frames, ignore_index=True)
+    """The default-timing rows of ``person_accuracy.py`` runs that fitted (:func:`prepare`)."""
+    return prepare(pd.concat([pd.read_csv(path) for path in paths], ignore_index=True))
+
+
+def prepare(frame: pd.DataFrame) -> pd.DataFrame:
+    """``person_accuracy.py`` rows (a run without ``noise``: 1 % BW): those of the default timing that fitted, with
+    the raw sds, whiteness, what else than the sd left a record undetermined and whether its interval was widened."""
+    frame = frame.copy()
+    if "noise" not in frame:
+        frame["noise"] = 0.01
+    frame["noise"] = frame["noise"].fillna(0.01)
     frame["error"] = frame["error"].fillna("").astype(str)
     frame = frame[(frame["timing"] == "model") & (frame["error"] == "")].reset_index(drop=True)
     frame["white"] = frame["ljung_box_p"] >= WHITE_P
@@ -201,12 +206,13 @@ def scheme_floor(rule: str, train: pd.DataFrame, name: str, factors, by):
     return held_out_floors(train, name, by) if rule == "held out" else 0.0
 
 
-def held_out(frame: pd.DataFrame, name: str) -> pd.DataFrame:
-    """One row per scheme, held-out generator and noise level."""
+def held_out(frame: pd.DataFrame, name: str, schemes=None) -> pd.DataFrame:
+    """One row per scheme (all of :data:`SCHEMES`, or those named), held-out generator and noise level."""
     out = []
     for held in frame["generator"].unique():
         train, test = frame[frame["generator"] != held], frame[frame["generator"] == held]
-        for scheme, (by, rule) in SCHEMES.items():
+        for scheme in schemes or SCHEMES:
+            by, rule = SCHEMES[scheme]
             if by is None:
                 factors, floor = ({}, np.nan), np.nan
             else:
@@ -289,6 +295,41 @@ def check(frame: pd.DataFrame, name: str) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+RULES = {"sd < 0.22 Hz (shipped)": None, "sd < 8.66 % of f_h": 0.0866, "sd < 6 % of f_h": 0.06}
+""""Determined" rules for ``f_h`` compared by :func:`determined_rules`: ``None`` the library's (a quarter of the
+yardstick, 0.22 Hz), a number the sd's largest share of the estimate."""
+
+
+def determined_rules(frame: pd.DataFrame) -> pd.DataFrame:
+    """The rows' own calibrated ``f_h`` intervals with each of :data:`RULES` for "determined" (the other checks
+    kept): how many are determined, how many of those miss, the largest error among them, the coverage, and
+    against the shipped rule the answers given back (and how many of them miss) and taken away."""
+    sd, est, truth = (frame[c].to_numpy() for c in ("f_h_se", "f_h_est", "f_h"))
+    error = np.abs(est / truth - 1.0)
+    ok = ~frame["f_h_other_fail"].to_numpy()
+    narrow = ((frame["f_h_low_narrow"] <= truth) & (truth <= frame["f_h_high_narrow"])).to_numpy()
+    kept = frame["f_h_widened"].to_numpy() & (frame["f_h_other_fail"].to_numpy()
+                                              | frame["variations_disagree"].astype(bool).to_numpy())
+    shipped = ok & (sd < DETERMINED_FRACTION * PRIOR_SD["f_h"])
+    out = []
+    for rule, share in RULES.items():
+        determined = shipped if share is None else ok & (sd < share * est)
+        yard = Z * PRIOR_SD["f_h"]
+        low = np.where(determined, frame["f_h_low_narrow"], np.minimum(frame["f_h_low_narrow"], est - yard))
+        high = np.where(determined, frame["f_h_high_narrow"], np.maximum(frame["f_h_high_narrow"], est + yard))
+        low = np.where(kept, np.minimum(low, frame["f_h_low"]), low)
+        high = np.where(kept, np.maximum(high, frame["f_h_high"]), high)
+        covered = (low <= truth) & (truth <= high)
+        given, taken = determined & ~shipped, shipped & ~determined
+        out.append({"rule": rule, "determined": int(determined.sum()),
+                    "determined and missed": int((determined & ~covered).sum()),
+                    "largest error determined (%)": (100.0 * float(error[determined].max())
+                                                     if determined.any() else np.nan),
+                    "coverage (%)": 100.0 * float(covered.mean()), "given back": int(given.sum()),
+                    "given back and missed": int((given & ~narrow).sum()), "taken away": int(taken.sum())})
+    return pd.DataFrame(out)
+
+
 def check_figure(fresh: pd.DataFrame, path: Path) -> None:
     """Coverage and half-width per generator and noise level on fresh records: the shipped calibration against the
     one before it, for ``f_h`` and ``xi_h`` (a PNG)."""
@@ -333,11 +374,20 @@ def main(argv=None) -> int:
                              "beside the calibration before it rebuilt on the same fits")
     parser.add_argument("--figure", type=Path, default=None, metavar="PNG",
                         help="with --check: draw the fresh records' coverage and widths here")
+    parser.add_argument("--rules", action="store_true",
+                        help="only compare the 'determined' rules of RULES on the rows (their own intervals)")
     args = parser.parse_args(argv)
     for path in (*args.rows, *args.check):
         if not path.is_file():
             parser.error(f"{path}: no such file (the --csv of a person_accuracy.py run)")
     frame = load(args.rows)
+    if args.rules:
+        print(f"{len(frame)} records fitted; f_h 'determined' by each rule:\n")
+        rules = determined_rules(frame)
+        print("| " + " | ".join(rules.columns) + " |\n" + "|---" * len(rules.columns) + "|")
+        for row in rules.itertuples(index=False):
+            print("| " + " | ".join(f"{v:.1f}" if isinstance(v, float) else str(v) for v in row) + " |")
+        return 0
     counts = frame.groupby(["generator", "noise"]).size()
     print("records fitted: " + ", ".join(f"{g} {100 * n:g} % BW {k}" for (g, n), k in counts.items()) + "\n")
     print("Coverage of the 90 % intervals on each held-out generator (median half-width of its determined "
