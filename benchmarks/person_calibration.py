@@ -37,6 +37,9 @@ Schemes:
 - ``by variation, floors held out``: factors per variation model and a floor per variation
   model, the largest any generator needs when it is left out (:func:`held_out_floors`):
   the rule the library ships (``person.fit.MODEL_ERROR_FLOOR``).
+- ``by variation and noise level, floors held out``: the same with factors per variation model
+  and per the simulated noise level (the true one: an upper bound on what the record's
+  estimated noise could give).
 
 ::
 
@@ -77,7 +80,8 @@ FLOORS = {"f_h": np.round(np.arange(0.0, 0.101, 0.005), 3), "xi_h": np.round(np.
 SCHEMES = {"as fitted": (None, None), "by variation": (("variation",), "one"),
            "by variation, no floor": (("variation",), "none"),
            "by variation and whiteness": (("variation", "white"), "none"),
-           "by variation, floors held out": (("variation",), "held out")}
+           "by variation, floors held out": (("variation",), "held out"),
+           "by variation and noise level, floors held out": (("variation", "noise"), "held out")}
 """Scheme name -> (the record features its factors are measured per, its floor: :func:`scheme_floor`); ``(None,
 None)``: the rows' own intervals."""
 MIN_RECORDS = 8
