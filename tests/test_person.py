@@ -433,8 +433,8 @@ def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys):
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=30, fs=1000.0, seed=11)
     capsys.readouterr()
     result = identify_person(sim.record, progress=True)
-    # every variation model: its first fit and its own timing fits; then the information
-    steps = len(AUTO_VARIATIONS) * (1 + TIMING_ITERATIONS + 2) + 1
+    # every variation model: its first fit and its own timing fits; the winner's final fit; the information
+    steps = len(AUTO_VARIATIONS) * (1 + TIMING_ITERATIONS + 1) + 2
     bar = capsys.readouterr().err
     assert "identify (record)" in bar and f"{steps}/{steps}" in bar  # every search counted, none twice
     assert result.record.fs == pytest.approx(100.0) and result.model.y.size == sim.record.time.size // 10

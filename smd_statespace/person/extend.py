@@ -358,7 +358,7 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
     # the one it kept among them
     variations = list(dict.fromkeys(row["variation"] for row in result.comparison))
     fits = []
-    with tqdm(total=len(variations) * (TIMING_ITERATIONS + 3), desc="effects: cycle starts", unit="fit",
+    with tqdm(total=len(variations) * (TIMING_ITERATIONS + 2) + 1, desc="effects: cycle starts", unit="fit",
               disable=not progress, leave=False) as bar:
         for variation in variations:
             if variation == model.variation:

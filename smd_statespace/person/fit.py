@@ -476,19 +476,29 @@ def _choose_with_own_timing(model_for, timing, fits, first_best, step) -> tuple:
     starts -6 % and -2 %). Returns ``(model, fitted, rows)``, ``rows`` for ``result.comparison`` (timing
     "re-placed"). The first comparison's winner (``first_best``) is kept when no model finishes off its
     search bounds and converged.
+
+    The choice is made on each model's best quick fit (:data:`QUICK_GAIN`); only the winner is then refitted
+    to full precision (:data:`FINAL_GAIN`), and its row carries that fit. On 40 records of five generators
+    (``benchmarks/person_fits.py``, seed 77) the quick fits chose as the full-precision ones on all 40; the
+    losers' final fits had taken 7 % of the fits' time.
     """
     finished = [_fit_timing(model_for, timing, m.variation, first=(m, f), step=step) for m, f in fits]
     rows = [_comparison_row(m, f, "re-placed") for m, f in finished]
     eligible = [i for i, row in enumerate(rows) if not row["on_bound"] and row["converged"]] or [first_best]
     best = min(eligible, key=lambda i: rows[i]["aic"])
-    return finished[best] + (rows,)
+    model, quick = finished[best]
+    fitted = fit_model(model, quick["params"])
+    step()
+    rows[best] = _comparison_row(model, fitted, "re-placed")
+    return model, fitted, rows
 
 
 def _fit_timing(model_for, timing, variation, first=None, step=lambda: None):
-    """Fit with a phase template and re-place the cycle starts; returns the best ``(model, fit)`` by likelihood.
+    """Fit with a phase template and re-place the cycle starts; returns the best ``(model, fit)`` by likelihood
+    (a quick fit: :func:`_choose_with_own_timing` refits the winner to full precision).
 
     ``first``: the ``(model, fit)`` without phase template at ``timing`` when already made;
-    ``step`` is called after each of the ``TIMING_ITERATIONS + 2`` fits (a progress bar).
+    ``step`` is called after each of the ``TIMING_ITERATIONS + 1`` fits (a progress bar).
     """
     base, fitted = first if first is not None else (None, None)
     if base is None:
@@ -518,10 +528,7 @@ def _fit_timing(model_for, timing, variation, first=None, step=lambda: None):
             best = (model, fitted)
         if iteration < TIMING_ITERATIONS:
             timing = corrected_timing(model, params)
-    model, fitted = best
-    fitted = fit_model(model, fitted["params"])
-    step()
-    return model, fitted
+    return best
 
 
 def model_error_floor(name: str, f_h: float, variation: str) -> float:
@@ -622,7 +629,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         were not measured there).
     progress : bool
         Show a progress bar (tqdm) over the likelihood searches (one per variation model,
-        ``TIMING_ITERATIONS + 2`` for ``timing="model"``, then the information matrix):
+        ``TIMING_ITERATIONS + 1`` more for ``timing="model"`` and the winner's final fit, then the
+        information matrix):
         a 30 s record takes 7-25 s.
     effects : sequence of Effect or str
         Physical effects added to the person's model (objects, names or
@@ -694,7 +702,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
 
     if cov_type not in ("robust", "oim"):
         raise OptionError(f"cov_type {cov_type!r} is not one of: robust, oim")
-    steps = len(names) * (1 + (TIMING_ITERATIONS + 2 if timing == "model" else 0)) + 1
+    steps = len(names) * (1 + (TIMING_ITERATIONS + 1 if timing == "model" else 0)) + (2 if timing == "model" else 1)
     with tqdm(total=steps, desc="identify (record)", unit="fit", disable=not progress, leave=False) as bar:
         step = bar.update
         # every variation model is fitted at the first cycle timing and compared by AIC there; with
