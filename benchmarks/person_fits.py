@@ -64,8 +64,12 @@ def _rms_shift(old, new) -> float:
 
 
 def run_record(task) -> list:
-    """Identify one record with every fit and re-placement recorded; rows as dicts."""
-    person, generator = task
+    """Identify one record with every fit and re-placement recorded; rows as dicts. ``task``: ``(person,
+    generator, quick_gain)``, ``quick_gain`` None for the library's :data:`~smd_statespace.person.fit.QUICK_GAIN`
+    (an experiment's stop rule of the intermediate fits otherwise)."""
+    person, generator, quick_gain = task
+    if quick_gain is not None:
+        person_fit.QUICK_GAIN = quick_gain
     key = {"generator": generator, "record": int(person["record"])}
     try:
         record = person_accuracy.simulate(person, generator).record
@@ -141,7 +145,8 @@ def fits_per_model(rows: pd.DataFrame) -> pd.DataFrame:
 def _winner(best: pd.DataFrame) -> str:
     """The variation model ``identify_person`` would choose among these fits (one per model): lowest AIC among
     those not on a search bound (all, if every one is)."""
-    eligible = best[~best["on_bound"]] if (~best["on_bound"]).any() else best
+    ok = ~best["on_bound"] & best["converged"]
+    eligible = best[ok] if ok.any() else best
     return eligible.loc[(2 * eligible["n_params"] - 2 * eligible["loglike"]).idxmin(), "variation"]
 
 
@@ -257,6 +262,9 @@ def main(argv=None) -> int:
     parser.add_argument("--generators", default=",".join(GENERATORS))
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--journal", type=Path, default=None, help="JSON lines of the rows; a rerun resumes it")
+    parser.add_argument("--quick-gain", type=float, default=None, metavar="GAIN",
+                        help="an experiment: the intermediate fits' stop rule (log-likelihood gained by the last "
+                             f"step; the library's: {person_fit.QUICK_GAIN:g})")
     parser.add_argument("--report", action="store_true", help="only print the tables of --journal")
     parser.add_argument("--against", type=Path, default=None, metavar="JOURNAL",
                         help="another run's journal (e.g. before a change): compare the answers on the same records")
@@ -269,7 +277,7 @@ def main(argv=None) -> int:
     if not args.report:
         done = {(r["generator"], r["record"]) for r in rows if r["kind"] in ("answer", "failed")}
         people = person_accuracy.draw_people(args.records, args.seed)
-        tasks = [(person, g) for g in generators for _, person in people.iterrows()
+        tasks = [(person, g, args.quick_gain) for g in generators for _, person in people.iterrows()
                  if (g, int(person["record"])) not in done]
         with ProcessPoolExecutor(args.jobs) as pool:
             for k, new in enumerate(pool.map(run_record, tasks), start=1):

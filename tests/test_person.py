@@ -95,6 +95,24 @@ def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options
     assert RecordStateSpace(model, shifted).loglike(params) < reference
 
 
+@pytest.mark.parametrize("variation", ["independent", "random_walk", "both", "smooth"])
+def test_state_only_smoother_gives_statsmodels_smoothed_states(short_sim, variation):
+    """``RecordStateSpace.smoothed_state`` (the re-placement of the cycle starts uses it) is the full smoother's
+    state mean, with the phase template's timing states too, and leaves the model as it found it."""
+    sim = short_sim
+    y = acceleration(sim)
+    template = np.array([0.0, -0.2, 0.1, 0.1, 0.05, 0.03, 0.0, 0.01, 0.0])
+    model = RecordModel(sim.record.time, y, estimate_timing(sim.record.time, sim.record.force), variation=variation,
+                        regressors=(Regressor("offset", np.ones_like(y), dynamic=False),), phase_template=template)
+    params = model.start_params(2.3, 0.25, -2.0)
+    params[-2:] = -3.0, 0.0
+    ssm = RecordStateSpace(model, model.filter(params)["delta"])
+    full = ssm.smooth(params, cov_type="none").smoothed_state
+    state = ssm.smoothed_state(params)
+    assert state.shape == full.shape and np.allclose(state, full, rtol=1e-10, atol=1e-12 * np.abs(full).max())
+    assert ssm.ssm.filter_concentrated and ssm.loglike(params) == pytest.approx(model.loglike(params), rel=1e-9)
+
+
 def test_maximum_likelihood_recovers_the_person_with_true_cycle_starts(long_sim):
     """With the true force-cycle boundaries, f_h and xi_h come back within their intervals and a few percent."""
     sim = long_sim

@@ -431,7 +431,7 @@ def corrected_timing(model: RecordModel, params) -> CycleTiming:
     from .statespace import RecordStateSpace
 
     fitted = model.filter(params)
-    smoothed = RecordStateSpace(model, fitted["delta"]).smooth(params, cov_type="none").smoothed_state
+    smoothed = RecordStateSpace(model, fitted["delta"]).smoothed_state(params)
     cycle = model._phase[0]
     p = model.n_coefficients
     b = model.timing.boundaries

@@ -163,3 +163,25 @@ class RecordStateSpace(MLEModel):
             cov[alpha, alpha] = D
         self.ssm.initialize_known(mean, cov)
         return params
+
+    def smoothed_state(self, params) -> np.ndarray:
+        """The smoothed state means at ``params``, shape ``(k_states, N)``: the smoother's state pass alone.
+
+        The same means as ``self.smooth(params).smoothed_state`` without the smoothed covariances,
+        disturbances and the results object: 35-50 % less time on a 30 s record (the cycle starts'
+        re-placement, :func:`~smd_statespace.person.fit.corrected_timing`, calls it six times per record).
+        The scale is not concentrated out here: statsmodels' state-only smoother (0.14-0.15) multiplies the
+        absent smoothed covariance by the concentrated scale and fails; every variance being relative to
+        ``sigma^2``, the means do not depend on it.
+        """
+        from statsmodels.tsa.statespace.kalman_smoother import SMOOTHER_STATE
+
+        self.update(params)
+        concentrated, output = self.ssm.filter_concentrated, self.ssm.smoother_output
+        self.ssm.filter_concentrated = False
+        self.ssm.set_smoother_output(SMOOTHER_STATE)
+        try:
+            return self.ssm.smooth().smoothed_state
+        finally:
+            self.ssm.filter_concentrated = concentrated
+            self.ssm.set_smoother_output(output)
