@@ -170,7 +170,7 @@ class RecordStateSpace(MLEModel):
         The same means as ``self.smooth(params).smoothed_state`` without the smoothed covariances,
         disturbances and the results object: 35-50 % less time on a 30 s record (the cycle starts'
         re-placement, :func:`~smd_statespace.person.fit.corrected_timing`, calls it six times per record).
-        The scale is not concentrated out here: statsmodels' state-only smoother (0.14-0.15) multiplies the
+        The scale is not concentrated out here: statsmodels' state-only smoother (0.15.0) multiplies the
         absent smoothed covariance by the concentrated scale and fails; every variance being relative to
         ``sigma^2``, the means do not depend on it.
         """
