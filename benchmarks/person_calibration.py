@@ -142,15 +142,19 @@ def rebuild(rows: pd.DataFrame, name: str, factors, by, floor: float) -> tuple:
     half = Z * np.hypot(sd, extra)
     low, high = est - half, est + half
     determined = ~rows[f"{name}_other_fail"].to_numpy() & (sd < DETERMINED_FRACTION * PRIOR_SD[name])
-    yard_low, yard_high = est - Z * PRIOR_SD[name], est + Z * PRIOR_SD[name]
-    low = np.where(determined, low, np.minimum(low, yard_low))
-    high = np.where(determined, high, np.maximum(high, yard_high))
-    # artefacts (whole search range) and disagreeing variation models: the library's widening as recorded
+    return (*widen(rows, name, low, high, determined), determined, sd)
+
+
+def widen(rows: pd.DataFrame, name: str, low, high, determined) -> tuple:
+    """``(low, high)`` as the library widens them: an undetermined answer's to at least the yardstick's width
+    around the estimate; artefacts (whole search range) and disagreeing variation models as recorded."""
+    est = rows[f"{name}_est"].to_numpy()
+    low = np.where(determined, low, np.minimum(low, est - Z * PRIOR_SD[name]))
+    high = np.where(determined, high, np.maximum(high, est + Z * PRIOR_SD[name]))
     kept = rows[f"{name}_widened"].to_numpy() & (rows[f"{name}_other_fail"].to_numpy()
                                                  | rows["variations_disagree"].astype(bool).to_numpy())
-    low = np.where(kept, np.minimum(low, rows[f"{name}_low"]), low)
-    high = np.where(kept, np.maximum(high, rows[f"{name}_high"]), high)
-    return low, high, determined, sd
+    return (np.where(kept, np.minimum(low, rows[f"{name}_low"]), low),
+            np.where(kept, np.maximum(high, rows[f"{name}_high"]), high))
 
 
 def cell(rows, name, low, high, determined) -> dict:
@@ -311,18 +315,13 @@ def determined_rules(frame: pd.DataFrame) -> pd.DataFrame:
     sd, est, truth = (frame[c].to_numpy() for c in ("f_h_se", "f_h_est", "f_h"))
     error = np.abs(est / truth - 1.0)
     ok = ~frame["f_h_other_fail"].to_numpy()
-    narrow = ((frame["f_h_low_narrow"] <= truth) & (truth <= frame["f_h_high_narrow"])).to_numpy()
-    kept = frame["f_h_widened"].to_numpy() & (frame["f_h_other_fail"].to_numpy()
-                                              | frame["variations_disagree"].astype(bool).to_numpy())
+    narrow_low, narrow_high = frame["f_h_low_narrow"].to_numpy(), frame["f_h_high_narrow"].to_numpy()
+    narrow = (narrow_low <= truth) & (truth <= narrow_high)
     shipped = ok & (sd < DETERMINED_FRACTION * PRIOR_SD["f_h"])
     out = []
     for rule, share in RULES.items():
         determined = shipped if share is None else ok & (sd < share * est)
-        yard = Z * PRIOR_SD["f_h"]
-        low = np.where(determined, frame["f_h_low_narrow"], np.minimum(frame["f_h_low_narrow"], est - yard))
-        high = np.where(determined, frame["f_h_high_narrow"], np.maximum(frame["f_h_high_narrow"], est + yard))
-        low = np.where(kept, np.minimum(low, frame["f_h_low"]), low)
-        high = np.where(kept, np.maximum(high, frame["f_h_high"]), high)
+        low, high = widen(frame, "f_h", narrow_low, narrow_high, determined)
         covered = (low <= truth) & (truth <= high)
         given, taken = determined & ~shipped, shipped & ~determined
         out.append({"rule": rule, "determined": int(determined.sum()),
