@@ -108,7 +108,8 @@ import math
 import numba
 import numpy as np
 
-from .kalman import BOTH, INDEPENDENT, RANDOM_WALK, SMOOTH, reset_covariance, rotate_pairs, state_size, step_rows
+from .kalman import (BOTH, INDEPENDENT, RANDOM_WALK, SMOOTH, reset_covariance, rotate_columns, rotate_pairs, state_size,
+                     step_rows)
 from .model import RecordModel
 
 __all__ = ["DYNAMICS_STEP", "score", "system_derivatives", "sensitivity_pass"]
@@ -231,6 +232,7 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
     dP = np.zeros((m, k, m))  # dP[:, j, :]: the derivative of P w.r.t. parameter j (rows of all j together)
     km = k * m
     dPf = dP.reshape((m, km))
+    dPc = dP.reshape((km, m))
     for i in range(nx):
         x[i] = delta[i]
     # the start, as augmented_pass's
@@ -364,6 +366,10 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                 x[a] = xn[a]
             if code == SMOOTH:  # the coefficients' smooth deviations: pairs (nx + i, nx + p + i)
                 f00, f01, f10, f11 = smooth_phi[0, 0], smooth_phi[0, 1], smooth_phi[1, 0], smooth_phi[1, 1]
+                # S dP_j S' for every parameter at once: the pairs' rows of dP (contiguous over all j), then
+                # their columns (the rows of dP seen as (m k, m))
+                rotate_pairs(dPf, n_template, nx, nx + p, f00, f01, f10, f11, False)
+                rotate_columns(dPc, n_template, nx, nx + p, f00, f01, f10, f11)
                 for j in range(k):
                     e00, e01, e10, e11 = d_sphi[j, 0, 0], d_sphi[j, 0, 1], d_sphi[j, 1, 0], d_sphi[j, 1, 1]
                     if has_smooth_d[j]:  # dS P S' + S P dS' (dS: the pairs' rows only), dS x, the template's input
@@ -374,7 +380,6 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
                                 Vs[a, c] = e00 * P[a, c] + e01 * P[b, c]
                                 Vs[b, c] = e10 * P[a, c] + e11 * P[b, c]
                         rotate_pairs(Vs.T, n_template, nx, nx + p, f00, f01, f10, f11, False)  # (dS P) S'
-                    rotate_pairs(dP[:, j, :], n_template, nx, nx + p, f00, f01, f10, f11, True)
                     rotate_pairs(dx[j].reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
                     if has_smooth_d[j]:
                         for a in range(m):
