@@ -186,6 +186,17 @@ def test_python_dash_m_version():
     assert done.stdout.strip() == f"smd-statespace {smd_statespace.__version__}"
 
 
+def test_starting_the_cli_loads_no_heavy_module():
+    """``--version``, ``--help`` and a bad option answer without scipy.signal, scipy.stats, matplotlib, statsmodels,
+    filterpy or numba (about 2 s of imports, docs/performance.md "Imports"): each command imports what it uses."""
+    heavy = ("scipy.signal", "scipy.stats", "matplotlib", "statsmodels", "filterpy", "numba")
+    code = ("import sys; import smd_statespace.cli.main; "
+            f"print(','.join(name for name in {heavy!r} if name in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == ""
+
+
 def console_script():
     here = Path(sys.executable).parent / ("smd-statespace.exe" if os.name == "nt" else "smd-statespace")
     return str(here) if here.exists() else shutil.which("smd-statespace")

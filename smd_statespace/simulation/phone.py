@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy import signal
 
 from ..errors import OptionError
 from ..io import G
@@ -53,6 +52,8 @@ def sensor_filter(acceleration, fs, fine) -> np.ndarray:
     It starts in its steady state at the first value: a real sensor's filter runs before the recording
     starts (started from zero, its start-up ringing alone moved an undetermined ``f_h`` by +165 % on a
     record of the smooth generator)."""
+    from scipy import signal  # imported here: with scipy.stats, ~1 s (the CLI imports this module to start)
+
     sos = signal.butter(SENSOR_FILTER_ORDER, SENSOR_BANDWIDTH * fs, fs=fine, output="sos")
     return signal.sosfilt(sos, acceleration, zi=signal.sosfilt_zi(sos) * acceleration[0])[0]
 
