@@ -52,8 +52,10 @@ person = person_accuracy.draw_people({records}, {seed}).iloc[{index}]
 record = person_accuracy.simulate(person, {generator!r}).record
 began = time.perf_counter()
 result = identify_person(record)
+import smd_statespace, os
 print(json.dumps({{"seconds": time.perf_counter() - began, "f_h": result.f_h, "xi_h": result.xi_h,
-                  "variation": result.model.variation}}))
+                  "variation": result.model.variation,
+                  "package": os.path.dirname(smd_statespace.__file__)}}))
 """
 
 
@@ -62,8 +64,13 @@ def run(tree: Path, generator: str, index: int, records: int, seed: int) -> dict
     env = {**os.environ, "PYTHONPATH": str(tree.resolve()), "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
     code = CHILD.format(benchmarks=str(Path(__file__).resolve().parent), records=records, seed=seed, index=index,
                         generator=generator)
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    # -P: the working directory is not put first on the path (with "-c" it would be, and a run from a checkout
+    # would import the checkout's package whatever PYTHONPATH says); the child says which package it ran
+    out = subprocess.run([sys.executable, "-P", "-c", code], env=env, capture_output=True, text=True, check=True)
+    row = json.loads(out.stdout.strip().splitlines()[-1])
+    if Path(row["package"]).resolve() != (tree / "smd_statespace").resolve():
+        raise RuntimeError(f"the run for {tree} imported {row['package']}, not {tree / 'smd_statespace'}")
+    return row
 
 
 def main(argv=None) -> int:
