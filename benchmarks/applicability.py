@@ -1,4 +1,4 @@
-"""Is this bouncing? Refusals and warnings of :func:`smd_statespace.diagnostics.applicability.check_bouncing`, measured.
+"""Is this bouncing? Refusals and warnings of :func:`smd_statespace.applicability.check_bouncing`, measured.
 
 Runs the checks on stand-ins built from physics for records the SMD model
 does not describe (a countermovement jump, hopping, running, a squat,
@@ -28,7 +28,7 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from smd_statespace.diagnostics.applicability import check_bouncing  # noqa: E402
+from smd_statespace.applicability import check_bouncing  # noqa: E402
 from smd_statespace.io import G, make_record  # noqa: E402
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing  # noqa: E402
 

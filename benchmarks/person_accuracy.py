@@ -115,7 +115,7 @@ LEVEL = 0.9
 N_HARMONICS = 4
 GENERATORS = VARIATIONS
 CALIBRATED_ON = ("jumps", "smooth", "coefficients", "pulses", "tempo")
-"""The generators :data:`~smd_statespace.person.fit.CALIBRATION` and the model-error floor were measured on (the
+"""The generators :data:`~smd_statespace.person.calibration.CALIBRATION` and the model-error floor were measured on (the
 five of docs/person-calibration.md, on other people: seeds 2027-2028; before it ``jumps`` and ``smooth``), named,
 so that a generator added to the simulator later is marked held out (the method never saw it). The table
 *Calibrated on the others* holds each generator out in turn."""
@@ -276,12 +276,15 @@ def fit_row(person, generator, timing, sim, intervals, variation) -> dict:
         row["seconds"] = time.perf_counter() - start
         row["error"] = f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
         return row
+    from smd_statespace.person.calibration import CALIBRATION  # here: person_before_after.py imports this script
+    # to simulate records for trees older than the module
+
     (f_lo, f_hi), (x_lo, x_hi) = result.intervals["f_h"], result.intervals["xi_h"]
     row.update({
         "error": "",
         "f_h_est": result.f_h, "xi_h_est": result.xi_h, "f_h_se": float(result.se[0]), "xi_h_se": float(result.se[1]),
         # the sds before the calibration's factor (person_calibration.py measures factors on them)
-        **{f"{name}_raw_se": float(result.se[i]) / (person_fit.CALIBRATION[result.model.variation][name]
+        **{f"{name}_raw_se": float(result.se[i]) / (CALIBRATION[result.model.variation][name]
                                                     if intervals == "calibrated" else 1.0)
            for i, name in enumerate(("f_h", "xi_h"))},
         "f_h_low": float(f_lo), "f_h_high": float(f_hi), "xi_h_low": float(x_lo), "xi_h_high": float(x_hi),

@@ -2,8 +2,8 @@
 
 The default intervals of ``f_h`` and ``xi_h`` (``identify_person(intervals="calibrated")``)
 are the record's standard errors times a factor per variation model
-(:data:`~smd_statespace.person.fit.CALIBRATION`), widened by a model-error floor in
-quadrature (:data:`~smd_statespace.person.fit.MODEL_ERROR_FLOOR`), and replaced by the
+(:data:`~smd_statespace.person.calibration.CALIBRATION`), widened by a model-error floor in
+quadrature (:data:`~smd_statespace.person.calibration.MODEL_ERROR_FLOOR`), and replaced by the
 yardstick's width where the record does not determine the parameter. This study refits
 nothing: it reads the rows of ``person_accuracy.py`` runs (``--csv``; e.g. one run at
 ``--noise 0.01`` and one at ``--noise 0.003``) and, for each *scheme* of calibration and
@@ -36,7 +36,7 @@ Schemes:
   that show theirs; no floor;
 - ``by variation, floors held out``: factors per variation model and a floor per variation
   model, the largest any generator needs when it is left out (:func:`held_out_floors`):
-  the rule the library ships (``person.fit.MODEL_ERROR_FLOOR``).
+  the rule the library ships (``person.calibration.MODEL_ERROR_FLOOR``).
 - ``by variation and noise level, floors held out``: the same with factors per variation model
   and per the simulated noise level (the true one: an upper bound on what the record's
   estimated noise could give).

@@ -3,9 +3,9 @@
 ``identify_person`` (its defaults: ``variation="auto"``, ``timing="model"``) fits each variation
 model of :data:`~smd_statespace.person.fit.AUTO_VARIATIONS` at the first cycle timing, then
 with a phase template at the cycle starts it re-places from its own fit
-(:data:`~smd_statespace.person.fit.TIMING_ITERATIONS` times), keeps its best fit and refits
+(:data:`~smd_statespace.person.search.TIMING_ITERATIONS` times), keeps its best fit and refits
 it to full precision; the lowest AIC wins. This script runs it on simulated records
-(``person_accuracy.py``'s people and generators) with every :func:`~smd_statespace.person.fit.fit_model`
+(``person_accuracy.py``'s people and generators) with every :func:`~smd_statespace.person.search.fit_model`
 call and every re-placement of the cycle starts recorded (a wrapper for the run), and asks
 which of those fits the answer needs:
 
@@ -46,6 +46,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from smd_statespace.person import fit as person_fit  # noqa: E402
+from smd_statespace.person import search  # noqa: E402
+from smd_statespace.person.calibration import CALIBRATION  # noqa: E402
 from smd_statespace.person import identify_person  # noqa: E402
 
 import person_accuracy  # noqa: E402  (beside this script: its people and generators)
@@ -65,18 +67,18 @@ def _rms_shift(old, new) -> float:
 
 def run_record(task) -> list:
     """Identify one record with every fit and re-placement recorded; rows as dicts. ``task``: ``(person,
-    generator, quick_gain)``, ``quick_gain`` None for the library's :data:`~smd_statespace.person.fit.QUICK_GAIN`
+    generator, quick_gain)``, ``quick_gain`` None for the library's :data:`~smd_statespace.person.search.QUICK_GAIN`
     (an experiment's stop rule of the intermediate fits otherwise)."""
     person, generator, quick_gain = task
     if quick_gain is not None:
-        person_fit.QUICK_GAIN = quick_gain
+        search.QUICK_GAIN = quick_gain
     key = {"generator": generator, "record": int(person["record"])}
     try:
         record = person_accuracy.simulate(person, generator).record
     except Exception as exc:  # a simulation the simulator refuses (the person would leave the plate)
         return [{**key, "kind": "failed", "error": f"{type(exc).__name__}: {exc}"}]
     rows = []
-    fit_model, corrected_timing = person_fit.fit_model, person_fit.corrected_timing
+    fit_model, corrected_timing = search.fit_model, search.corrected_timing
 
     def recorded_fit(model, start=None, quick=False, method="scoring"):
         began = time.perf_counter()
@@ -96,17 +98,20 @@ def run_record(task) -> list:
                      "seconds": time.perf_counter() - began})
         return new
 
-    person_fit.fit_model, person_fit.corrected_timing = recorded_fit, recorded_timing
+    # identify_person makes the first fits (person.fit), the search the others (person.search): both recorded
+    person_fit.fit_model = search.fit_model = recorded_fit
+    search.corrected_timing = recorded_timing
     began = time.perf_counter()
     try:
         result = identify_person(record)
     except Exception as exc:  # a refusal is an answer too: recorded, the run goes on
         return rows + [{**key, "kind": "failed", "error": f"{type(exc).__name__}: {exc}"}]
     finally:
-        person_fit.fit_model, person_fit.corrected_timing = fit_model, corrected_timing
+        person_fit.fit_model = search.fit_model = fit_model
+        search.corrected_timing = corrected_timing
     seconds = time.perf_counter() - began
     # the sds before the calibration's factor (stricter than the reported ones)
-    raw = result.se[:2] / np.array([person_fit.CALIBRATION[result.model.variation][n] for n in ("f_h", "xi_h")])
+    raw = result.se[:2] / np.array([CALIBRATION[result.model.variation][n] for n in ("f_h", "xi_h")])
     rows.append({**key, "kind": "answer", "variation": result.model.variation, "f_h": result.f_h,
                  "xi_h": result.xi_h, "f_h_se": float(raw[0]), "xi_h_se": float(raw[1]),
                  "f_h_true": float(person["f_h"]), "xi_h_true": float(person["xi_h"]), "seconds": seconds})
@@ -264,7 +269,7 @@ def main(argv=None) -> int:
     parser.add_argument("--journal", type=Path, default=None, help="JSON lines of the rows; a rerun resumes it")
     parser.add_argument("--quick-gain", type=float, default=None, metavar="GAIN",
                         help="an experiment: the intermediate fits' stop rule (log-likelihood gained by the last "
-                             f"step; the library's: {person_fit.QUICK_GAIN:g})")
+                             f"step; the library's: {search.QUICK_GAIN:g})")
     parser.add_argument("--report", action="store_true", help="only print the tables of --journal")
     parser.add_argument("--against", type=Path, default=None, metavar="JOURNAL",
                         help="another run's journal (e.g. before a change): compare the answers on the same records")

@@ -1,6 +1,6 @@
 """Coverage of the record-level intervals on quiet and fast records (:func:`smd_statespace.person.identify_person`).
 
-``person.fit.CALIBRATION`` was measured on 30 s records at 100 Hz with 1 % BW
+``person.calibration.CALIBRATION`` was measured on 30 s records at 100 Hz with 1 % BW
 noise (``person_accuracy.py``). Real force plates are quieter and faster. This
 study simulates the same people (``person_accuracy.draw_people``) in four
 conditions, 100 Hz or 1000 Hz (decimated to 100 Hz by ``identify_person``)
@@ -15,7 +15,7 @@ Columns: coverage of ``f_h`` and ``xi_h``, without the model-error floor (the sa
 calibrated sds alone, as ``--floor 0,0`` would give) and with it; the median signed error of ``f_h``
 (%), which the noise level does not remove; the median calibrated sd of
 ``f_h`` (Hz); the share of records whose innovations pass the Ljung-Box test
-(p >= 0.01: no "the model misses something" warning). ``--floor F,X`` sets ``person.fit.MODEL_ERROR_FLOOR`` for the
+(p >= 0.01: no "the model misses something" warning). ``--floor F,X`` sets ``person.calibration.MODEL_ERROR_FLOOR`` for the
 run, for every variation model (relative for ``f_h``, absolute for ``xi_h``).
 
 Everything random comes from ``SeedSequence(--seed)`` through ``draw_people``;
@@ -37,7 +37,7 @@ from tqdm.auto import tqdm
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import person_accuracy  # noqa: E402  (draw_people: the same people as the accuracy study)
 
-from smd_statespace.person import fit as person_fit  # noqa: E402
+from smd_statespace.person import calibration as person_calibration  # noqa: E402
 from smd_statespace.person import identify_person  # noqa: E402
 from smd_statespace.simulation import simulate_bouncing  # noqa: E402
 
@@ -52,7 +52,7 @@ def one(task) -> dict:
     """Simulate and identify one record; never raises."""
     person, (label, fs, noise), generator, floor = task
     if floor is not None:
-        for floors in person_fit.MODEL_ERROR_FLOOR.values():  # the same floor for every variation model
+        for floors in person_calibration.MODEL_ERROR_FLOOR.values():  # the same floor for every variation model
             floors.update(f_h=floor[0], xi_h=floor[1])
     row = {"condition": label, "generator": generator, "record": int(person["record"]), "error": ""}
     blf = [person[f"blf{i}"] for i in range(1, 5)]
@@ -125,7 +125,7 @@ def main(argv=None) -> int:
         frame.to_csv(args.csv, index=False)
     used = (f"f_h {floor[0]:g} (relative), xi_h {floor[1]:g}" if floor else
             "; ".join(f"{v}: f_h {f['f_h']:g} (relative), xi_h {f['xi_h']:g}"
-                      for v, f in person_fit.MODEL_ERROR_FLOOR.items()))
+                      for v, f in person_calibration.MODEL_ERROR_FLOOR.items()))
     print(f"model-error floor: {used}; seed {args.seed}")
     print("\n".join(summary(frame)))
     for _, row in frame[frame["error"] != ""].iterrows():

@@ -58,6 +58,7 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 import argparse  # noqa: E402
+import importlib  # noqa: E402
 import platform  # noqa: E402
 import re  # noqa: E402
 import shlex  # noqa: E402
@@ -73,6 +74,7 @@ import numpy as np  # noqa: E402
 import smd_statespace  # noqa: E402
 from smd_statespace.io import write_record  # noqa: E402
 from smd_statespace.person import fit as person_fit  # noqa: E402
+from smd_statespace.person import search as person_search  # noqa: E402
 from smd_statespace.person import identify_person  # noqa: E402
 from smd_statespace.person import score as person_score  # noqa: E402
 from smd_statespace.person.model import RecordModel  # noqa: E402
@@ -90,12 +92,13 @@ BLF_FACTOR = (0.7, 1.3)
 DURATION, FS = 30.0, 100.0
 """Record length (s) and sampling rate (Hz)."""
 
-TIMED = (("searches", "fit_model"), ("timing", "corrected_timing"), ("information", "information"),
-         ("result", "person_result"))
-"""``(key, function of smd_statespace.person.fit)`` timed during ``identify_person``."""
+TIMED = (("searches", "fit", "fit_model"), ("searches", "search", "fit_model"), ("timing", "search", "corrected_timing"),
+         ("information", "answer", "information"), ("result", "fit", "person_result"))
+"""``(key, module of smd_statespace.person, function)`` timed during ``identify_person`` (a function is timed in
+each module that calls it: ``fit_model`` makes the first fits in ``fit``, the others in ``search``)."""
 
 IDENTIFY_IMPORTS = ("smd_statespace.cli", "smd_statespace.person", "smd_statespace.person.statespace",
-                    "smd_statespace.person.output", "smd_statespace.plotting.person")
+                    "smd_statespace.cli.person_output", "smd_statespace.plotting.person")
 """What ``identify REC --mass M`` imports before its first figure (the command, the fit, statsmodels' twin,
 the files and the figures)."""
 
@@ -198,8 +201,8 @@ def write_timers() -> Timers:
 
 def library_timers() -> Timers:
     timers = Timers()
-    for key, name in TIMED:
-        timers.wrap(person_fit, name, key)
+    for key, module, name in TIMED:
+        timers.wrap(importlib.import_module(f"smd_statespace.person.{module}"), name, key)
     timers.wrap(RecordModel, "filter", "loglike")  # every Kalman pass: a likelihood alone or under a score
     timers.wrap(person_score, "score", "score")  # passes with derivatives (each also one pass above)
     return timers
@@ -214,7 +217,7 @@ def warm_up(record) -> float:
     try:
         timing = estimate_timing(record.time, record.force)
         y = record.force / record.mass - G
-        for variation in getattr(person_fit, "AUTO_VARIATIONS", ("independent", "smooth")):
+        for variation in person_fit.AUTO_VARIATIONS:
             model = RecordModel(record.time, y, timing, variation=variation)
             model.loglike(model.start_params(2.5, 0.3))
     except Exception as exc:  # the warm-up is a courtesy: an API change must not stop the benchmark
@@ -224,7 +227,7 @@ def warm_up(record) -> float:
 
 def time_library(records, progress=print) -> list[dict]:
     """``identify_person`` on every record with the timers; then ``summary()`` and ``write_person``."""
-    from smd_statespace.person.output import write_person
+    from smd_statespace.cli.person_output import write_person
 
     rows = []
     with library_timers() as timers, tempfile.TemporaryDirectory() as scratch:
@@ -353,8 +356,8 @@ def time_diagnose(item, folder: Path) -> dict:
 
 def coarse_start(model):
     """The start ``fit_model`` picks by itself: the best of ``START_F_H`` x ``START_XI_H``."""
-    grid = [model.start_params(f, x) for f in getattr(person_fit, "START_F_H", (2.5,))
-            for x in getattr(person_fit, "START_XI_H", (0.3,))]
+    grid = [model.start_params(f, x) for f in person_search.START_F_H
+            for x in person_search.START_XI_H]
     return max(grid, key=model.loglike)
 
 
@@ -383,7 +386,7 @@ def compare_statsmodels(row) -> dict:
     model.loglike = counted  # an instance attribute: this model only, removed below
     try:
         started = time.perf_counter()
-        ours = person_fit.fit_model(model, start)
+        ours = person_search.fit_model(model, start)
         ours_seconds = time.perf_counter() - started
         ours_calls = max(calls[0], ours["n_evaluations"])  # scoring's passes carry derivatives (score), not loglike
     finally:
@@ -408,7 +411,7 @@ def compare_statsmodels(row) -> dict:
         sm_seconds = time.perf_counter() - started
     sm_params = np.asarray(fitted.params, dtype=float)
     try:
-        cov, _ = person_fit.information(model, params, "oim")
+        cov, _ = person_search.information(model, params, "oim")
         sd = np.sqrt(np.diag(cov))[:2]
         sd_source = "inverse observed information"
     except Exception:  # noqa: BLE001 - the calibrated sds of the result, if the information changed its form

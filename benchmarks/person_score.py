@@ -9,7 +9,7 @@ fastest of ``--repeats`` runs (one thread) of:
   default for linear dynamics, or central differences of ``system``), the sensitivity pass alone, and the whole
   :func:`score`;
 * ``k + 1`` likelihood evaluations (L-BFGS-B's 2-point gradient) and ``2 k`` (a central gradient);
-* once each: the numerical Hessian of :func:`~smd_statespace.person.fit.information` (``2 k^2`` evaluations)
+* once each: the numerical Hessian of :func:`~smd_statespace.person.search.information` (``2 k^2`` evaluations)
   and the per-cycle scores of the robust covariance (``_cluster_scores``: ``2 k`` evaluations), which
   :func:`score` gives (its expected information and its per-sample scores) from one pass.
 
@@ -40,7 +40,7 @@ import numpy as np  # noqa: E402
 from smd_statespace.io import G  # noqa: E402
 from smd_statespace.person import RecordModel, Regressor, estimate_timing  # noqa: E402
 from smd_statespace.person import kalman  # noqa: E402
-from smd_statespace.person.fit import _cluster_scores, information  # noqa: E402
+from smd_statespace.person.search import _cluster_scores, information  # noqa: E402
 from smd_statespace.person.score import score, sensitivity_pass, system_derivatives  # noqa: E402
 from smd_statespace.simulation import simulate_bouncing  # noqa: E402
 

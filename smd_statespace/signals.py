@@ -125,7 +125,7 @@ RECORD_RATE = 100.0
 Bouncing forces carry nothing above about 25 Hz (six harmonics of 3.5 Hz, floor modes of
 Table 3 below 20 Hz). The article's per-sample noise levels and random walk (Eq. 6) were
 set at its 100 Hz, and so was the calibration of the record-level intervals
-(:data:`smd_statespace.person.fit.CALIBRATION`); the cost grows with the samples (a 60 s
+(:data:`smd_statespace.person.calibration.CALIBRATION`); the cost grows with the samples (a 60 s
 record, record-level: 13 s at 100 Hz, 114 s at 1000 Hz).
 """
 

@@ -6,7 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from smd_statespace.diagnostics.applicability import NotBouncingError, check_bouncing
+from smd_statespace.applicability import NotBouncingError, check_bouncing
 from smd_statespace.cli import main
 from smd_statespace.io import G, make_record
 from smd_statespace.person import identify_person

@@ -12,7 +12,7 @@ from smd_statespace.cli import main
 from smd_statespace.errors import CycleError, SMDInputError
 from smd_statespace.io import G, make_record
 from smd_statespace.person import CycleTiming, RecordModel, Regressor, estimate_timing, identify_person
-from smd_statespace.person.fit import fit_model, information
+from smd_statespace.person.search import fit_model, information
 from smd_statespace.person.model import expm2
 from smd_statespace.person.results import PersonResult
 from smd_statespace.person.statespace import RecordStateSpace
@@ -180,7 +180,7 @@ def test_an_undetermined_f_h_gets_an_interval_as_wide_as_the_record_leaves_it(lo
     search range: never a narrow interval around a value the record does not give."""
     from scipy import stats
 
-    from smd_statespace.person.fit import undetermined_interval
+    from smd_statespace.person.answer import undetermined_interval
     from smd_statespace.person.results import PRIOR_SD
 
     sim = long_sim
@@ -209,7 +209,7 @@ def test_the_f_h_interval_spans_the_variation_models_the_record_cannot_rule_out(
     the interval spans both and the warning says so; a model ruled out (AIC 25 worse) or one that agrees leaves
     the interval as it was (the unseen-generator record of shared/findings: 2.10-2.26 and 2.84-3.69 Hz, truth
     2.45)."""
-    from smd_statespace.person.fit import honest_intervals
+    from smd_statespace.person.answer import honest_intervals
 
     sim = long_sim
     model = RecordModel(sim.record.time, acceleration(sim), true_timing(sim), variation="independent")
@@ -235,7 +235,7 @@ def test_a_model_that_misfits_the_record_does_not_determine_the_person(long_sim,
 
     from scipy import stats
 
-    from smd_statespace.person.fit import honest_intervals
+    from smd_statespace.person.answer import honest_intervals
     from smd_statespace.person.results import MISFIT_SHARE, PRIOR_SD
 
     assert long_fit.misfit_share < 0.2 * MISFIT_SHARE and not long_fit.misfit
@@ -433,7 +433,7 @@ def test_identify_warns_when_the_base_model_misses_an_effect_and_names_the_next_
 def test_wald_interval_is_symmetric_inside_the_bounds_and_ends_at_a_bound_it_would_cross():
     from scipy import stats
 
-    from smd_statespace.person.fit import wald_interval
+    from smd_statespace.person.calibration import wald_interval
     from smd_statespace.person.model import XI_H_BOUNDS
 
     z = stats.norm.ppf(0.95)
@@ -446,7 +446,8 @@ def test_wald_interval_is_symmetric_inside_the_bounds_and_ends_at_a_bound_it_wou
 
 @pytest.mark.slow
 def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys):
-    from smd_statespace.person.fit import AUTO_VARIATIONS, TIMING_ITERATIONS
+    from smd_statespace.person.fit import AUTO_VARIATIONS
+    from smd_statespace.person.search import TIMING_ITERATIONS
 
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=30, fs=1000.0, seed=11)
     capsys.readouterr()
@@ -471,7 +472,7 @@ def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys):
 def test_calibrated_intervals_add_the_model_error_floor_and_the_sd_stays_the_records(long_fit):
     from scipy import stats
 
-    from smd_statespace.person.fit import MODEL_ERROR_FLOOR
+    from smd_statespace.person.calibration import MODEL_ERROR_FLOOR
 
     z = stats.norm.ppf(0.95)
     floors = MODEL_ERROR_FLOOR[long_fit.model.variation]

@@ -155,7 +155,7 @@ def params_of(model, **named):
 
 def relinearised_loglike(time, y, truth, beta, times=8):
     """The record-level log-likelihood at ``beta`` after re-linearising about the predicted path ``times`` times."""
-    from smd_statespace.person.extend import nominal_path
+    from smd_statespace.person.statespace import nominal_path
 
     model = cubic_model(time, y, nominal=np.zeros((time.size, 2)))
     params = params_of(model, f_h=truth["f_h"], xi_h=truth["xi_h"], beta_3=beta)

@@ -20,8 +20,8 @@ from smd_statespace.io import G
 from smd_statespace.model import SMDModel
 from smd_statespace.person import RecordModel, Regressor, estimate_timing
 from smd_statespace.person.dynamics import PersonDynamics
-from smd_statespace.person.extend import nominal_path
-from smd_statespace.person.fit import fit_model, information
+from smd_statespace.person.statespace import nominal_path
+from smd_statespace.person.search import fit_model, information
 from smd_statespace.person.score import score, system_derivatives
 from smd_statespace.simulation import simulate_bouncing
 
@@ -247,7 +247,7 @@ def test_scoring_reaches_the_maximum_the_difference_search_reaches(record, name)
     gradients finds from the same start (or higher), with a fraction of its passes, and it is a maximum. (The
     estimates themselves are not compared: where the difference search stops short of the maximum, e.g. xi_h
     0.23 sd away with a phase template on this 10 s record, scoring is the better answer.)"""
-    from smd_statespace.person.fit import fit_model
+    from smd_statespace.person.search import fit_model
 
     model = CASES[name](record)
     start = model.start_params(2.6, 0.3, -3.0)
@@ -267,12 +267,12 @@ def test_a_scoring_search_that_runs_out_of_steps_is_finished_by_lbfgs(record, mo
     from there and reaches the maximum scoring reaches with all its steps."""
     import functools
 
-    from smd_statespace.person import fit
+    from smd_statespace.person import search
 
     model = CASES["independent"](record)
     start = model.start_params(2.6, 0.3, -3.0)
-    full = fit.fit_model(model, start)
-    monkeypatch.setattr(fit, "_scoring", functools.partial(fit._scoring, max_iterations=1))
-    finished = fit.fit_model(model, start)
+    full = search.fit_model(model, start)
+    monkeypatch.setattr(search, "_scoring", functools.partial(search._scoring, max_iterations=1))
+    finished = search.fit_model(model, start)
     assert finished["converged"] and "then L-BFGS-B" in finished["message"]
     assert finished["loglike"] == pytest.approx(full["loglike"], abs=1e-2)

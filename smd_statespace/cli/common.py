@@ -197,14 +197,14 @@ def add_check_argument(parser):
 
 
 def checked(record, args) -> list:
-    """Check that ``record`` is bouncing (:func:`~smd_statespace.diagnostics.applicability.check_bouncing`); print warnings.
+    """Check that ``record`` is bouncing (:func:`~smd_statespace.applicability.check_bouncing`); print warnings.
 
-    Raises :class:`~smd_statespace.diagnostics.applicability.NotBouncingError` (exit 2)
+    Raises :class:`~smd_statespace.applicability.NotBouncingError` (exit 2)
     for a refusal unless ``--ignore-checks``; returns the warnings.
     """
     import sys
 
-    from ..diagnostics.applicability import check_bouncing
+    from ..applicability import check_bouncing
 
     warnings = check_bouncing(record).raise_if_refused(override=getattr(args, "ignore_checks", False))
     for text in warnings:

@@ -158,7 +158,7 @@ def demo_person_section(record, out_dir, truth):
     Returns the text; writes ``person.json`` and the person's figures into ``out_dir/person``.
     """
     from ..person import identify_person
-    from ..person.output import write_person
+    from .person_output import write_person
     from .common import truth_values
 
     known = truth_values(truth)

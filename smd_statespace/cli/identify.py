@@ -238,7 +238,7 @@ def run_person(args) -> int:
     """``identify --estimator record``: the person from the whole record; person.json, results.csv, figures."""
     from ..person import identify_person
     from ..person.extend import check_effects
-    from ..person.output import write_person
+    from .person_output import write_person
 
     effects = build_model(args).effects  # an unknown effect or option: one line before anything is read
     record = read_person_record(args)

@@ -15,7 +15,7 @@ module                  what it holds
 The record-level diagnosis is :mod:`smd_statespace.person.diagnose`.
 """
 
-from .applicability import BouncingCheck, Finding, NotBouncingError, check_bouncing
+from ..applicability import BouncingCheck, Finding, NotBouncingError, check_bouncing
 from .check import INITIAL_STATES, ModelCheck, check_model, fit_percent
 from .missing import Candidate, Diagnosis, default_candidates, diagnose
 

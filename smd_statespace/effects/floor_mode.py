@@ -7,7 +7,8 @@ import numpy as np
 from .. import article
 from ..errors import OptionError
 from ..model.core import F_H, TWO_PI, XI_H, Slot
-from ..model.effect import Effect, _slot_count
+from ..model.effect import Effect, slot_count
+from .excitation import ambient_floor_excitation, ambient_line_count
 from .options import nonnegative, positive, positive_range, spec_value
 
 __all__ = ["FloorMode"]
@@ -51,7 +52,7 @@ class FloorMode(Effect):
     ``M_h / modal_mass`` with ``modal_mass`` 8583 kg), writes the floor
     acceleration as the record's ``floor_acc`` column (white noise of
     ``noise`` times its RMS), and adds ``ambient`` floor vibration from other
-    sources (see :func:`~smd_statespace.simulation.ambient_floor_excitation`).
+    sources (see :func:`~smd_statespace.effects.excitation.ambient_floor_excitation`).
 
     The simulated record starts in the coupled (person + floor) periodic
     steady state of the first cycle's force: with ``fb_variation=0`` and
@@ -472,7 +473,7 @@ class FloorMode(Effect):
         return jac
 
     def slot_rates(self, model, x, t, inputs, acc):
-        width = _slot_count(model, self)
+        width = slot_count(model, self)
         rates = np.zeros(x.shape[:-1] + (width,))
         if not width:
             return rates
@@ -486,7 +487,7 @@ class FloorMode(Effect):
         return rates
 
     def slot_rates_jacobian(self, model, x, t, inputs, acc, acc_jacobian):
-        width = _slot_count(model, self)
+        width = slot_count(model, self)
         jac = np.zeros(x.shape[:-1] + (width, x.shape[-1]))
         if not width:
             return jac
@@ -526,8 +527,6 @@ class FloorMode(Effect):
         return twin
 
     def draw_simulation_inputs(self, rng, duration):
-        from ..simulation.dynamics import ambient_floor_excitation, ambient_line_count
-
         f_f, xi_f = self.values["f_f"], self.values["xi_f"]
         phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(f_f, duration))
         self._excitation = ambient_floor_excitation(self.ambient, f_f, xi_f, duration, phases)

@@ -264,9 +264,9 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
     With ``estimator="record"`` the record gives one row: the person
     (:meth:`~smd_statespace.person.results.PersonResult.table_row`). With
     ``check`` a record that is not bouncing
-    (:func:`~smd_statespace.diagnostics.applicability.check_bouncing`) fails with the reason.
+    (:func:`~smd_statespace.applicability.check_bouncing`) fails with the reason.
     """
-    from ..diagnostics.applicability import check_bouncing
+    from ..applicability import check_bouncing
     from ..signals import RECORD_RATE
     from .runner import CycleRunner
 

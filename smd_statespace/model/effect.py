@@ -17,7 +17,7 @@ from ..errors import OptionError
 if TYPE_CHECKING:  # annotations only
     from .core import CycleInputs, SMDModel, Slot
 
-__all__ = ["Effect"]
+__all__ = ["Effect", "slot_count"]
 
 
 class Effect:
@@ -285,7 +285,7 @@ class Effect:
         ``acc`` is the total COM acceleration. The default (all zeros) makes
         every slot a random-walk parameter.
         """
-        return np.zeros(x.shape[:-1] + (_slot_count(model, self),))
+        return np.zeros(x.shape[:-1] + (slot_count(model, self),))
 
     def slot_rates_jacobian(self, model: "SMDModel", x, t, inputs: CycleInputs, acc, acc_jacobian):
         """Derivative of :meth:`slot_rates`, shape ``x.shape[:-1] + (len(slots), n_state)``.
@@ -297,7 +297,7 @@ class Effect:
         from .jacobians import JACOBIAN_STEP, expand_time, numeric_jacobian
 
         x = np.asarray(x, dtype=float)
-        width = _slot_count(model, self)
+        width = slot_count(model, self)
         if width == 0:
             return np.zeros(x.shape[:-1] + (0, x.shape[-1]))
         acc = np.asarray(acc, dtype=float)
@@ -313,7 +313,7 @@ class Effect:
         return f"{type(self).__name__}()"
 
 
-def _slot_count(model, effect) -> int:
+def slot_count(model, effect) -> int:
     """Number of state slots ``effect`` has in ``model`` (its known parameters left out)."""
     where = model.effect_slice(effect)
     return where.stop - where.start

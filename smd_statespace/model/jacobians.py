@@ -106,7 +106,7 @@ def check_jacobians(model, inputs=None, t=0.1, states=8, seed=0, scale=1.0) -> p
         relative to ``1 + |automatic|`` (about 1e-8 when they agree), and
         ``ok`` is True when both are below 1e-5.
     """
-    from .core import CycleInputs
+    from .inputs import CycleInputs
 
     inputs = CycleInputs(f_b=2.0) if inputs is None else inputs
     x = _states(model, states, seed, scale)
@@ -155,7 +155,7 @@ def check_linearity(model, inputs=None, t=0.1, states=4, seed=0, scale=1.0, rais
         With ``raise_error``, when an effect declares one of its own slots
         linear and the rate is not affine in it: the declaration is wrong.
     """
-    from .core import CycleInputs
+    from .inputs import CycleInputs
 
     inputs = CycleInputs(f_b=2.0) if inputs is None else inputs
     x = _states(model, states, seed, scale)

@@ -10,7 +10,8 @@ likelihood. Modules: :mod:`.timing` (force-cycle boundaries), :mod:`.dynamics`
 :mod:`.diagnose` (which effect is missing), :mod:`.results` (:class:`PersonResult`).
 """
 
-from .fit import FitError, identify_person
+from .fit import identify_person
+from .search import FitError
 from .model import RecordModel, Regressor
 from .results import PersonResult
 from .timing import CycleTiming, estimate_timing

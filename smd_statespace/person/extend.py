@@ -27,7 +27,7 @@ How an effect enters:
   discretisation;
 - nonlinear (a cubic spring, quadratic damping, asymmetric stiffness, any
   user's effect): linearised about the one-step predicted path of the
-  previous fit (:func:`nominal_path`) and fitted again about the new path
+  previous fit (:func:`~smd_statespace.person.statespace.nominal_path`) and fitted again about the new path
   until the log-likelihood changes by less than :data:`NOMINAL_TOLERANCE` (at
   most :data:`NOMINAL_ITERATIONS` times): at the fixed point, an extended
   Kalman filter inside the likelihood. Its likelihood is then approximate,
@@ -48,7 +48,7 @@ from .dynamics import PersonDynamics
 from .model import RecordModel
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "record_effects", "configured_for_record",
-           "split_effects", "record_signals", "effect_model", "fit_effects", "nominal_path"]
+           "split_effects", "record_signals", "effect_model", "fit_effects"]
 
 NOMINAL_ITERATIONS = 6
 """Most re-linearisations of a nonlinear effect about the new predicted path."""
@@ -163,31 +163,11 @@ def record_signals(record, model: SMDModel) -> dict:
     return {"floor_acc": acc, "floor_vel": vel, "floor_disp": disp}
 
 
-def nominal_path(model: RecordModel, params) -> np.ndarray:
-    """The one-step predicted dynamic states ``x_{t|t-1}``, shape ``(N, n_x)``, of ``model`` at ``params``.
-
-    The path a nonlinear effect is linearised about. It is causal: the value
-    at sample ``t`` depends on the measurements before ``t`` only, so the
-    linearised model's one-step predictions are predictions, and its
-    likelihood is a prediction-error likelihood (at the fixed point of the
-    re-linearisations, that of an extended Kalman filter). The smoothed path,
-    which the fit first used, depends on the measurement it predicts: on clean
-    records the re-linearised fit then ran away from the physics (a cubic
-    spring with likelihood ratio 184, ``f_h`` 2.30 -> 1.40 Hz, truth 2.36),
-    where about the predicted path the same record gives 1.8.
-    """
-    from .statespace import RecordStateSpace
-
-    delta = model.filter(params)["delta"]
-    filtered = RecordStateSpace(model, delta).filter(params, cov_type="none")
-    return filtered.predicted_state[:model.n_dynamic, :-1].T
-
-
 def effect_model(result, effects, path=None) -> RecordModel:
     """The record-level model of ``result`` (its timing, variation, regressors) with ``effects`` added.
 
     ``result`` is a fit without effects. A nonlinear effect's first nominal
-    path is the predicted dynamic states (:func:`nominal_path`) of ``path`` (default ``result``: its
+    path is the predicted dynamic states (:func:`~smd_statespace.person.statespace.nominal_path`) of ``path`` (default ``result``: its
     ``u``, ``u'``; a fit with some of ``effects`` already in, those first, gives
     theirs too); the states it does not have start at zero.
     """
@@ -197,6 +177,8 @@ def effect_model(result, effects, path=None) -> RecordModel:
     dynamics = PersonDynamics(smd, base.time, record_signals(result.record, smd))
     nominal = None
     if not dynamics.linear:
+        from .statespace import nominal_path  # statsmodels: imported when an effect is linearised
+
         nominal = np.zeros((base.time.size, dynamics.n_dynamic))
         nominal[:, :path.model.n_dynamic] = nominal_path(path.model, path.params)
     template = base.phase_template
@@ -275,7 +257,8 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
         With ``before`` (``result``), ``effects`` and ``linearisations`` (how
         many paths a nonlinear effect was linearised about; 0 when exact).
     """
-    from .fit import FitError, fit_model, person_result
+    from .answer import person_result
+    from .search import FitError, fit_model
 
     present = tuple(result.effects)
     added = check_effects([configured_for_record(effect, result) for effect in effects], result.record)
@@ -319,7 +302,8 @@ def _settle_path(model: RecordModel, fitted, progress=False) -> tuple:
 
     Returns ``(model, fitted, linearisations, settled)``; a linear model comes back as it is (0, True).
     """
-    from .fit import fit_model
+    from .search import fit_model
+    from .statespace import nominal_path
 
     linearisations, settled = 0, True
     with tqdm(total=NOMINAL_ITERATIONS, desc="effects (record)", unit="fit", disable=not progress or not
@@ -342,14 +326,14 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
     """Re-place the cycle starts and choose the variation model again, with the effects in the model.
 
     The same procedure as :func:`~smd_statespace.person.fit.identify_person`'s
-    (:func:`~smd_statespace.person.fit._choose_with_own_timing`) over the
+    (:func:`~smd_statespace.person.search.choose_with_own_timing`) over the
     variation models ``result`` compared, started at ``result``'s cycle starts:
     ``model`` (``result``'s variation, fitted as ``fitted``) from its fit, the
     others from the coarse start search. Returns ``(model, fitted, rows)``,
     ``rows`` for the result's ``comparison``, each marked with the effects'
     specs.
     """
-    from .fit import TIMING_ITERATIONS, _choose_with_own_timing, fit_model
+    from .search import TIMING_ITERATIONS, choose_with_own_timing, fit_model
 
     def model_for(timing_, variation_, template):
         return replace(model, timing=timing_, variation=variation_, phase_template=template)
@@ -368,7 +352,7 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
                 fits.append((other, fit_model(other, quick=True)))
             bar.update()
         first = variations.index(model.variation)
-        chosen, chosen_fit, rows = _choose_with_own_timing(model_for, model.timing, fits, first, bar.update)
+        chosen, chosen_fit, rows = choose_with_own_timing(model_for, model.timing, fits, first, bar.update)
     specs = [effect.spec for effect in effects]
     rows = [{**row, "effects": specs} for row in rows]
     return chosen, chosen_fit, rows

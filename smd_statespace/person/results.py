@@ -25,6 +25,7 @@ import pandas as pd
 from scipy import stats
 
 from ..io import G
+from .calibration import model_error_floor
 from .model import RecordModel
 
 __all__ = ["PersonResult", "DETERMINED_FRACTION", "MISFIT_SHARE", "PRIOR_SD"]
@@ -138,7 +139,7 @@ class PersonResult:
     n_evaluations : int
         Likelihood evaluations of the search.
     record_warnings : list of str
-        What the checks of :func:`~smd_statespace.diagnostics.applicability.check_bouncing`
+        What the checks of :func:`~smd_statespace.applicability.check_bouncing`
         found in the record before the fit (first in :attr:`warnings`).
     notes : list of str
         What was done to the record before the fit (decimation), in words.
@@ -158,7 +159,7 @@ class PersonResult:
         model, where :meth:`effect_test` compares the two (None: :attr:`loglike`, the starts kept).
     narrow_intervals : dict
         The calibrated intervals of ``f_h`` and ``xi_h`` as the record's information gives them,
-        before :func:`~smd_statespace.person.fit.honest_intervals` widened them (empty for other
+        before :func:`~smd_statespace.person.answer.honest_intervals` widened them (empty for other
         interval methods); :attr:`intervals` are the ones to read.
     """
 
@@ -242,7 +243,7 @@ class PersonResult:
         out: they weight the template's least squares but hardly move it.
 
         When ``f_h`` or ``xi_h`` has an interval wider than its information says (not determined, an
-        artefact, a misfit: :func:`~smd_statespace.person.fit.honest_intervals`), the linear ``sd`` does
+        artefact, a misfit: :func:`~smd_statespace.person.answer.honest_intervals`), the linear ``sd`` does
         not hold across it: the template is concentrated again at a grid across the person's intervals
         (:data:`BLF_GRID`) and ``low``, ``high`` span what it gives; a BLF whose interval is then wider
         than its value is ``determined`` False (said in :attr:`warnings`). (On a record whose force drifts,
@@ -261,8 +262,6 @@ class PersonResult:
 
     def _parameter_cov_for_blf(self) -> np.ndarray:
         """:attr:`cov` with the model-error floor of ``f_h`` and ``xi_h`` added, as the intervals have it."""
-        from .fit import model_error_floor
-
         cov = np.array(self.cov, dtype=float)
         if self.interval_method.startswith("calibrated"):
             for which, name in enumerate(("f_h", "xi_h")):
@@ -411,10 +410,10 @@ class PersonResult:
         """One-step predicted dynamic states (``u`` in m, ``u'`` in m/s, then any effect's), shape (N, n_x).
 
         The path a nonlinear effect is linearised about
-        (:func:`~smd_statespace.person.extend.nominal_path`); an effect's
+        (:func:`~smd_statespace.person.statespace.nominal_path`); an effect's
         :meth:`record_default <smd_statespace.model.Effect.record_default>` may read its size.
         """
-        from .extend import nominal_path
+        from .statespace import nominal_path  # statsmodels: imported when a path is asked for
 
         return nominal_path(self.model, self.params)
 

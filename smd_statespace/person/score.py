@@ -16,7 +16,7 @@ relative to ``sigma^2``. At the maximiser ``(delta_hat, sigma2_hat)``
 (:meth:`RecordModel.filter`) ``dL/dtheta = dl/dtheta`` at fixed
 ``delta = delta_hat`` and ``sigma^2 = sigma2_hat``; the ``dl_k/dtheta``
 are the per-sample scores (their sum the gradient), the quantities
-:func:`~smd_statespace.person.fit._cluster_scores` builds by central
+:func:`~smd_statespace.person.search._cluster_scores` builds by central
 differences of :meth:`RecordModel.sample_loglike`.
 
 *Fixed ``delta``.* With ``delta`` known the augmented (de Jong) filter of
@@ -75,7 +75,7 @@ parameters (``profile_information``: the Schur complement, with
 is *not* usable for ``f_h`` and ``xi_h``: the template absorbs much of a
 change of the dynamics, and it gives standard errors 0.1-0.2 times those
 of the observed information (the Hessian of
-:func:`~smd_statespace.person.fit.information`). The second agrees with
+:func:`~smd_statespace.person.search.information`). The second agrees with
 the observed information: ratios of the ``f_h``, ``xi_h`` standard
 errors 0.98, 0.94 on the fitted sample record (``data/sample.csv``,
 "independent"), 0.84-1.06 on six simulated 12 s records, 0.75-1.16 with
@@ -772,7 +772,7 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
         the profile likelihood and *not usable as the observed information*:
         on fitted records its standard errors of ``f_h`` and ``xi_h`` are
         0.1-0.2 times those of the observed information (the numerical
-        Hessian of :func:`~smd_statespace.person.fit.information`);
+        Hessian of :func:`~smd_statespace.person.search.information`);
         ``profile_information`` (k, k): the same expected information of
         ``(theta, delta, sigma^2)`` with ``delta`` and ``sigma^2`` as
         nuisance parameters, ``I_tt - I_td I_dd^-1 I_dt - I_ts I_ss^-1 I_st``

@@ -20,7 +20,8 @@ module              what it holds
 from .bouncing import (DEFAULT_BLF, GRF_PHASE_LAG, SAMPLE_SETTINGS, SyntheticRecord, default_phases, sample_path,
                        sample_truth_path, simulate_bouncing, write_sample)
 from ..model import acceleration_frf
-from .dynamics import ambient_floor_excitation, ambient_line_count, integrate_response
+from ..effects.excitation import ambient_floor_excitation, ambient_line_count
+from .dynamics import integrate_response
 from .population import MASS_DISTRIBUTION, POPULATION_BOUNDS, sample_population
 
 __all__ = ["VARIATIONS", "SMOOTH_CORRELATION_CYCLES", "DEFAULT_BLF", "GRF_PHASE_LAG", "POPULATION_BOUNDS",

@@ -48,8 +48,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import SMDInputError
-from ..io import G, Record
+from .errors import SMDInputError
+from .io import G, Record
 
 __all__ = ["NotBouncingError", "Finding", "BouncingCheck", "check_bouncing"]
 
