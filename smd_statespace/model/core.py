@@ -55,7 +55,7 @@ shape ``(n_state,)`` or a particle cloud of shape ``(n_particles, n_state)``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
