@@ -162,7 +162,6 @@ def acceleration_frf(frequency, f_h, xi_h):
     return -(omega**2) / (omega_h**2 - omega**2 + 2j * xi_h * omega_h * omega)
 
 
-
 # ---------------------------------------------------------------------------
 # effects
 
