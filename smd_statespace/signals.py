@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import CycleError, MassError, OptionError, RecordError
+from .errors import CycleError, MassError, OptionError, RecordError, check_range
 from .io import G, Record
 
 __all__ = [
@@ -486,17 +486,6 @@ class Cycle:
         return slice(self.start, self.stop + 1)
 
 
-def _check_fb_range(fb_range) -> tuple[float, float]:
-    """Return ``fb_range`` as a pair of floats ``0 < lo < hi`` or raise OptionError."""
-    try:
-        lo, hi = (float(value) for value in fb_range)
-    except (TypeError, ValueError):
-        raise OptionError(f"fb_range={fb_range!r} must be a pair (low, high) of frequencies in Hz") from None
-    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo < hi):
-        raise OptionError(f"fb_range=({lo:g}, {hi:g}) Hz must satisfy 0 < low < high")
-    return lo, hi
-
-
 def _bouncing_period(force: np.ndarray, fs: float, fb_hi: float) -> float | None:
     """Dominant repetition period (s) of the force from its autocorrelation, or None.
 
@@ -583,7 +572,7 @@ def find_cycles(time, force, fb_range=SUPPORTED_FB, *, source=None, prominence=P
     flags the cycles around it.
     """
     label = f"{source}: " if source else ""
-    lo, hi = _check_fb_range(fb_range)
+    lo, hi = check_range(fb_range, "fb_range (Hz)", positive=True)
     if not (isinstance(prominence, (int, float)) and 0.0 < prominence < 1.0):
         raise OptionError(f"prominence={prominence!r} must be a fraction of the force range in (0, 1)")
     time, force = _checked_signals(time, force, label)

@@ -102,3 +102,38 @@ def test_structural_problems(tmp_path):
 
 def test_errors_are_value_errors():
     assert issubclass(RecordError, ValueError) and issubclass(MassError, ValueError)
+
+
+@pytest.mark.parametrize("value,options,problem", [
+    ((2.0, 1.0), {}, "must satisfy low < high"),
+    ((1.0, float("nan")), {}, "must satisfy low < high"),
+    ((1.0,), {}, "must be a pair (low, high)"),
+    ((1.0, 2.0, 3.0), {}, "must be a pair (low, high)"),
+    ("fast", {}, "must be a pair (low, high)"),
+    (None, {}, "must be a pair (low, high)"),
+    ((0.0, 2.0), {"positive": True}, "must satisfy 0 < low < high"),
+    ((-1.0, 2.0), {"minimum": 0.0}, "must not go below 0"),
+])
+def test_check_range_refuses_in_one_line_naming_the_option(value, options, problem):
+    from smd_statespace.errors import OptionError, check_range
+
+    with pytest.raises(OptionError) as info:
+        check_range(value, "floor_mode: frequency_range", **options)
+    message = str(info.value)
+    assert message.startswith("floor_mode: frequency_range ") and problem in message and "\n" not in message
+
+
+def test_check_range_gives_floats_and_is_the_check_of_every_range_option():
+    """One validator: the model's prior ranges, an effect's ranges and the pipeline's fb_range all refuse with its
+    words."""
+    from smd_statespace.effects import make_effect
+    from smd_statespace.errors import OptionError, check_range
+    from smd_statespace.model import SMDModel
+
+    assert check_range(("1", 2), "r") == (1.0, 2.0) and check_range([0.0, 1.0], "r", minimum=0.0) == (0.0, 1.0)
+    with pytest.raises(OptionError, match="xi_h_range must not go below 0"):
+        SMDModel(xi_h_range=(-0.1, 1.0))
+    with pytest.raises(OptionError, match="floor_mode: damping_range must satisfy 0 < low < high"):
+        make_effect("floor_mode:damping_range=0/0.1")
+    with pytest.raises(OptionError, match="cubic_stiffness: beta_range must satisfy low < high"):
+        make_effect("cubic_stiffness:beta_range=5/-5")

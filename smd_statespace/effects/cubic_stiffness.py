@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import OptionError
+from ..errors import check_range
 from ..model.core import F_H, TWO_PI, U, Slot
 from ..model.effect import Effect
-from .options import numbers, spec_value, with_values_spec
+from .options import spec_value, with_values_spec
 
 __all__ = ["CubicStiffness"]
 
@@ -40,10 +40,7 @@ class CubicStiffness(Effect):
     simulation_defaults = {"beta_3": 400.0}
 
     def __init__(self, beta_range=(-1000.0, 1000.0)):
-        low, high = numbers(beta_range, "beta_range", "cubic_stiffness", pair=True)
-        if not low < high:
-            raise OptionError(f"cubic_stiffness: beta_range must satisfy low < high, got {beta_range!r}")
-        self.beta_range = (low, high)
+        self.beta_range = check_range(beta_range, "cubic_stiffness: beta_range")
 
     def slots(self, model):
         low, high = self.beta_range

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from .. import article
-from ..errors import OptionError
+from ..errors import OptionError, check_range
 from ..model.core import F_H, TWO_PI, XI_H, Slot
 from ..model.effect import Effect, slot_count
 from .excitation import ambient_floor_excitation, ambient_line_count
-from .options import nonnegative, positive, positive_range, spec_value
+from .options import nonnegative, positive, spec_value
 
 __all__ = ["FloorMode"]
 
@@ -238,10 +238,12 @@ class FloorMode(Effect):
                 raise OptionError(f"{where}: frequency_spread must be a fraction below 1, got {spread!r}")
             frequency_range = (frequency * (1.0 - spread), frequency * (1.0 + spread))
         self.frequency = frequency
-        self.frequency_range = positive_range(frequency_range or defaults["frequency_range"], "frequency_range", where)
-        self.damping_range = positive_range(damping_range or defaults["damping_range"], "damping_range", where)
-        self.mass_ratio_range = positive_range(mass_ratio_range or defaults["mass_ratio_range"],
-                                                "mass_ratio_range", where)
+        self.frequency_range = check_range(frequency_range or defaults["frequency_range"],
+                                           f"{where}: frequency_range", positive=True)
+        self.damping_range = check_range(damping_range or defaults["damping_range"], f"{where}: damping_range",
+                                         positive=True)
+        self.mass_ratio_range = check_range(mass_ratio_range or defaults["mass_ratio_range"],
+                                            f"{where}: mass_ratio_range", positive=True)
         self.displacement = positive(defaults["displacement"] if displacement is None else displacement,
                                       "displacement (m)", where)
         self.velocity = positive(defaults["velocity"] if velocity is None else velocity, "velocity (m/s)", where)

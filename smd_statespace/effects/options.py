@@ -16,14 +16,14 @@ def with_values_spec(spec: str, effect) -> str:
     return spec + glue + ",".join(f"{key}={spec_value(value)}" for key, value in values.items())
 
 
-def numbers(value, label, where, pair=False):
-    """``value`` (a number or a sequence of numbers) as floats; ``pair``: exactly two."""
+def numbers(value, label, where):
+    """``value`` (a number or numbers) as finite floats; a range: :func:`~smd_statespace.errors.check_range`."""
     try:
         numbers = tuple(float(v) for v in np.atleast_1d(value))
     except (TypeError, ValueError):
-        raise OptionError(f"{where}: {label} must be {'a pair low/high' if pair else 'numbers'}, got {value!r}") from None
-    if not all(np.isfinite(numbers)) or (pair and len(numbers) != 2):
-        raise OptionError(f"{where}: {label} must be {'a pair low/high' if pair else 'finite numbers'}, got {value!r}")
+        raise OptionError(f"{where}: {label} must be numbers, got {value!r}") from None
+    if not all(np.isfinite(numbers)):
+        raise OptionError(f"{where}: {label} must be finite numbers, got {value!r}")
     return numbers
 
 
@@ -54,14 +54,3 @@ def positive(value, label, where):
     if not (np.isfinite(number) and number > 0):
         raise OptionError(f"{where}: {label} must be a positive number, got {value!r}")
     return number
-
-
-def positive_range(value, label, where):
-    """``value`` as a pair ``0 < low < high`` of floats, or an :class:`OptionError` naming ``label``."""
-    try:
-        low, high = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{where}: {label} must be a pair low/high, got {value!r}") from None
-    if not (np.isfinite(low) and np.isfinite(high) and 0 < low < high):
-        raise OptionError(f"{where}: {label} must satisfy 0 < low < high, got {value!r}")
-    return low, high

@@ -60,7 +60,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..errors import OptionError
+from ..errors import OptionError, check_range
 from ..io import G
 from .effect import Effect
 from .inputs import TWO_PI, CycleInputs
@@ -379,10 +379,10 @@ class SMDModel:
             discretisation=discretisation,
             substeps=int(substeps),
             observation=observation,
-            f_h_range=tuple(map(float, _check_range("f_h_range", f_h_range, 0.0))),
-            xi_h_range=tuple(map(float, _check_range("xi_h_range", xi_h_range, 0.0))),
-            coefficient_range=tuple(map(float, _check_range("coefficient_range", coefficient_range, None))),
-            a0_range=None if a0_range is None else tuple(map(float, _check_range("a0_range", a0_range, None))),
+            f_h_range=tuple(map(float, check_range(f_h_range, "f_h_range", minimum=0.0))),
+            xi_h_range=tuple(map(float, check_range(xi_h_range, "xi_h_range", minimum=0.0))),
+            coefficient_range=tuple(map(float, check_range(coefficient_range, "coefficient_range"))),
+            a0_range=None if a0_range is None else tuple(map(float, check_range(a0_range, "a0_range"))),
             process_noise=float(process_noise),
             observation_noise=float(observation_noise),
         )
@@ -787,15 +787,3 @@ class SMDModel:
 
 def _width(where: slice) -> int:
     return where.stop - where.start
-
-
-def _check_range(label, value, minimum):
-    try:
-        low, high = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{label} must be a pair (low, high), got {value!r}") from None
-    if not (np.isfinite(low) and np.isfinite(high) and low < high):
-        raise OptionError(f"{label} must satisfy low < high, got {value!r}")
-    if minimum is not None and low < minimum:
-        raise OptionError(f"{label} must not go below {minimum:g}, got {value!r}")
-    return low, high
