@@ -4,9 +4,38 @@ Session-scoped, so a record is simulated and a person identified once per test r
 modules use them. Plain helpers (no fixtures) are in ``helpers.py``.
 """
 
+from pathlib import Path
+
 import pytest
 
 from smd_statespace.simulation import simulate_bouncing
+
+SMOKE = {
+    # whole modules: records, checks, the model and its Jacobians, the pipeline, the layers
+    "test_io.py": None, "test_layers.py": None, "test_model.py": None, "test_jacobians.py": None,
+    "test_applicability.py": None, "test_signals.py": None, "test_suggestions.py": None,
+    # one test of each kind elsewhere: an estimator against the exact Kalman filter, the person's exact gradient
+    # and search, the command line's errors and start
+    "test_estimators.py": ("test_grid_equals_textbook_kalman_filter_on_linear_subcase",
+                           "test_kalman_type_filters_match_exact_filter_on_linear_subcase",
+                           "test_vectorised_ukf_equals_filterpy_loop", "test_bad_estimator_options"),
+    "test_person_score.py": ("test_gradient_is_the_derivative_of_the_profile_loglike[independent]",
+                             "test_a_broken_pass_gives_nan"),
+    "test_cli.py": ("test_version_and_help", "test_starting_the_cli_loads_no_heavy_module",
+                    "test_simulate_bad_inputs_are_one_line_errors", "test_simulate_writes_a_readable_record"),
+    "test_simulate.py": ("test_steady_state_harmonics_equal_eq2_frequency_response", "test_free_decay_matches",
+                         "test_grf_is_eq3"),
+}
+"""The smoke tier (``python -m pytest -m smoke``, under a minute): modules, or test-name prefixes in a module; never a
+test marked slow."""
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        chosen = SMOKE.get(Path(str(item.fspath)).name, ())
+        if item.get_closest_marker("slow") is None and (
+                chosen is None or any(item.name.startswith(prefix) for prefix in chosen)):
+            item.add_marker(pytest.mark.smoke)
 
 
 @pytest.fixture(scope="session")
