@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import shlex
 from dataclasses import dataclass, field
-from pathlib import Path
 from functools import cached_property
 
 import numpy as np
@@ -831,77 +830,18 @@ class PersonResult:
 
     # ------------------------------------------------------------------ figures
     def plot_diagnostics(self, path=None, lags=None):
-        """statsmodels' four-panel residual diagnostics of the standardised innovations; saved as PNG if ``path``."""
-        fig = self.statespace_results.plot_diagnostics(lags=lags or min(self.default_lags(), 40), figsize=(10, 7))
-        fig.suptitle(f"{Path(str(self.record.source)).name}: innovations of GRF/M - g (record-level model)")
-        series, correlogram = fig.axes[0], fig.axes[3]
-        time = self.model.time
-        for line in series.get_lines():  # statsmodels draws against the sample index: time in seconds instead
-            index = np.asarray(line.get_xdata(), dtype=float)
-            line.set_xdata(np.interp(index, np.arange(time.size), time))
-        series.set_xlim(time[0], time[-1])
-        series.set(xlabel="time (s)", title="standardised innovations")
-        correlogram.set(xlabel=f"lag (samples of {1.0 / self.record.fs:g} s)")
-        fig.subplots_adjust(hspace=0.35)  # room for the time axis' label above the Q-Q panel's title
-        if path is not None:
-            fig.savefig(path, dpi=110)
-        return fig
+        """statsmodels' four-panel residual diagnostics of the standardised innovations; saved as PNG if ``path``
+        (:func:`~smd_statespace.plotting.person.plot_person_diagnostics`)."""
+        from ..plotting.person import plot_person_diagnostics  # the result's own figure: matplotlib when drawn
+
+        return plot_person_diagnostics(self, path, lags)
 
     def plot_fit(self, path=None, seconds=3.0, truth=None):
-        """Measured against one-step predicted ``GRF / M_h - g`` where the fit is best and worst, and every cycle's BLFs.
+        """Measured against one-step predicted ``GRF / M_h - g`` where the fit is best and worst, and every cycle's
+        BLFs (:func:`~smd_statespace.plotting.person.plot_person_fit`); saved as PNG if ``path``."""
+        from ..plotting.person import plot_person_fit  # the result's own figure: matplotlib when drawn
 
-        The two windows of ``seconds`` are those with the smallest and the largest RMS innovation
-        (at 100 Hz a one-step prediction looks good almost everywhere: the worst window shows where
-        it does not). The template's BLFs are drawn with their intervals at :attr:`level` (sds with
-        the person's uncertainty, :meth:`template_blf`). ``truth`` (flat keys ``f_h``, ``xi_h``,
-        ``blf_1``, ..., as :func:`~smd_statespace.io.truth_values` gives them) is drawn as dashed
-        lines and named in the title.
-        """
-        truth = dict(truth or {})
-        from matplotlib.figure import Figure
-
-        _, raw = self.model.innovations(self.params, self.filtered)
-        t, y = self.model.time, self.model.y
-        width = max(1, min(int(round(seconds * self.record.fs)), t.size))
-        power = np.convolve(raw**2, np.ones(width) / width, mode="valid")  # mean square over each window
-        worst = int(np.argmax(power))
-        apart = np.abs(np.arange(power.size) - worst) >= width  # the best window does not overlap the worst
-        best = int(np.argmin(np.where(apart, power, np.inf))) if apart.any() else int(np.argmin(power))
-        fig = Figure(figsize=(11, 6.8), layout="constrained")
-        grid = fig.add_gridspec(2, 2)
-        known = (f" (truth {truth['f_h']:.2f} Hz, {truth['xi_h']:.2f})" if {"f_h", "xi_h"} <= set(truth) else "")
-        fig.suptitle(f"{Path(str(self.record.source)).name}: f_h {self.f_h:.2f} Hz, xi_h {self.xi_h:.2f}{known}")
-        for column, (first, label) in enumerate(((best, "best"), (worst, "worst"))):
-            ax = fig.add_subplot(grid[0, column])
-            window = slice(first, first + width)
-            ax.plot(t[window], y[window], color="0.3", lw=1.2, label="measured")
-            ax.plot(t[window], (y - raw)[window], color="C1", lw=1.0, label="predicted one step ahead")
-            ax.plot(t[window], raw[window], color="C3", lw=0.8, label="innovation")
-            for b in self.model.timing.boundaries:
-                if t[window][0] <= b <= t[window][-1]:
-                    ax.axvline(b, color="0.8", lw=0.6, zorder=0)
-            rms = float(np.sqrt(power[first]))
-            ax.set(xlabel="time (s)", ylabel="GRF/M - g (m/s$^2$)" if column == 0 else None,
-                   title=f"{label} {seconds:g} s: RMS innovation {rms:.3f} m/s$^2$ (grey: cycle starts)")
-            if column == 0:
-                ax.legend(loc="upper right", fontsize=7, ncol=3)
-        bx = fig.add_subplot(grid[1, :])
-        cycles = self.cycles
-        blf = self.template_blf()
-        for i in range(1, self.model.n_harmonics + 1):
-            bx.errorbar(cycles["t_start"], cycles[f"blf_{i}"], yerr=cycles[f"blf_{i}_sd"], fmt="o", ms=3,
-                        color=f"C{i - 1}", label=f"BLF{i}")
-            bx.axhline(blf.loc[i, "blf"], color=f"C{i - 1}", lw=0.8)
-            bx.axhspan(blf.loc[i, "low"], blf.loc[i, "high"], color=f"C{i - 1}", alpha=0.12, lw=0)
-            if f"blf_{i}" in truth:
-                bx.axhline(truth[f"blf_{i}"], color=f"C{i - 1}", lw=1.0, ls="--")
-        bx.set(xlabel="cycle start (s)", ylabel="BLF (g)",
-               title=f"every cycle's load factors (smoother); lines and bands: template, {self.level:.0%} interval"
-               + ("; dashed: truth" if any(k.startswith("blf_") for k in truth) else ""))
-        bx.legend(loc="upper right", fontsize=8, ncol=4)
-        if path is not None:
-            fig.savefig(path, dpi=110)
-        return fig
+        return plot_person_fit(self, path, seconds, truth)
 
 
 def _unit(unit: str) -> str:

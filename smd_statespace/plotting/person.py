@@ -1,5 +1,9 @@
-"""Figures of a record-level person: where the model fails, and what an added effect changed.
+"""Figures of a record-level person: how it fits, where the model fails, and what an added effect changed.
 
+- :func:`plot_person_fit`: measured against one-step predicted COM acceleration where the fit
+  is best and worst, and every cycle's load factors (``PersonResult.plot_fit``);
+- :func:`plot_person_diagnostics`: statsmodels' residual diagnostics of the innovations, against
+  time (``PersonResult.plot_diagnostics``);
 - :func:`plot_spectrum`: the innovations' spectrum with the multiples of the
   bouncing frequency marked, without and with the effects;
 - :func:`plot_compare`: measured against free-run simulated COM acceleration
@@ -19,7 +23,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy import signal
 
-__all__ = ["free_run", "fit_percent", "plot_spectrum", "plot_compare", "plot_floor_correlation"]
+__all__ = ["free_run", "fit_percent", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
+           "plot_floor_correlation"]
 
 COLORS = {"without": "tab:red", "with": "tab:blue"}
 
@@ -174,4 +179,73 @@ def plot_floor_correlation(result, path=None, max_lag: float = 1.0) -> Figure:
     ax.set(xlabel="lag of the floor acceleration (s)", ylabel="correlation")
     ax.legend(fontsize=8, loc="upper right")
     ax.set_title(f"{_name(result)}: innovations against the measured floor acceleration", fontsize=10)
+    return _save(fig, path)
+
+
+def plot_person_fit(result, path=None, seconds=3.0, truth=None) -> Figure:
+    """Measured against one-step predicted ``GRF / M_h - g`` where the fit is best and worst, and every cycle's BLFs.
+
+    The two windows of ``seconds`` are those with the smallest and the largest RMS innovation
+    (at 100 Hz a one-step prediction looks good almost everywhere: the worst window shows where
+    it does not). The template's BLFs are drawn with their intervals at the result's ``level`` (sds with the person's uncertainty,
+    :meth:`~smd_statespace.person.results.PersonResult.template_blf`). ``truth`` (flat keys ``f_h``, ``xi_h``,
+    ``blf_1``, ..., as :func:`~smd_statespace.io.truth_values` gives them) is drawn as dashed
+    lines and named in the title.
+    """
+    truth = dict(truth or {})
+    _, raw = result.model.innovations(result.params, result.filtered)
+    t, y = result.model.time, result.model.y
+    width = max(1, min(int(round(seconds * result.record.fs)), t.size))
+    power = np.convolve(raw**2, np.ones(width) / width, mode="valid")  # mean square over each window
+    worst = int(np.argmax(power))
+    apart = np.abs(np.arange(power.size) - worst) >= width  # the best window does not overlap the worst
+    best = int(np.argmin(np.where(apart, power, np.inf))) if apart.any() else int(np.argmin(power))
+    fig = Figure(figsize=(11, 6.8), layout="constrained")
+    grid = fig.add_gridspec(2, 2)
+    known = (f" (truth {truth['f_h']:.2f} Hz, {truth['xi_h']:.2f})" if {"f_h", "xi_h"} <= set(truth) else "")
+    fig.suptitle(f"{_name(result)}: f_h {result.f_h:.2f} Hz, xi_h {result.xi_h:.2f}{known}")
+    for column, (first, label) in enumerate(((best, "best"), (worst, "worst"))):
+        ax = fig.add_subplot(grid[0, column])
+        window = slice(first, first + width)
+        ax.plot(t[window], y[window], color="0.3", lw=1.2, label="measured")
+        ax.plot(t[window], (y - raw)[window], color="C1", lw=1.0, label="predicted one step ahead")
+        ax.plot(t[window], raw[window], color="C3", lw=0.8, label="innovation")
+        for b in result.model.timing.boundaries:
+            if t[window][0] <= b <= t[window][-1]:
+                ax.axvline(b, color="0.8", lw=0.6, zorder=0)
+        rms = float(np.sqrt(power[first]))
+        ax.set(xlabel="time (s)", ylabel="GRF/M - g (m/s$^2$)" if column == 0 else None,
+               title=f"{label} {seconds:g} s: RMS innovation {rms:.3f} m/s$^2$ (grey: cycle starts)")
+        if column == 0:
+            ax.legend(loc="upper right", fontsize=7, ncol=3)
+    bx = fig.add_subplot(grid[1, :])
+    cycles = result.cycles
+    blf = result.template_blf()
+    for i in range(1, result.model.n_harmonics + 1):
+        bx.errorbar(cycles["t_start"], cycles[f"blf_{i}"], yerr=cycles[f"blf_{i}_sd"], fmt="o", ms=3,
+                    color=f"C{i - 1}", label=f"BLF{i}")
+        bx.axhline(blf.loc[i, "blf"], color=f"C{i - 1}", lw=0.8)
+        bx.axhspan(blf.loc[i, "low"], blf.loc[i, "high"], color=f"C{i - 1}", alpha=0.12, lw=0)
+        if f"blf_{i}" in truth:
+            bx.axhline(truth[f"blf_{i}"], color=f"C{i - 1}", lw=1.0, ls="--")
+    bx.set(xlabel="cycle start (s)", ylabel="BLF (g)",
+           title=f"every cycle's load factors (smoother); lines and bands: template, {result.level:.0%} interval"
+           + ("; dashed: truth" if any(k.startswith("blf_") for k in truth) else ""))
+    bx.legend(loc="upper right", fontsize=8, ncol=4)
+    return _save(fig, path)
+
+
+def plot_person_diagnostics(result, path=None, lags=None) -> Figure:
+    """statsmodels' four-panel residual diagnostics of the standardised innovations; saved as PNG if ``path``."""
+    fig = result.statespace_results.plot_diagnostics(lags=lags or min(result.default_lags(), 40), figsize=(10, 7))
+    fig.suptitle(f"{_name(result)}: innovations of GRF/M - g (record-level model)")
+    series, correlogram = fig.axes[0], fig.axes[3]
+    time = result.model.time
+    for line in series.get_lines():  # statsmodels draws against the sample index: time in seconds instead
+        index = np.asarray(line.get_xdata(), dtype=float)
+        line.set_xdata(np.interp(index, np.arange(time.size), time))
+    series.set_xlim(time[0], time[-1])
+    series.set(xlabel="time (s)", title="standardised innovations")
+    correlogram.set(xlabel=f"lag (samples of {1.0 / result.record.fs:g} s)")
+    fig.subplots_adjust(hspace=0.35)  # room for the time axis' label above the Q-Q panel's title
     return _save(fig, path)
