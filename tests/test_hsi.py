@@ -7,7 +7,8 @@ import pytest
 from smd_statespace import OptionError, article
 from smd_statespace.cli import main
 from smd_statespace.simulation.floor import FloorModel, coupled_frf, coupled_response, simulate_on_floor
-from smd_statespace.studies.hsi import HSIStudy, hsi_study, plot_floor, plot_parameters, pooled_least_squares
+from smd_statespace.plotting.hsi import plot_floor, plot_parameters
+from smd_statespace.studies.hsi import HSIStudy, hsi_study, pooled_least_squares
 from smd_statespace.io import G
 from smd_statespace.simulation import integrate_response, simulate_bouncing
 

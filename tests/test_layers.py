@@ -86,3 +86,17 @@ def test_the_private_name_check_finds_crossings(tmp_path):
     assert private_crossings(package) == ["smd_statespace/a/m.py:1: smd_statespace.b.n._x",
                                           "smd_statespace/a/m.py:2: smd_statespace.b.n._x",
                                           "smd_statespace/a/m.py:3: smd_statespace.b._hidden.z"]
+
+
+def test_matplotlib_is_imported_only_in_plotting():
+    """Every figure is drawn in plotting/ (a result's plot method calls it there): no other module imports matplotlib."""
+    outside = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if path.relative_to(PACKAGE).parts[0] == "plotting":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else [])
+            outside += [f"{path.relative_to(PACKAGE.parent)}:{node.lineno}" for name in names
+                        if name.split(".")[0] == "matplotlib"]
+    assert outside == []

@@ -39,7 +39,8 @@ def add_hsi(subparsers):
 
 def run_hsi(args) -> int:
     """Run ``smd-statespace hsi``."""
-    from ..studies.hsi import hsi_study, plot_floor, plot_parameters
+    from ..plotting.hsi import plot_floor, plot_parameters
+    from ..studies.hsi import hsi_study
 
     directory = out_dir(args.out)
     if not args.quiet:

@@ -51,7 +51,6 @@ import time as _time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -65,9 +64,6 @@ from .dynamics import _cycle_states, _simulation_effects, _System
 from .population import _population_columns, with_stiffness_and_damping
 from .variation import TRUNCATION_SD, _draw_cycles
 
-if TYPE_CHECKING:  # matplotlib is imported in plot_crowd: the command line's start does not load it (0.4 s)
-    from matplotlib.figure import Figure
-
 __all__ = [
     "CROWD_SETTINGS",
     "N_HARMONICS",
@@ -79,7 +75,6 @@ __all__ = [
     "draw_people",
     "periodic_grf_minimum",
     "simulate_crowd",
-    "plot_crowd",
 ]
 
 N_HARMONICS = 3
@@ -507,7 +502,10 @@ class Crowd:
         return csv_path, people_path
 
     def plot(self, path=None, n_people=3):
-        """Figure: a few people's GRFs, the total crowd force and its spectrum (:func:`plot_crowd`)."""
+        """Figure: a few people's GRFs, the total crowd force and its spectrum
+        (:func:`~smd_statespace.plotting.crowd.plot_crowd`)."""
+        from ..plotting.crowd import plot_crowd  # the crowd's own figure: matplotlib when drawn
+
         return plot_crowd(self, path, n_people)
 
 
@@ -716,62 +714,3 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
                     rejected_cycles=int(rejected["cycles"].sum()), effects=[effect.name for effect in checked])
     return Crowd(people=people, forces=frame, settings=settings, cycles=cycles,
                  seconds=_time.perf_counter() - started)
-
-
-def plot_crowd(crowd: Crowd, path=None, n_people=3, window=4.0) -> Figure:
-    """A few individual GRFs, the total crowd force, and the total's amplitude spectrum.
-
-    Parameters
-    ----------
-    crowd : Crowd
-    path : str or path-like, optional
-        PNG to write.
-    n_people : int
-        Individual GRFs drawn (the first ``n_people``), in body weights.
-    window : float
-        Seconds shown of the individual GRFs (from the start).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    from matplotlib.figure import Figure  # here, not at the top: only the figure needs matplotlib
-
-    s = crowd.settings
-    time = crowd.time
-    fig = Figure(figsize=(8.0, 7.2))
-    ax_people, ax_total, ax_spec = fig.subplots(3, 1)
-    shown = time <= window
-    for i in range(min(n_people, s["n"])):
-        person = crowd.people.iloc[i]
-        column = crowd.forces.columns[1 + i]
-        ax_people.plot(time[shown], crowd.forces[column].to_numpy()[shown] / person["weight"], lw=1.0,
-                       label=f"person {i}: {person['mass']:.0f} kg, $f_h$ {person['f_h']:.2f} Hz, "
-                             f"$\\xi_h$ {person['xi_h']:.2f}")
-    ax_people.set_ylabel("GRF / body weight")
-    ax_people.set_xlabel("time (s)")
-    ax_people.set_title(f"Individual GRFs (first {window:g} s)", fontsize=10)
-    low, high = ax_people.get_ylim()
-    ax_people.set_ylim(low, high + 0.45 * (high - low))  # room for the legend above the curves
-    ax_people.legend(fontsize=7, loc="upper center", ncol=min(n_people, 3))
-
-    ax_total.plot(time, crowd.total / 1000.0, lw=0.6, color="tab:red")
-    ax_total.axhline(crowd.weight / 1000.0, color="0.4", lw=0.8, ls="--", label="total weight")
-    ax_total.set_ylabel("total force (kN)")
-    ax_total.set_xlabel("time (s)")
-    ax_total.set_title(f"Total crowd force: {s['n']} people at $f_b$ = {s['f_b']:g} Hz", fontsize=10)
-    ax_total.legend(fontsize=8, loc="upper right")
-
-    frequency, amplitude = crowd.spectrum()
-    upper = min(s["fs"] / 2.0, 5.0 * s["f_b"])
-    keep = frequency <= upper
-    ax_spec.plot(frequency[keep], amplitude[keep] / 1000.0, lw=0.8, color="tab:red")
-    for k in range(1, N_HARMONICS + 1):
-        ax_spec.axvline(k * s["f_b"], color="0.6", lw=0.6, ls=":")
-    ax_spec.set_xlabel("frequency (Hz)")
-    ax_spec.set_ylabel("amplitude (kN)")
-    ax_spec.set_title("Spectrum of the total dynamic force (dotted: $k f_b$)", fontsize=10)
-    fig.tight_layout()
-    if path is not None:
-        fig.savefig(path, dpi=90)
-    return fig
