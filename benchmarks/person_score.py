@@ -75,9 +75,7 @@ def main(argv=None):
     k = params.size
     sys = model.system(params)
     fitted = model.filter(params)
-    pass_args = (model.y - sys["y_known"], sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["offset"],
-                 sys["X_obs"], sys["X_tr"], sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"],
-                 model.n_coefficients, sys["smooth_phi"], sys["smooth_q"], sys["smooth_p0"])
+    pass_args = sys.pass_arguments(model.y, model.n_coefficients)
     der = system_derivatives(model, params, sys)
     sens_args = pass_args + (fitted["delta"], der["dyn"], der["d_hx"], der["d_Phi"], der["d_Gam"],
                              der["d_offset"], der["d_X_tr"], der["d_y"], der["d_Qx"], der["d_D"], der["d_E"],

@@ -58,12 +58,12 @@ def test_step_is_the_exact_solution_of_eq2_under_a_harmonic_force():
                 a[1, 2:] = 0.0
                 a[1, drive] = 1.0
                 exact = linalg.expm(a * 0.01) @ x0
-                assert np.allclose(sys["Gam"][k, :, column] / G, exact[:2], rtol=1e-9, atol=1e-15)
+                assert np.allclose(sys.Gam[k, :, column] / G, exact[:2], rtol=1e-9, atol=1e-15)
     # the constant a0: A^-1 (Phi - I) B
     a2 = np.array([[0.0, 1.0], [-w**2, -2 * params[1] * w]])
     big = np.zeros((3, 3))
     big[:2, :2], big[1, 2] = a2, 1.0
-    assert np.allclose(sys["Gam"][5, :, 0] / G, (linalg.expm(big * 0.01) @ [0, 0, 1.0])[:2], rtol=1e-9)
+    assert np.allclose(sys.Gam[5, :, 0] / G, (linalg.expm(big * 0.01) @ [0, 0, 1.0])[:2], rtol=1e-9)
 
 
 @pytest.mark.parametrize("options", [

@@ -61,7 +61,7 @@ from . import kalman
 from .dynamics import PersonDynamics, exponentials, harmonic_gains
 from .timing import CycleTiming
 
-__all__ = ["VARIATIONS", "Regressor", "RecordModel", "coefficient_names"]
+__all__ = ["VARIATIONS", "Regressor", "RecordSystem", "RecordModel", "coefficient_names"]
 
 VARIATIONS = {"independent": kalman.INDEPENDENT, "random_walk": kalman.RANDOM_WALK, "both": kalman.BOTH,
               "smooth": kalman.SMOOTH}
@@ -105,6 +105,74 @@ def coefficient_names(n_harmonics):
     for i in range(1, n_harmonics + 1):
         names += [f"a{i}", f"b{i}"]
     return names
+
+
+@dataclass(frozen=True)
+class RecordSystem:
+    """The record-level model's arrays at one parameter vector: what the compiled passes take.
+
+    ``N`` samples, ``n_x`` dynamic states, ``p = 2 n + 1`` force coefficients, ``r``
+    regressors (effects' known signals), ``K`` = 1 for linear dynamics (``Phi`` and ``hx``
+    the same at every sample) or ``N``. Accelerations in m/s^2, every variance relative
+    to the scale ``sigma^2`` (:mod:`~smd_statespace.person.kalman`).
+
+    Attributes
+    ----------
+    hx : ndarray, shape (K, n_x)
+        Observation row of the dynamic states.
+    H : ndarray, shape (N, p)
+        Observation row of the force coefficients (the Fourier basis in the cycle's phase).
+    Phi : ndarray, shape (K, n_x, n_x)
+        Transition of the dynamic states over one sample.
+    Gam : ndarray, shape (N, n_x, p)
+        Transition gain of the force coefficients.
+    Qx : ndarray, shape (n_x, n_x)
+        Process covariance of the dynamic states (zero without process noise).
+    offset : ndarray, shape (N, n_x)
+        Known part of the step (a linearised or input-driven effect).
+    y_known : ndarray, shape (N,)
+        Known part of the observation, subtracted from ``y`` before a pass.
+    X_obs : ndarray, shape (N, r)
+        Regressors in the observation.
+    X_tr : ndarray, shape (N, n_x, r)
+        Regressors in the step.
+    reset : ndarray of bool, shape (N,)
+        Whether a cycle starts at the sample (the coefficients are drawn again).
+    code : int
+        The variation model (:data:`~smd_statespace.person.kalman.INDEPENDENT`, ...).
+    D, E, drift : ndarray, shape (p,)
+        Variances of the coefficients' deviation per cycle, of their random walk per cycle
+        and of their drift per sample.
+    smooth_phi, smooth_q, smooth_p0 : ndarray, shape (2, 2)
+        The Matern-3/2 step, its process covariance and its stationary covariance (variation
+        "smooth"; zeros otherwise).
+    """
+
+    hx: np.ndarray
+    H: np.ndarray
+    Phi: np.ndarray
+    Gam: np.ndarray
+    Qx: np.ndarray
+    offset: np.ndarray
+    y_known: np.ndarray
+    X_obs: np.ndarray
+    X_tr: np.ndarray
+    reset: np.ndarray
+    code: int
+    D: np.ndarray
+    E: np.ndarray
+    drift: np.ndarray
+    smooth_phi: np.ndarray
+    smooth_q: np.ndarray
+    smooth_p0: np.ndarray
+
+    def pass_arguments(self, y, n_template) -> tuple:
+        """The positional arguments of :func:`~smd_statespace.person.kalman.augmented_pass` for the measured
+        ``y`` (the known part subtracted) and ``n_template`` template coefficients; the first ones of
+        :func:`~smd_statespace.person.score.sensitivity_pass` too."""
+        return (y - self.y_known, self.hx, self.H, self.Phi, self.Gam, self.Qx, self.offset, self.X_obs, self.X_tr,
+                self.reset, self.code, self.D, self.E, self.drift, n_template, self.smooth_phi, self.smooth_q,
+                self.smooth_p0)
 
 
 @dataclass(frozen=True)
@@ -463,18 +531,8 @@ class RecordModel:
         cache[key] = out
         return out
 
-    def system(self, params) -> dict:
-        """The arrays of the compiled pass for a parameter vector.
-
-        Returns
-        -------
-        dict
-            ``hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E,
-            drift, smooth_phi, smooth_q, smooth_p0`` as
-            :func:`~smd_statespace.person.kalman.augmented_pass` takes them,
-            and ``y_known``, the known part of the observation (subtracted
-            from ``y`` before the pass).
-        """
+    def system(self, params) -> RecordSystem:
+        """The arrays of the compiled pass for a parameter vector (:class:`RecordSystem`)."""
         dynamics = self._dynamics(params)
         D, E, S, w = self._variances(params)
         nx = self.n_dynamic
@@ -482,25 +540,10 @@ class RecordModel:
             (nx, nx))
         where = self._smooth_index
         smooth = matern32_step(np.exp(params[where]), self.dt) if where is not None else (np.zeros((2, 2)),) * 3
-        return {
-            "hx": dynamics["hx"],
-            "H": self._H_all,
-            "Phi": dynamics["Phi"],
-            "Gam": dynamics["Gam"],
-            "Qx": qx,
-            "offset": dynamics["offset"],
-            "y_known": dynamics["y_known"],
-            "X_obs": self._X_obs,
-            "X_tr": dynamics["X_tr"],
-            "reset": self._phase[3],
-            "code": VARIATIONS[self.variation],
-            "D": D,
-            "E": E,
-            "drift": S,
-            "smooth_phi": smooth[0],
-            "smooth_q": smooth[1],
-            "smooth_p0": smooth[2],
-        }
+        return RecordSystem(hx=dynamics["hx"], H=self._H_all, Phi=dynamics["Phi"], Gam=dynamics["Gam"], Qx=qx,
+                            offset=dynamics["offset"], y_known=dynamics["y_known"], X_obs=self._X_obs,
+                            X_tr=dynamics["X_tr"], reset=self._phase[3], code=VARIATIONS[self.variation], D=D, E=E,
+                            drift=S, smooth_phi=smooth[0], smooth_q=smooth[1], smooth_p0=smooth[2])
 
     def timing_rates(self) -> np.ndarray:
         """Phase rate ``2 pi f_b`` of every cycle (rad/s), shape (J,)."""
@@ -510,11 +553,7 @@ class RecordModel:
     def filter(self, params) -> dict:
         """Run the compiled pass and concentrate; returns the pass's arrays and :func:`kalman.concentrate`'s."""
         sys = self.system(params)
-        e, Ev, f, S, s, ee = kalman.augmented_pass(
-            self.y - sys["y_known"], sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["offset"],
-            sys["X_obs"], sys["X_tr"],
-            sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"], self.n_coefficients,
-            sys["smooth_phi"], sys["smooth_q"], sys["smooth_p0"])
+        e, Ev, f, S, s, ee = kalman.augmented_pass(*sys.pass_arguments(self.y, self.n_coefficients))
         out = kalman.concentrate(S, s, ee, f, self.y.size, self.held_delta)
         out.update(innovations_raw=e, innovation_regression=Ev, innovation_variance_unscaled=f)
         return out

@@ -677,13 +677,13 @@ def system_derivatives(model: RecordModel, params, system=None, step=DYNAMICS_ST
     dynamic = ["f_h", "xi_h"] + list(model.effect_parameters)
     dyn = np.full(k, -1, dtype=np.int64)
     stacks = {name: [] for name in DYNAMIC_ARRAYS}
-    p = sys["D"].size
+    p = sys.D.size
     nx = model.n_dynamic
     out = {"d_Qx": np.zeros((k, nx, nx)), "d_D": np.zeros((k, p)), "d_E": np.zeros((k, p)),
            "d_drift": np.zeros((k, p)), "d_sphi": np.zeros((k, 2, 2)), "d_sq": np.zeros((k, 2, 2)),
            "d_sp0": np.zeros((k, 2, 2))}
     scales = model.scales
-    values = {"D": sys["D"], "E": sys["E"], "drift": sys["drift"]}
+    values = {"D": sys.D, "E": sys.E, "drift": sys.drift}
     rate = float(np.exp(params[names.index("log_var_w")])) if "log_var_w" in names else 0.0
     base = _Discretisation(model, params) if analytic and any(name in dynamic for name in names) else None
     for j, name in enumerate(names):
@@ -699,7 +699,7 @@ def system_derivatives(model: RecordModel, params, system=None, step=DYNAMICS_ST
                 down[j] -= h
                 plus, minus = model.system(up), model.system(down)
                 for key in DYNAMIC_ARRAYS:
-                    stacks[key].append((plus[key] - minus[key]) / (2.0 * h))
+                    stacks[key].append((getattr(plus, key) - getattr(minus, key)) / (2.0 * h))
             out["d_Qx"][j] = stacks["Qx"][-1]
             dyn[j] = len(stacks["hx"]) - 1
         elif name == "log_smooth_time":
@@ -707,15 +707,15 @@ def system_derivatives(model: RecordModel, params, system=None, step=DYNAMICS_ST
         elif name.startswith("log_var_"):  # exp(log variance): the derivative is the value where it enters
             which, mask = _variance_entries(model, j)
             if which == "w":
-                out["d_Qx"][j] = sys["Qx"]
+                out["d_Qx"][j] = sys.Qx
             else:
                 out[f"d_{which}"][j] = np.where(mask, values[which], 0.0)
         else:
             raise ValueError(f"no derivative of the system arrays with respect to {name!r}")
     n_dyn = len(stacks["hx"])
-    K = sys["Phi"].shape[0]
+    K = sys.Phi.shape[0]
     N = model.time.size
-    r = sys["X_tr"].shape[2]
+    r = sys.X_tr.shape[2]
 
     def stack(key, shape):
         return np.ascontiguousarray(np.array(stacks[key])) if n_dyn else np.zeros((0,) + shape)
@@ -800,9 +800,7 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
     der = system_derivatives(model, params, sys, method=method)
     delta, sigma2 = np.asarray(fitted["delta"], dtype=float), float(fitted["sigma2"])
     v, f, dv, df = sensitivity_pass(
-        model.y - sys["y_known"], sys["hx"], sys["H"], sys["Phi"], sys["Gam"], sys["Qx"], sys["offset"],
-        sys["X_obs"], sys["X_tr"], sys["reset"], sys["code"], sys["D"], sys["E"], sys["drift"],
-        model.n_coefficients, sys["smooth_phi"], sys["smooth_q"], sys["smooth_p0"], delta,
+        *sys.pass_arguments(model.y, model.n_coefficients), delta,
         der["dyn"], der["d_hx"], der["d_Phi"], der["d_Gam"], der["d_offset"], der["d_X_tr"], der["d_y"],
         der["d_Qx"], der["d_D"], der["d_E"], der["d_drift"], der["d_sphi"], der["d_sq"], der["d_sp0"])
     variance = sigma2 * f

@@ -88,28 +88,28 @@ class RecordStateSpace(MLEModel):
         sys = model.system(params)
         n, p, nx = model.y.size, model.n_force_states, model.n_dynamic
         m = self.k_states
-        r = sys["X_obs"].shape[1]
+        r = sys.X_obs.shape[1]
         n_template = model.n_coefficients
         x0, beta = self.delta[:nx], self.delta[nx + n_template:nx + n_template + r]
         tau = np.zeros(p)  # the phase and rate errors, if any, have mean zero
         tau[:n_template] = self.delta[nx:nx + n_template]
         alpha, base = slice(nx, nx + p), slice(nx + p, nx + 2 * p)
         design = np.zeros((1, m, n))
-        design[0, :nx, :] = np.broadcast_to(sys["hx"], (n, nx)).T
-        design[0, alpha, :] = sys["H"].T
+        design[0, :nx, :] = np.broadcast_to(sys.hx, (n, nx)).T
+        design[0, alpha, :] = sys.H.T
         transition = np.repeat(np.eye(m)[:, :, None], n, axis=2)
-        transition[:nx, :nx, :] = np.broadcast_to(sys["Phi"], (n, nx, nx)).transpose(1, 2, 0)
-        transition[:nx, alpha, :] = sys["Gam"].transpose(1, 2, 0)
+        transition[:nx, :nx, :] = np.broadcast_to(sys.Phi, (n, nx, nx)).transpose(1, 2, 0)
+        transition[:nx, alpha, :] = sys.Gam.transpose(1, 2, 0)
         intercept = np.zeros((m, n))
-        intercept[:nx, :] = sys["offset"].T + ((sys["X_tr"] @ beta).T if r else 0.0)
+        intercept[:nx, :] = sys.offset.T + ((sys.X_tr @ beta).T if r else 0.0)
         state_cov = np.zeros((m, m, n))
-        state_cov[:nx, :nx, :] = sys["Qx"][:, :, None]
-        drift = np.diag(sys["drift"])
+        state_cov[:nx, :nx, :] = sys.Qx[:, :, None]
+        drift = np.diag(sys.drift)
         state_cov[alpha, alpha, :] += drift[:, :, None]
         # statsmodels' time t maps the state at sample t to sample t + 1: a cycle starting
         # at sample k draws its coefficients in the transition of time k - 1
-        starts = np.flatnonzero(sys["reset"]) - 1
-        D, E = np.diag(sys["D"]), np.diag(sys["E"])
+        starts = np.flatnonzero(sys.reset) - 1
+        D, E = np.diag(sys.D), np.diag(sys.E)
         if model.variation == "independent":
             transition[alpha, :, starts] = 0.0
             intercept[alpha, starts] = tau[:, None]
@@ -117,16 +117,16 @@ class RecordStateSpace(MLEModel):
         elif model.variation == "random_walk":
             state_cov[alpha, alpha, starts] = (E + drift)[:, :, None]
         elif model.variation == "smooth":
-            f, qs = sys["smooth_phi"], sys["smooth_q"]
+            f, qs = sys.smooth_phi, sys.smooth_q
             for i in range(n_template):
                 rows = [nx + i, nx + p + i]
                 transition[np.ix_(rows, rows)] = f[:, :, None]
                 intercept[rows[0], :] += (1.0 - f[0, 0]) * tau[i]
                 intercept[rows[1], :] -= f[1, 0] * tau[i]
-                state_cov[np.ix_(rows, rows)] += sys["D"][i] * qs[:, :, None]
+                state_cov[np.ix_(rows, rows)] += sys.D[i] * qs[:, :, None]
             timing = slice(nx + n_template, nx + p)  # the phase and rate errors are drawn again per cycle
             transition[timing, :, starts] = 0.0
-            state_cov[timing, timing, starts] = np.diag(sys["D"][n_template:])[:, :, None]
+            state_cov[timing, timing, starts] = np.diag(sys.D[n_template:])[:, :, None]
         else:  # m := m + e, alpha := m + e + d
             state_cov[base, base, :] += drift[:, :, None]
             transition[alpha, :, starts] = 0.0
@@ -138,7 +138,7 @@ class RecordStateSpace(MLEModel):
             state_cov[base, alpha, starts] = step[:, :, None]
             state_cov[base, base, starts] = step[:, :, None]
         self.ssm["design"] = design
-        self.ssm["obs_intercept"] = (sys["y_known"] + ((sys["X_obs"] @ beta) if r else 0.0))[None, :]
+        self.ssm["obs_intercept"] = (sys.y_known + ((sys.X_obs @ beta) if r else 0.0))[None, :]
         self.ssm["transition"] = transition
         self.ssm["state_intercept"] = intercept
         self.ssm["state_cov"] = state_cov
@@ -152,11 +152,11 @@ class RecordStateSpace(MLEModel):
             mean[alpha] = tau
         elif model.variation == "smooth":
             mean[alpha] = tau
-            cov[alpha, alpha] = np.diag(sys["D"])
-            p0 = sys["smooth_p0"]
+            cov[alpha, alpha] = np.diag(sys.D)
+            p0 = sys.smooth_p0
             for i in range(n_template):
                 rows = [nx + i, nx + p + i]
-                cov[np.ix_(rows, rows)] = sys["D"][i] * p0
+                cov[np.ix_(rows, rows)] = sys.D[i] * p0
         else:
             mean[alpha] = tau
             mean[base] = tau

@@ -62,23 +62,23 @@ def free_run(result) -> np.ndarray:
     """
     model = result.model
     system = model.system(result.params)
-    nx, p = model.n_dynamic, system["H"].shape[1]
+    nx, p = model.n_dynamic, system.H.shape[1]
     delta = result.filtered["delta"]
     force = np.zeros((model.y.size, p))
     force[:, :model.n_coefficients] = delta[nx:nx + model.n_coefficients]  # the template (phase errors 0)
     beta = delta[nx + model.n_coefficients:]
     n = model.y.size
-    phi = np.broadcast_to(system["Phi"], (n, nx, nx))
-    hx = np.broadcast_to(system["hx"], (n, nx))
-    drive = np.einsum("kij,kj->ki", system["Gam"], force) + system["offset"]
+    phi = np.broadcast_to(system.Phi, (n, nx, nx))
+    hx = np.broadcast_to(system.hx, (n, nx))
+    drive = np.einsum("kij,kj->ki", system.Gam, force) + system.offset
     if beta.size:
-        drive = drive + system["X_tr"] @ beta
+        drive = drive + system.X_tr @ beta
     states = np.empty((n, nx))
     states[0] = delta[:nx]
     for k in range(1, n):
         states[k] = phi[k - 1] @ states[k - 1] + drive[k - 1]
-    out = np.einsum("ki,ki->k", hx, states) + np.einsum("kj,kj->k", system["H"], force) + system["y_known"]
-    return out + (system["X_obs"] @ beta if beta.size else 0.0)
+    out = np.einsum("ki,ki->k", hx, states) + np.einsum("kj,kj->k", system.H, force) + system.y_known
+    return out + (system.X_obs @ beta if beta.size else 0.0)
 
 
 def fit_percent(measured, predicted) -> float:
