@@ -621,3 +621,21 @@ def test_the_first_boundary_of_a_record_that_starts_from_rest_is_not_pulled_into
     assert np.array_equal(_regular_edges(regular), regular)
     assert _regular_edges(np.array([0.3, 0.5, 0.9, 1.3, 1.7]))[0] == pytest.approx(0.1)
     assert _regular_edges(np.array([0.1, 0.5, 0.9, 1.3, 1.45]))[-1] == pytest.approx(1.7)
+
+
+def test_parameters_by_name_round_trip_and_refuse_in_words(short_sim):
+    """RecordModel.unpack / pack: the parameter vector by name (code outside the model reads names, not positions)."""
+    from smd_statespace.errors import OptionError
+
+    record = short_sim.record
+    model = RecordModel(record.time, record.force / record.mass - G, estimate_timing(record.time, record.force), 4,
+                        "smooth")
+    params = model.start_params(2.7, 0.31, -2.0)
+    named = model.unpack(params)
+    assert list(named) == model.param_names and named["f_h"] == 2.7 and named["xi_h"] == 0.31
+    assert named["log_smooth_time"] == params[model.param_names.index("log_smooth_time")]
+    assert np.array_equal(model.pack({**named, "another_models_parameter": 1.0}), params)
+    with pytest.raises(OptionError, match="no value for xi_h"):
+        model.pack({k: v for k, v in named.items() if k != "xi_h"})
+    with pytest.raises(OptionError, match=f"{len(params)} values expected"):
+        model.unpack(params[:-1])

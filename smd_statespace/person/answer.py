@@ -40,7 +40,7 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
             interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
         else:
             # the floor widens the interval, not the sd: the sd says what the record determines
-            floor = 0.0 if intervals == "wald" else model_error_floor(name, params[0], model.variation)
+            floor = 0.0 if intervals == "wald" else model_error_floor(name, model.unpack(params)["f_h"], model.variation)
             interval[name] = wald_interval(params[which], float(np.hypot(se[which], floor)), level,
                                            model.bounds[which])
     for name in model.effect_parameters:  # the effects' parameters: Wald intervals from the information

@@ -203,9 +203,9 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     default = model.start_params(result.f_h, result.xi_h)
     low, high = np.asarray(model.bounds).T
     trials = [effect.record_starts(result) or [{}] for effect in effects]
-    origins = [dict(zip(result.model.param_names, result.params))]
+    origins = [result.model.unpack(result.params)]
     if root is not result:
-        origins.append({**origins[0], **dict(zip(root.model.param_names, root.params))})
+        origins.append({**origins[0], **root.model.unpack(root.params)})
     out = []
     for named in origins:
         starts = []

@@ -428,6 +428,24 @@ class RecordModel:
         """Whether each effect parameter's lower search bound is a physical limit, by name."""
         return {slot.name: slot.limit for slot in self.dynamics.parameters}
 
+    def unpack(self, params) -> dict:
+        """The parameters by name, ``{"f_h": Hz, "xi_h": -, "log_var_d_1": ..., ...}`` (:attr:`param_names`).
+
+        Code outside this class reads a parameter by name, never by its position."""
+        params = np.asarray(params, dtype=float)
+        if params.shape != (len(self.param_names),):
+            raise OptionError(f"parameters: {len(self.param_names)} values expected ({', '.join(self.param_names)}), "
+                              f"got shape {params.shape}")
+        return dict(zip(self.param_names, params.tolist()))
+
+    def pack(self, values) -> np.ndarray:
+        """The parameter vector of a mapping ``name -> value`` holding every name of :attr:`param_names` (extra
+        names are ignored: another model's parameters can start this one)."""
+        missing = [name for name in self.param_names if name not in values]
+        if missing:
+            raise OptionError(f"parameters: no value for {', '.join(missing)}")
+        return np.array([float(values[name]) for name in self.param_names])
+
     def person_at_bound(self, params) -> bool:
         """True when ``f_h`` or ``xi_h`` sits on a search bound."""
         return self.at_bound(params, 0) or self.at_bound(params, 1)
@@ -485,7 +503,7 @@ class RecordModel:
         finite-difference gradient moves the variance ratios one by one, and
         those leave the discretised dynamics as they are.
         """
-        named = dict(zip(self.param_names, params))
+        named = self.unpack(params)
         effect_values = {name: named[name] for name in self.effect_parameters}
         key = (float(params[0]), float(params[1])) + tuple(float(v) for v in effect_values.values())
         cache = self.__dict__.setdefault("_dynamics_cache", {})

@@ -191,12 +191,12 @@ class PersonResult:
     @property
     def f_h(self) -> float:
         """SMD natural frequency ``f_h`` (Hz)."""
-        return float(self.params[0])
+        return self.model.unpack(self.params)["f_h"]
 
     @property
     def xi_h(self) -> float:
         """SMD damping ratio ``xi_h`` (-)."""
-        return float(self.params[1])
+        return self.model.unpack(self.params)["xi_h"]
 
     @property
     def se(self) -> np.ndarray:
@@ -331,13 +331,12 @@ class PersonResult:
         if not self.person_widened:
             return None
         (f_low, f_high), (x_low, x_high) = self.intervals["f_h"], self.intervals["xi_h"]
-        bounds = np.asarray(self.model.bounds)
+        f_bounds, x_bounds = (self.model.bounds[self.model.param_names.index(name)] for name in ("f_h", "xi_h"))
         out = []
         for f_h in np.linspace(f_low, f_high, self.BLF_GRID[0]):
             for xi_h in np.unique(np.r_[np.linspace(x_low, x_high, self.BLF_GRID[1]), self.xi_h]):
-                params = self.params.copy()
-                params[0] = np.clip(f_h, *bounds[0])
-                params[1] = np.clip(xi_h, max(bounds[1][0], 0.02), bounds[1][1])
+                params = self.model.pack({**self.model.unpack(self.params), "f_h": np.clip(f_h, *f_bounds),
+                                          "xi_h": np.clip(xi_h, max(x_bounds[0], 0.02), x_bounds[1])})
                 values = self._blf_values(params)
                 if np.all(np.isfinite(values)):
                     out.append(values)
@@ -348,7 +347,7 @@ class PersonResult:
 
         Index 0 is ``a0``; zeros when the variation model has no such part.
         """
-        named = dict(zip(self.model.param_names, self.params))
+        named = self.model.unpack(self.params)
         out = np.zeros(self.model.n_harmonics + 1)
         for i in range(out.size):
             key = f"log_var_{kind}_{i}"

@@ -516,8 +516,8 @@ def _matern32_derivatives(length_scale, dt):
 
 def _linearise(model: RecordModel, params):
     """``model.dynamics.linearise`` at ``params``, as :meth:`RecordModel.system` calls it."""
-    named = dict(zip(model.param_names, params))
-    return model.dynamics.linearise(float(params[0]), float(params[1]),
+    named = model.unpack(params)
+    return model.dynamics.linearise(named["f_h"], named["xi_h"],
                                     {name: named[name] for name in model.effect_parameters}, model.nominal)
 
 

@@ -419,7 +419,7 @@ def comparison_row(model, fitted, timing) -> dict:
     return {"variation": model.variation, "timing": timing, "loglike": fitted["loglike"],
             "n_params": len(fitted["params"]), "aic": 2 * len(fitted["params"]) - 2 * fitted["loglike"],
             "converged": fitted["converged"], "on_bound": model.person_at_bound(fitted["params"]),
-            "f_h": float(fitted["params"][0]), "xi_h": float(fitted["params"][1])}
+            **{name: model.unpack(fitted["params"])[name] for name in ("f_h", "xi_h")}}
 
 
 def choose_with_own_timing(model_for, timing, fits, first_best, step) -> tuple:
@@ -468,11 +468,10 @@ def fit_timing(model_for, timing, variation, first=None, step=lambda: None):
         template = model.filter(params)["delta"][model.n_dynamic:model.n_dynamic + model.n_coefficients]
         model = model_for(timing, variation, template)
         if iteration == 0:
-            named = dict(zip(base.param_names, params))
+            named = base.unpack(params)
 
             def start_for(phase, rate):
-                values = {**named, "log_var_phase": phase, "log_var_rate": rate}
-                return np.array([values[name] for name in model.param_names])
+                return model.pack({**named, "log_var_phase": phase, "log_var_rate": rate})
 
             candidates = [start_for(a, b) for a in PHASE_VARIANCE_STARTS[0] for b in PHASE_VARIANCE_STARTS[1]]
             start = max(candidates, key=model.loglike)
