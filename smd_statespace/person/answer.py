@@ -34,13 +34,14 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
         scale[0], scale[1] = factors["f_h"], factors["xi_h"]
         cov = cov * np.outer(scale, scale)
     se = np.sqrt(np.diag(cov))
+    f_h = model.unpack(params)["f_h"]
     interval = {}
     for which, name in enumerate(("f_h", "xi_h")):
         if intervals == "profile":
             interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
         else:
             # the floor widens the interval, not the sd: the sd says what the record determines
-            floor = 0.0 if intervals == "wald" else model_error_floor(name, model.unpack(params)["f_h"], model.variation)
+            floor = 0.0 if intervals == "wald" else model_error_floor(name, f_h, model.variation)
             interval[name] = wald_interval(params[which], float(np.hypot(se[which], floor)), level,
                                            model.bounds[which])
     for name in model.effect_parameters:  # the effects' parameters: Wald intervals from the information

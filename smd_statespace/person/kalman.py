@@ -150,6 +150,19 @@ def step_rows(T, G, X, out, work):
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def rotate_columns(X, n_template, r0, r1, f00, f01, f10, f11):
+    """Columns ``r0 + i``, ``r1 + i`` of ``X`` move by the 2 x 2 ``f``, ``i < n_template`` (in place): with
+    :func:`rotate_pairs` on the rows, ``S X S'`` for a stack of matrices whose rows are ``X``'s."""
+    for c in range(X.shape[0]):
+        for i in range(n_template):
+            a, b = r0 + i, r1 + i
+            x0 = X[c, a]
+            x1 = X[c, b]
+            X[c, a] = f00 * x0 + f01 * x1
+            X[c, b] = f10 * x0 + f11 * x1
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def rotate_pairs(X, n_template, r0, r1, f00, f01, f10, f11, columns):
     """Rows (and, with ``columns``, then columns) ``r0 + i``, ``r1 + i`` of ``X`` move by the 2 x 2 ``f``,
     ``i < n_template`` (in place): the smooth variation's step of a deviation and its rate."""
@@ -162,24 +175,7 @@ def rotate_pairs(X, n_template, r0, r1, f00, f01, f10, f11, columns):
             X[a, c] = f00 * x0 + f01 * x1
             X[b, c] = f10 * x0 + f11 * x1
         if columns:
-            for c in range(X.shape[0]):
-                x0 = X[c, a]
-                x1 = X[c, b]
-                X[c, a] = f00 * x0 + f01 * x1
-                X[c, b] = f10 * x0 + f11 * x1
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def rotate_columns(X, n_template, r0, r1, f00, f01, f10, f11):
-    """Columns ``r0 + i``, ``r1 + i`` of ``X`` move by the 2 x 2 ``f``, ``i < n_template`` (in place): with
-    :func:`rotate_pairs` on the rows, ``S X S'`` for a stack of matrices whose rows are ``X``'s."""
-    for c in range(X.shape[0]):
-        for i in range(n_template):
-            a, b = r0 + i, r1 + i
-            x0 = X[c, a]
-            x1 = X[c, b]
-            X[c, a] = f00 * x0 + f01 * x1
-            X[c, b] = f10 * x0 + f11 * x1
+            rotate_columns(X, 1, a, b, f00, f01, f10, f11)
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})

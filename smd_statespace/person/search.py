@@ -416,10 +416,11 @@ def corrected_timing(model: RecordModel, params) -> CycleTiming:
 
 def comparison_row(model, fitted, timing) -> dict:
     """One variation model's fit in ``result.comparison``: its likelihood, AIC, person, and at which timing."""
+    named = model.unpack(fitted["params"])
     return {"variation": model.variation, "timing": timing, "loglike": fitted["loglike"],
             "n_params": len(fitted["params"]), "aic": 2 * len(fitted["params"]) - 2 * fitted["loglike"],
             "converged": fitted["converged"], "on_bound": model.person_at_bound(fitted["params"]),
-            **{name: model.unpack(fitted["params"])[name] for name in ("f_h", "xi_h")}}
+            "f_h": named["f_h"], "xi_h": named["xi_h"]}
 
 
 def choose_with_own_timing(model_for, timing, fits, first_best, step) -> tuple:
