@@ -119,6 +119,25 @@ def test_compiled_normals_are_numpys():
     np.testing.assert_array_equal(blocks, generator.standard_normal((50, 13)).T)
 
 
+def test_ziggurat_tables_follow_their_construction():
+    """The copied tables are Marsaglia and Tsang's 256 layers of equal area under exp(-x**2/2), edge R."""
+    from math import erfc, exp, log, pi, sqrt
+
+    from smd_statespace.estimators._ziggurat import FI, INVERSE_R, KI, R, WI
+
+    area = R * exp(-R * R / 2) + sqrt(pi / 2) * erfc(R / sqrt(2))  # base layer: rectangle and tail
+    edges = np.empty(256)
+    edges[255] = R
+    for i in range(255, 1, -1):  # each layer above has the same area
+        edges[i - 1] = sqrt(-2 * log(exp(-edges[i] ** 2 / 2) + area / edges[i]))
+    edges[0] = area / exp(-R * R / 2)
+    np.testing.assert_allclose(WI * 2.0**52, edges, rtol=1e-12)
+    np.testing.assert_allclose(FI[1:], np.exp(-edges[1:] ** 2 / 2), rtol=1e-12)
+    assert FI[0] == 1.0 and KI[1] == 0 and INVERSE_R == pytest.approx(1 / R, rel=1e-15)
+    ratios = np.r_[R / edges[0], 0.0, edges[1:255] / edges[2:]]
+    np.testing.assert_allclose(KI.astype(float) / 2.0**52, ratios, rtol=1e-12, atol=0)
+
+
 def test_vectorised_exponential_is_within_one_ulp_of_libm():
     from smd_statespace.estimators._pf_numba import exponentiate
 

@@ -8,7 +8,7 @@ resamples systematically when the effective sample size drops. It does
 exactly what :meth:`ParticleFilter._run_numpy` does and draws the same
 normal variates in the same order: the filter's generator is numpy's SFC64,
 whose few lines and whose ziggurat normal sampler are inlined here (with
-numpy's own tables, as numba ships them), bit for bit, and the generator's
+numpy's own tables, :mod:`._ziggurat`), bit for bit, and the generator's
 state is handed back to numpy after the pass. The two paths therefore agree
 to rounding (``tests/test_performance.py``).
 

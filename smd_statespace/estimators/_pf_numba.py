@@ -15,7 +15,8 @@ import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
-from numba.np.random._constants import fi_double, ki_double, wi_double, ziggurat_nor_inv_r, ziggurat_nor_r
+
+from ._ziggurat import FI, INVERSE_R, KI, R, WI
 
 TWO_PI = 2.0 * math.pi
 
@@ -57,9 +58,9 @@ def standard_normal(s0, s1, s2, s3):
     idx = np.intp(bits & LOW8)
     rest = bits >> S8
     rabs = (rest >> S1) & MANTISSA
-    if rabs < ki_double[idx]:
+    if rabs < KI[idx]:
         sign = 1.0 - 2.0 * np.float64(np.int64(rest & S1))  # +-1 without a branch (one in two would mispredict)
-        return np.int64(rabs) * wi_double[idx] * sign, s0, s1, s2, s3
+        return np.int64(rabs) * WI[idx] * sign, s0, s1, s2, s3
     return _normal_slow(bits, s0, s1, s2, s3)
 
 
@@ -70,23 +71,23 @@ def _normal_slow(bits, s0, s1, s2, s3):
         idx = np.intp(bits & LOW8)
         bits >>= S8
         rabs = (bits >> S1) & MANTISSA
-        x = np.int64(rabs) * wi_double[idx]
+        x = np.int64(rabs) * WI[idx]
         if bits & S1:
             x = -x
-        if rabs < ki_double[idx]:
+        if rabs < KI[idx]:
             return x, s0, s1, s2, s3
         if idx == 0:
             while True:
                 first, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
                 second, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
-                xx = -ziggurat_nor_inv_r * math.log1p(-unit_double(first))
+                xx = -INVERSE_R * math.log1p(-unit_double(first))
                 yy = -math.log1p(-unit_double(second))
                 if yy + yy > xx * xx:
                     if (rabs >> S8) & S1:
-                        return -(ziggurat_nor_r + xx), s0, s1, s2, s3
-                    return ziggurat_nor_r + xx, s0, s1, s2, s3
+                        return -(R + xx), s0, s1, s2, s3
+                    return R + xx, s0, s1, s2, s3
         uniform, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
-        if (fi_double[idx - 1] - fi_double[idx]) * unit_double(uniform) + fi_double[idx] < math.exp(-0.5 * x * x):
+        if (FI[idx - 1] - FI[idx]) * unit_double(uniform) + FI[idx] < math.exp(-0.5 * x * x):
             return x, s0, s1, s2, s3
         bits, s0, s1, s2, s3 = sfc64(s0, s1, s2, s3)
 
