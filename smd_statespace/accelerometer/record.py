@@ -1,0 +1,64 @@
+"""An accelerometer file as the person model reads it: :func:`accelerometer_record`.
+"""
+
+from __future__ import annotations
+
+from ..io import G
+from .reading import read_accelerometer
+from .resampling import resample_uniform
+from .vertical import vertical_acceleration
+
+__all__ = ["UNKNOWN_MASS", "accelerometer_record"]
+
+UNKNOWN_MASS = 70.0
+"""Nominal mass (kg) an accelerometer record carries when no body mass is given (a value the records'
+checks accept; nothing below depends on it).
+
+The record-level model observes ``GRF / M - g`` (Eq. 3), which for an
+accelerometer is ``a_v`` whatever ``M``: ``f_h``, ``xi_h``, the load factors (in g)
+and the noise do not depend on it. ``K_h``, ``C_h`` (Eq. 17-18) and forces in
+newtons do; they are left out (``record.extra["mass_known"]`` is False)."""
+
+
+def accelerometer_record(path, mass=None, units: str = "auto", fs=None):
+    """An accelerometer file as the person model reads it: a :class:`~smd_statespace.io.Record`.
+
+    Reads the file (:func:`read_accelerometer`), puts it on a uniform clock
+    (:func:`resample_uniform`), takes the vertical (:func:`vertical_acceleration`)
+    and returns a record whose "force" is ``M (g + a_v)``: what a force plate under
+    a rigid body of mass ``M`` moving like the phone would measure (Eq. 3 read
+    backwards), so every check, estimator and output of a force-plate record applies
+    (a record of jumping, whose vertical specific force falls to 0 in flight, is
+    refused like a plate's whose force does).
+
+    Parameters
+    ----------
+    path : str or Path
+        The accelerometer CSV.
+    mass : float, optional
+        Body mass (kg). Without it, :data:`UNKNOWN_MASS` is used and marked unknown:
+        ``K_h`` and ``C_h`` are then left out of the results.
+    units : {"auto", "m/s^2", "g"}
+        Units of a plain or vertical file (:func:`read_accelerometer`).
+    fs : float, optional
+        Rate of the uniform grid (Hz); default the phone's own nominal rate.
+
+    Returns
+    -------
+    Record
+        With ``extra``: ``sensor`` ("accelerometer"), ``mass_known``, ``format``,
+        ``units_read``, ``clock`` (:func:`resample_uniform`'s info) and ``geometry``
+        (:func:`vertical_acceleration`'s info).
+    """
+    from dataclasses import replace
+
+    from ..io import check_mass, make_record
+
+    mass_known = mass is not None
+    body = check_mass(mass) if mass_known else UNKNOWN_MASS
+    raw = read_accelerometer(path, units=units)
+    time, acc, clock = resample_uniform(raw.time, raw.acc, fs=fs, source=raw.source)
+    a_v, geometry = vertical_acceleration(time, acc, source=raw.source)
+    record = make_record(time - time[0], body * (G + a_v), body, source=raw.source)
+    return replace(record, extra={"sensor": "accelerometer", "mass_known": mass_known, "format": raw.format,
+                                  "units_read": raw.units_read, "clock": clock, "geometry": geometry})
