@@ -56,6 +56,7 @@ from smd_statespace.effects import EFFECTS, load_effects_file
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
 from smd_statespace.person.diagnose import diagnose_person
+from smd_statespace.person.effect_adapter import record_default
 from smd_statespace.person.extend import configured_for_record, fit_effects
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
 
@@ -164,7 +165,7 @@ def one(task) -> dict:
         # default (measured_floor), is left out so that diagnose can be asked to find it
         base = identify_person(record, measured_floor=False)
         base_seconds = time.perf_counter() - moment
-        candidates = [cls.record_default(base) for cls in EFFECTS.values()]
+        candidates = [record_default(cls, base) for cls in EFFECTS.values()]
         candidates = [c for c in candidates if c is not None]
         if record.floor_acc is None:
             candidates.append("floor_mode:source=modal")

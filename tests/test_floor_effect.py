@@ -8,8 +8,10 @@ from smd_statespace.effects import EFFECTS, FloorMode, make_effect
 from smd_statespace.estimators import cycle_data
 from smd_statespace.io import G, make_record
 from smd_statespace.model import CycleInputs, SMDModel
+from smd_statespace.person.effect_adapter import record_search_size
 from smd_statespace.identify.runner import CycleRunner
 from smd_statespace.simulation import simulate_bouncing
+from smd_statespace.simulation.effect_adapter import draw_inputs, for_simulation
 
 from helpers import finite_difference, random_states
 
@@ -129,10 +131,10 @@ def test_a_searched_floor_frequency_counts_its_trials():
     searched = make_effect("floor_mode:source=modal")
     grid = np.geomspace(2.0, 20.0, searched._trial_count())
     assert np.all(np.diff(np.log(grid)) <= np.log1p(FloorMode.RECORD_FREQUENCY_STEP) + 1e-12)
-    assert searched.record_search_size(None) == grid.size + 1 and 200 < grid.size < 260
-    assert make_effect("floor_mode:source=modal,frequency=3.48").record_search_size(None) == 1
-    assert make_effect("floor_mode").record_search_size(None) == 1
-    assert make_effect("cubic_stiffness").record_search_size(None) == 1
+    assert record_search_size(searched, None) == grid.size + 1 and 200 < grid.size < 260
+    assert record_search_size(make_effect("floor_mode:source=modal,frequency=3.48"), None) == 1
+    assert record_search_size(make_effect("floor_mode"), None) == 1
+    assert record_search_size(make_effect("cubic_stiffness"), None) == 1  # the adapter's default
 
     class Fit:  # what candidate_row reads of a fit: LR 22 on 5 unknowns, the clean record's false floor
         effects = (searched,)
@@ -333,3 +335,21 @@ def test_measured_mode_on_a_simulated_floor_record():
     assert len(ok["floor"]) == len(ok["base"]) == len(pre.valid_cycles)
     error = {label: abs(table.f_h.median() - 1.8) for label, table in ok.items()}
     assert error["floor"] < error["base"] - 0.02
+
+
+def test_drawing_a_floors_ambient_excitation_returns_a_new_floor():
+    """An effect is immutable: its random simulation inputs come in a copy, the floor it was drawn for is unchanged."""
+    person = SMDModel(n_harmonics=1)
+    floor = for_simulation(make_effect("floor_mode:frequency=3.48,ambient=0.5"), person, 70.0)
+    drawn = draw_inputs(floor, np.random.default_rng(1), 10.0)
+    assert drawn is not floor and drawn.values == floor.values
+    rates = []
+    for effect in (floor, drawn, floor):
+        model = SMDModel(n_harmonics=1, effects=[effect])
+        x = np.zeros(model.n_state)
+        x[model.index("f_h")], x[model.index("xi_h")] = 2.5, 0.3
+        rates.append(effect.slot_rates(model, x, 1.3, CycleInputs(f_b=2.0), 0.0))
+    assert np.all(rates[0] == 0.0) and np.array_equal(rates[0], rates[2])  # at rest, before and after the draw
+    assert rates[1][1] != 0.0  # the drawn copy's floor is shaken by its ambient excitation
+    plain = make_effect("cubic_stiffness:beta_3=400")
+    assert draw_inputs(plain, np.random.default_rng(1), 10.0) is plain  # nothing to draw: the adapter's default

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from .. import article
@@ -177,6 +179,8 @@ class FloorMode(Effect):
     KNOWN_MASS_RATIO = 70.0 / article.TABLE3[0].modal_mass
     """Default ``M_h / m_f`` of a known mode: a 70 kg person on mode 1 of the article's plate (0.008)."""
     ALL_SLOTS = ("z", "z_dot", "f_f", "xi_f", "mass_ratio")
+    simulated_mass = None
+    """The person's mass (kg) of a floor prepared for simulation (:meth:`for_simulation`), else None."""
     known = False
 
     def __init__(self, source=None, *, frequency=None, frequency_spread=None, frequency_range=None,
@@ -529,9 +533,12 @@ class FloorMode(Effect):
         return twin
 
     def draw_simulation_inputs(self, rng, duration):
+        """A copy of this (simulated) floor with its ambient excitation drawn for ``duration`` s."""
         f_f, xi_f = self.values["f_f"], self.values["xi_f"]
         phases = rng.uniform(0.0, 2.0 * np.pi, ambient_line_count(f_f, duration))
-        self._excitation = ambient_floor_excitation(self.ambient, f_f, xi_f, duration, phases)
+        twin = copy.copy(self)
+        twin._excitation = ambient_floor_excitation(self.ambient, f_f, xi_f, duration, phases)
+        return twin
 
     def measured_signals(self, states, normals, noise):
         z_ddot = states["z_ddot"].to_numpy()
@@ -542,7 +549,7 @@ class FloorMode(Effect):
         values = self.values
         truth = {"frequency": values["f_f"], "damping": values["xi_f"], "mass_ratio": values["mass_ratio"],
                  "noise": self.noise, "ambient": self.ambient}
-        if hasattr(self, "simulated_mass"):
+        if self.simulated_mass is not None:
             truth["modal_mass"] = self.simulated_mass / values["mass_ratio"]
         return truth
 

@@ -75,7 +75,7 @@ def cycle_data(model: SMDModel, preprocessed, cycle) -> CycleData:
     missing = [name for name in model.requires if name not in signals]
     if missing:
         needing = [e for e in model.effects if missing[0] in e.requires]
-        columns = [c for e in needing for c in getattr(e, "requires_columns", ())]
+        columns = [c for e in needing for c in e.requires_columns]
         column = f"a {columns[0]!r} column, which the record lacks" if columns else "a column the record lacks"
         raise OptionError(
             f"{getattr(preprocessed, 'source', 'record')}: effect {needing[0].name!r} needs signal {missing[0]!r} "

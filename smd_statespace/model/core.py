@@ -62,7 +62,7 @@ import numpy as np
 
 from ..errors import OptionError, check_range
 from ..io import G
-from .effect import Effect
+from .effect import Effect, FloorMotion, HarmonicOrders
 from .inputs import TWO_PI, CycleInputs
 
 
@@ -396,6 +396,7 @@ class SMDModel:
         for effect in self.effects:
             if not isinstance(effect, Effect):
                 raise OptionError(f"effects must be Effect objects, got {effect!r}")
+        self._floor = next((effect for effect in self.effects if isinstance(effect, FloorMotion)), None)
 
         names = [effect.name for effect in self.effects]
         for name in names:
@@ -491,10 +492,8 @@ class SMDModel:
         every effect with a leg term (a cubic spring, a user's nonlinear
         damper) reads ``u - z`` through this.
         """
-        for effect in self.effects:
-            if hasattr(effect, "floor_motion"):
-                return effect.floor_motion(self, x, t, inputs)
-        return 0.0, 0.0
+        floor = self._floor
+        return (0.0, 0.0) if floor is None else floor.floor_motion(self, x, t, inputs)
 
     def effect_slice(self, effect: Effect) -> slice:
         """Positions of ``effect``'s own slots in the state vector."""
@@ -535,7 +534,7 @@ class SMDModel:
         """Force harmonic orders of the model (Eq. 4): ``1..n`` plus those of any ``orders``-bearing effect."""
         orders = set(range(1, int(self.n_harmonics) + 1))
         for effect in self.effects:
-            if hasattr(effect, "orders"):
+            if isinstance(effect, HarmonicOrders):
                 orders.update(int(k) for k in np.atleast_1d(effect.orders(self)))
         return np.array(sorted(orders), dtype=int)
 

@@ -1,14 +1,30 @@
-"""The base class of physical effects: one object per effect, used by estimation, simulation and diagnosis.
+"""The base class of physical effects: a small declaration of slots and terms, used by every package.
 
 Write a subclass (see docs/effects.md), register it with
 :func:`smd_statespace.effects.register_effect`, and every estimator, the
 simulator, the diagnosis and every command know it.
+
+An effect declares its state slots, its term in the COM acceleration and the
+rates of its own dynamic slots (optionally their Jacobians). Everything else
+is derived from those by the package that needs it, with defaults there:
+:mod:`smd_statespace.simulation.effect_adapter` (the truth of a simulation,
+random inputs, extra force harmonics, measured columns),
+:mod:`smd_statespace.diagnostics.effect_adapter` (per-cycle candidates and
+score terms) and :mod:`smd_statespace.person.effect_adapter` (record-level
+candidates, trial starts, search sizes). An effect that can say more than
+the default implements the method the adapter's ``Protocol`` names (the
+floor mode: its random ambient excitation, its measured column). Two
+capabilities the model itself reads are declared here: :class:`FloorMotion`
+and :class:`HarmonicOrders`.
+
+An effect is immutable: its methods return new objects (:meth:`Effect.with_values`,
+``draw_simulation_inputs``) and never change the one they are called on.
 """
 
 from __future__ import annotations
 
 import copy
-from typing import TYPE_CHECKING, Mapping
+from typing import TYPE_CHECKING, Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -17,7 +33,7 @@ from ..errors import OptionError
 if TYPE_CHECKING:  # annotations only
     from .core import CycleInputs, SMDModel, Slot
 
-__all__ = ["Effect", "slot_count"]
+__all__ = ["Effect", "FloorMotion", "HarmonicOrders", "slot_count"]
 
 
 class Effect:
@@ -41,13 +57,11 @@ class Effect:
     - forward simulation: :func:`~smd_statespace.simulation.simulate_bouncing`
       and :func:`~smd_statespace.simulation.integrate_response` integrate the
       same acceleration and slot rates with the parameters at known values
-      (:meth:`with_values`, :attr:`simulation_defaults`,
-      :meth:`for_simulation`), so ``simulate --effect NAME:slot=value``
-      works for every registered effect;
-    - diagnosis: :meth:`candidate` configures the effect for a record and
-      :meth:`score_terms` gives the terms a missing effect would add to the
-      acceleration (derivatives of :meth:`acceleration` in its parameters),
-      which ``diagnose`` correlates with the residual and the record-level
+      (:meth:`with_values`, :attr:`simulation_defaults`), so
+      ``simulate --effect NAME:slot=value`` works for every registered effect;
+    - diagnosis: the terms a missing effect would add to the acceleration
+      are the derivatives of :meth:`acceleration` in its parameters, which
+      ``diagnose`` correlates with the residual and the record-level
       diagnosis fits.
 
     A parameter slot given a value (``NAME:slot=value`` on the command line,
@@ -60,6 +74,10 @@ class Effect:
         Registry name (``--effect NAME``).
     requires : tuple of str
         Exogenous signals the effect needs from :class:`CycleInputs`.
+    requires_columns : tuple of str
+        Columns of the record the effect reads (the floor's measured
+        acceleration ``floor_acc``); identification refuses a record without
+        them, naming the column.
     record_parameters : int
         Values read off the whole record to configure the effect before any
         cycle is identified (e.g. a floor frequency taken from the residual
@@ -68,6 +86,7 @@ class Effect:
 
     name = "effect"
     requires: tuple[str, ...] = ()
+    requires_columns: tuple[str, ...] = ()
     record_parameters: int = 0
     simulation_defaults: Mapping[str, float] = {}
     """Typical true values of the effect's parameter slots (by slot name), used by the simulator when not given."""
@@ -108,57 +127,6 @@ class Effect:
         twin._values = merged
         return twin
 
-    def for_simulation(self, model: "SMDModel", mass: float) -> "Effect":
-        """This effect ready for forward simulation: every parameter slot at a known value.
-
-        Default: the given :attr:`values`, then :attr:`simulation_defaults`;
-        a parameter with neither is an error naming it. ``model`` is the
-        simulated person's model (base options set), ``mass`` the body mass
-        (kg). Override to translate physical options (a floor's modal mass)
-        into slot values.
-        """
-        if self.requires:
-            raise OptionError(
-                f"effect {self.name!r} needs measured signals ({', '.join(self.requires)}); it cannot be simulated"
-            )
-        values = {**self.simulation_defaults, **self.values}
-        missing = [slot.name for slot in self.slots(model) if slot.kind == "parameter" and slot.name not in values]
-        if missing:
-            raise OptionError(
-                f"effect {self.name!r}: give the true value of {', '.join(missing)} to simulate it, "
-                f"e.g. {self.name}:{missing[0]}=VALUE"
-            )
-        return self.with_values(**values)
-
-    def draw_simulation_inputs(self, rng: np.random.Generator, duration: float) -> None:
-        """Draw what a simulation of this effect needs at random (default: nothing).
-
-        Called on the object :meth:`for_simulation` returned, after the
-        person's own random numbers, so the effect leaves those unchanged.
-        """
-
-    def force_harmonics(self, model: "SMDModel"):
-        """Extra force harmonics the simulator adds to the force of Eq. 4, or None (default).
-
-        Returns ``(blf, phases)``: amplitudes (g) and phases (rad, or None for
-        the simulator's default shape) of orders ``n+1, n+2, ...``.
-        """
-        return None
-
-    def measured_signals(self, states, normals, noise: float) -> dict:
-        """Record columns a simulation of this effect adds (default: none).
-
-        ``states`` is the simulator's states table (columns ``u, u_dot,
-        u_ddot``, every dynamic slot and its rate), ``normals`` standard
-        normal numbers (one per sample) for measurement noise, ``noise`` the
-        simulation's noise fraction.
-        """
-        return {}
-
-    def simulation_truth(self) -> dict:
-        """What a simulation with this effect records as its truth (default: the :attr:`values`)."""
-        return self.values
-
     @classmethod
     def candidate(cls, check) -> "Effect | None":
         """This effect configured as a candidate for a record, or None to leave it out.
@@ -176,46 +144,6 @@ class Effect:
         ``judged`` the candidates' refits.
         """
         return []
-
-    @classmethod
-    def record_default(cls, result) -> "Effect | None":
-        """This effect as a default candidate of the record-level diagnosis, or None to leave it out.
-
-        ``result`` is the base :class:`~smd_statespace.person.results.PersonResult`.
-        Default: the effect with its default options.
-        """
-        return cls()
-
-    def record_harmonics(self, model: "SMDModel") -> int:
-        """Force harmonics this effect adds to the record-level model (default 0).
-
-        An effect whose terms are more harmonics of the force (``harmonics``)
-        enters the record-level model as that many more harmonics of the
-        template, varying from cycle to cycle like the others, instead of
-        as parameters.
-        """
-        return 0
-
-    def record_starts(self, result) -> list:
-        """Candidate starting values of this effect's parameters for the record-level search (default: none).
-
-        ``result`` is the :class:`~smd_statespace.person.results.PersonResult`
-        without the effect. Each candidate is a dict of parameter values; the
-        search starts from the one with the highest likelihood. Parameters not
-        given start at 0 when their range holds 0 (the effect absent), else at
-        their slot's nominal value.
-        """
-        return []
-
-    def record_search_size(self, result) -> int:
-        """How many separate trials the record-level search of this effect's parameters makes (default 1).
-
-        An effect whose parameter is found by trying many values (a floor
-        mode's frequency over a grid) takes the best of them, so its
-        likelihood ratio is the largest of that many: ``diagnose`` multiplies
-        its p-value by this number (Bonferroni over the trials) before the test.
-        """
-        return 1
 
     def score_terms(self, model: "SMDModel", x, t, inputs: CycleInputs) -> dict:
         """The terms this effect would add to ``u''``, one per unknown coefficient (m/s^2 per unit).
@@ -311,6 +239,27 @@ class Effect:
 
     def __repr__(self):
         return f"{type(self).__name__}()"
+
+
+@runtime_checkable
+class FloorMotion(Protocol):
+    """An effect that moves the floor under the person (a floor mode).
+
+    The model reads the first such effect's ``(z, z')`` (m, m/s) in
+    :meth:`~smd_statespace.model.SMDModel.floor_motion`, so that every leg
+    term acts on the motion relative to the floor (Section 6).
+    """
+
+    def floor_motion(self, model: "SMDModel", x, t, inputs: CycleInputs):
+        """Floor displacement ``z`` (m) and velocity ``z'`` (m/s), each of shape ``x.shape[:-1]``."""
+
+
+@runtime_checkable
+class HarmonicOrders(Protocol):
+    """An effect whose slots are more harmonics of the force (Eq. 4): the model's basis includes its orders."""
+
+    def orders(self, model: "SMDModel"):
+        """The harmonic orders (integers above ``model.n_harmonics``) the effect adds."""
 
 
 def slot_count(model, effect) -> int:

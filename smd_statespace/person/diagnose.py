@@ -10,7 +10,7 @@ true number of added unknowns
 (:meth:`~smd_statespace.person.results.PersonResult.effect_test`), at
 ``alpha`` over the number of candidates (Bonferroni; a candidate found as the
 best of many trials, a floor mode's frequency grid, is also tested as that many:
-:meth:`Effect.record_search_size <smd_statespace.model.Effect.record_search_size>`). The table shows, before
+:func:`~smd_statespace.person.effect_adapter.record_search_size`). The table shows, before
 and after, ``f_h``, ``xi_h``, the effect's parameters, the noise and the
 whiteness of the innovations. Every candidate is screened at the person's
 cycle starts and variation model (``fit_effects(..., timing=False)``, one search
@@ -19,8 +19,7 @@ it, the cycle starts re-placed and the variation model chosen again with it in
 the model, so that its row shows the numbers ``identify --effect`` gives (its
 test stays the screening's, made where the person without it was fitted).
 
-Candidates, by default (:meth:`Effect.record_default
-<smd_statespace.model.Effect.record_default>`): every registered effect
+Candidates, by default (:func:`~smd_statespace.person.effect_adapter.record_default`): every registered effect
 (a user's too), the floor only as the measured floor when the record has a
 ``floor_acc`` column. An estimated floor mode (``floor_mode:source=modal``)
 is tried only when asked for (``--effect floor_mode:source=modal``): its
@@ -46,6 +45,7 @@ from scipy import stats
 
 from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
+from .effect_adapter import record_default, record_search_size
 from .extend import configured_for_record, fit_effects
 
 __all__ = ["PersonDiagnosis", "diagnose_person", "candidate_row"]
@@ -58,7 +58,7 @@ def candidate_row(base, fitted, level: float) -> dict:
     added = fitted.effects[len(base.effects):]  # the candidate, on top of the effects already in the model
     # a candidate with nothing to estimate (a measured floor) is not nested: it must beat chi-square(1);
     # one found as the best of many trials (a floor mode's frequency grid) is tested as that many (Bonferroni)
-    trials = int(np.prod([effect.record_search_size(base) for effect in added]))
+    trials = int(np.prod([record_search_size(effect, base) for effect in added]))
     log_p = min(float(stats.chi2.logsf(max(lr, 0.0), max(df, 1))) + math.log(trials), 0.0)
     estimates = fitted.effect_estimates()
     before_tests, after_tests = base.test_pvalues(), fitted.test_pvalues()
@@ -196,7 +196,7 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     for name, other in ((first, second), (second, first)):
         lr = 2.0 * (both.loglike - fits[other].loglike)
         df = max(both.added_unknowns(fits[other]), 1)
-        trials = int(np.prod([e.record_search_size(base) for e in fits[name].effects[present:]]))
+        trials = int(np.prod([record_search_size(e, base) for e in fits[name].effects[present:]]))
         out[name] = {"lr": float(lr), "p_value": min(float(stats.chi2.sf(max(lr, 0.0), df)) * trials, 1.0)}
     keeps = [name for name in (first, second) if out[name]["p_value"] < level]
     if len(keeps) == 1:
@@ -221,7 +221,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
         Effects to try (names, ``NAME:key=value`` specs or objects), none of them in ``result`` already;
         a bare name as its class configures itself for this record (as by default).
         Default: every registered effect not in ``result`` as its class configures itself for this
-        record (:meth:`Effect.record_default <smd_statespace.model.Effect.record_default>`).
+        record (:func:`~smd_statespace.person.effect_adapter.record_default`).
     alpha : float
         Family-wise significance level; each candidate is tested at
         ``alpha / len(candidates)``.
@@ -237,7 +237,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     present = {effect.name for effect in result.effects}
     if candidates is None:
         effects = [effect for name, cls in EFFECTS.items() if name not in present
-                   for effect in [cls.record_default(result)] if effect is not None]
+                   for effect in [record_default(cls, result)] if effect is not None]
     else:
         effects = [configured_for_record(candidate, result) for candidate in candidates]
         already = [effect.name for effect in effects if effect.name in present]

@@ -17,8 +17,7 @@ fit that has ``A``.
 How an effect enters:
 
 - force harmonics (``harmonics``): more harmonics of the force, with their
-  template coefficients and cycle-to-cycle spread (:meth:`Effect.record_harmonics
-  <smd_statespace.model.Effect.record_harmonics>`);
+  template coefficients and cycle-to-cycle spread (:func:`~smd_statespace.person.effect_adapter.record_harmonics`);
 - linear in the state with a measured input (a floor with ``floor_acc``):
   exactly, the input's terms are known parts of the rates and of the
   observation;
@@ -45,6 +44,7 @@ from ..errors import OptionError
 from ..model import SMDModel
 from ..progress import tqdm
 from .dynamics import PersonDynamics
+from .effect_adapter import record_default, record_harmonics, record_starts
 from .model import RecordModel
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "record_effects", "configured_for_record",
@@ -70,13 +70,13 @@ def check_effects(effects, record) -> tuple:
 
     effects = tuple(make_effect(effect) for effect in effects)
     for effect in effects:
-        columns = tuple(getattr(effect, "requires_columns", ()))
+        columns = effect.requires_columns
         missing = [column for column in columns if getattr(record, column, None) is None]
         if missing:
             raise OptionError(f"{record.source}: effect {effect.spec!r} needs the column {missing[0]} "
                               "(the floor's measured acceleration, m/s^2), which the record does not have; "
                               "without one use floor_mode:source=modal")
-    SMDModel(effects=[e for e in effects if not e.record_harmonics(SMDModel())])  # duplicates, bad values
+    SMDModel(effects=[e for e in effects if not record_harmonics(e, SMDModel())])  # duplicates, bad values
     return effects
 
 
@@ -125,14 +125,14 @@ def configured_for_record(effect, result):
     """``effect`` as the record-level model takes it: a bare name (no options) as its class configures itself.
 
     ``identify --effect cubic_stiffness`` then searches the range ``diagnose`` proposed it with
-    (:meth:`Effect.record_default <smd_statespace.model.Effect.record_default>`, from ``result``, the fit
+    (:func:`~smd_statespace.person.effect_adapter.record_default`, from ``result``, the fit
     without it: a cubic spring's range scaled to the record's displacement), not a fixed default that a
     strong spring ends on. Specs with options and :class:`Effect` objects are taken as given.
     """
     from ..effects import EFFECTS, make_effect
 
     if isinstance(effect, str) and effect.strip() in EFFECTS:
-        configured = EFFECTS[effect.strip()].record_default(result)
+        configured = record_default(EFFECTS[effect.strip()], result)
         if configured is not None and configured.name == effect.strip():
             return configured
     return make_effect(effect)
@@ -141,8 +141,8 @@ def configured_for_record(effect, result):
 def split_effects(effects, n_harmonics: int) -> tuple:
     """``(harmonics, model)``: the record model's force harmonics and the SMD model of the other effects."""
     base = SMDModel(n_harmonics=n_harmonics)
-    extra = sum(int(effect.record_harmonics(base)) for effect in effects)
-    dynamic = [effect for effect in effects if not effect.record_harmonics(base)]
+    extra = sum(record_harmonics(effect, base) for effect in effects)
+    dynamic = [effect for effect in effects if not record_harmonics(effect, base)]
     return n_harmonics + extra, SMDModel(n_harmonics=n_harmonics + extra, effects=dynamic)
 
 
@@ -193,8 +193,7 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     """Starts of the search, one per fit the model could grow from.
 
     From ``result`` (the fit the effects are added to) by name, the best of
-    the added effects' own trial starts (:meth:`Effect.record_starts
-    <smd_statespace.model.Effect.record_starts>`) by likelihood, else the
+    the added effects' own trial starts (:func:`~smd_statespace.person.effect_adapter.record_starts`) by likelihood, else the
     model's. When ``result`` holds effects already, a second start from
     ``root`` (the fit without any) with ``result``'s effect parameters: a
     variance that an earlier effect's fit drove to zero sits on a flat
@@ -202,7 +201,7 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     """
     default = model.start_params(result.f_h, result.xi_h)
     low, high = np.asarray(model.bounds).T
-    trials = [effect.record_starts(result) or [{}] for effect in effects]
+    trials = [record_starts(effect, result) or [{}] for effect in effects]
     origins = [result.model.unpack(result.params)]
     if root is not result:
         origins.append({**origins[0], **root.model.unpack(root.params)})

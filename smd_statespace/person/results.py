@@ -409,7 +409,7 @@ class PersonResult:
 
         The path a nonlinear effect is linearised about
         (:func:`~smd_statespace.person.statespace.nominal_path`); an effect's
-        :meth:`record_default <smd_statespace.model.Effect.record_default>` may read its size.
+        :func:`~smd_statespace.person.effect_adapter.record_default` may read its size.
         """
         from .statespace import nominal_path  # statsmodels: imported when a path is asked for
 

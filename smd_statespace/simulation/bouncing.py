@@ -76,6 +76,7 @@ from ..io import G, Record, check_mass, make_record, write_record
 from ..model import SMDModel, c_h, k_h
 from ..model import acceleration_frf
 from .dynamics import _cycle_states, _number, _simulation_effects, _System, _vector
+from .effect_adapter import draw_inputs, force_harmonics, measured_signals, simulation_truth
 from .generators import GENERATORS, TEMPO_MAX_FB_VARIATION, _check_pulses
 from .variation import (SMOOTH_CORRELATION_CYCLES, TRUNCATION_SD, VARIATIONS, _cycles_frame, _draw_cycles,
                         _smooth_cycles, _smooth_force, _smooth_geometry, _smooth_run_in, _smooth_states)
@@ -323,7 +324,7 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
         )
     effects = _simulation_effects(effects, mass)
     person = SMDModel(n_harmonics=1)
-    forcing = [effect.force_harmonics(person) for effect in effects]
+    forcing = [force_harmonics(effect, person) for effect in effects]
     extra = [pair for pair in forcing if pair is not None]
     extra_blf = np.concatenate([np.asarray(pair[0], dtype=float) for pair in extra]) if extra else np.empty(0)
     given_extra = [pair[1] for pair in extra]
@@ -410,6 +411,16 @@ def _smooth_record(settings, rng_blocks, run_in_knots, geometry, time):
     return cycles, _smooth_states(s.system, force, run_in, cycles, time)
 
 
+def _with_drawn_inputs(settings, rng):
+    """``settings`` with each effect's random simulation inputs drawn (a new system when one drew any)."""
+    drawn = tuple(draw_inputs(effect, rng, settings.duration) for effect in settings.effects)
+    if all(new is old for new, old in zip(drawn, settings.effects)):
+        return settings
+    dynamic = [effect for effect in drawn if force_harmonics(effect, SMDModel(n_harmonics=1)) is None]
+    system = settings.system.with_drawn_inputs(dynamic) if dynamic else settings.system
+    return SimpleNamespace(**{**vars(settings), "effects": drawn, "system": system})
+
+
 def _measured_record(settings, states, grf_noise, floor_noise):
     """The :class:`Record` an estimator sees: Eq. 3 plus noise (and the noisy floor acceleration)."""
     s = settings
@@ -417,7 +428,7 @@ def _measured_record(settings, states, grf_noise, floor_noise):
     force = s.mass * (G + states["u_ddot"].to_numpy()) + s.noise * weight * grf_noise  # Eq. 3
     columns = {}
     for effect in s.effects:
-        columns.update(effect.measured_signals(states, floor_noise, s.noise))
+        columns.update(measured_signals(effect, states, floor_noise, s.noise))
     return make_record(states["time"].to_numpy(), force, s.mass, source="synthetic", **columns)
 
 
@@ -426,8 +437,8 @@ def _effects_truth(settings):
     out = {}
     for effect in settings.effects:
         truth = {key: (list(value) if isinstance(value, tuple) else value)
-                 for key, value in effect.simulation_truth().items()}
-        if "phases" in truth and effect.force_harmonics(SMDModel(n_harmonics=1)) is not None:
+                 for key, value in simulation_truth(effect).items()}
+        if "phases" in truth and force_harmonics(effect, SMDModel(n_harmonics=1)) is not None:
             truth["phases"] = [float(v) for v in settings.extra_phases]
         out[effect.name] = truth
     return out
@@ -692,8 +703,7 @@ def simulate_bouncing(
     else:
         rng_blocks, grf_noise, floor_noise = _draw_blocks(rng, n_rows, s.blf.size, s.all_blf.size - s.blf.size,
                                                           n_samples)
-    for effect in s.effects:  # drawn last, so that they leave every other random number unchanged
-        effect.draw_simulation_inputs(rng, s.duration)
+    s = _with_drawn_inputs(s, rng)  # drawn last, so that they leave every other random number unchanged
     generator = None
     if s.variation in GENERATORS:
         cycles, states, generator = make(s, rng_blocks, time)

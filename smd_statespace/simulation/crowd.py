@@ -61,6 +61,7 @@ from ..io import G
 from ..model import SMDModel, acceleration_frf
 from .bouncing import default_phases, steady_grf_shape
 from .dynamics import _cycle_states, _simulation_effects, _System
+from .effect_adapter import force_harmonics
 from .population import _population_columns, with_stiffness_and_damping
 from .variation import TRUNCATION_SD, _draw_cycles
 
@@ -525,7 +526,7 @@ def _simulate_forces(indices, parameters, cycles, time, out, effects=()):
         for i in indices:
             mass = float(parameters["mass"][i])
             prepared = _simulation_effects(effects, mass, where="crowd")
-            harmonics = [effect.force_harmonics(person) for effect in prepared]
+            harmonics = [force_harmonics(effect, person) for effect in prepared]
             person_cycles = _with_extra_harmonics(cycles[i], [h for h in harmonics if h is not None],
                                                   parameters, i)
             system = _System(parameters["f_h"][i], parameters["xi_h"][i],

@@ -12,6 +12,7 @@ of the first cycle (exact for a linear system, by shooting otherwise).
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -21,6 +22,7 @@ from ..effects import build_effect, make_effect
 from ..errors import OptionError
 from ..io import G, check_mass
 from ..model import CycleInputs, SMDModel, smd_acceleration
+from .effect_adapter import for_simulation, force_harmonics
 
 __all__ = ["RTOL", "ATOL", "integrate_response"]
 
@@ -94,7 +96,7 @@ def _simulation_effects(effects, mass, where="simulate_bouncing"):
         raise OptionError(f"{where}: effect {twice[0]!r} is given twice; give each effect once")
     person = SMDModel(n_harmonics=1)
     try:
-        return tuple(effect.for_simulation(person, mass) for effect in built)
+        return tuple(for_simulation(effect, person, mass) for effect in built)
     except OptionError as exc:
         raise OptionError(f"{where}: {exc}") from None
 
@@ -139,6 +141,19 @@ class _System:
         self.n_state = len(self.names)
         self.a_matrix, self.b_vector = self._linear_matrices()
         self.linear = self._is_linear()
+
+    def with_drawn_inputs(self, effects) -> "_System":
+        """This system with ``effects`` (the same ones, their random inputs drawn) in place of its own.
+
+        The inputs are additive forcing of the effects' slots (a floor's
+        ambient excitation), not dynamics, so the linearisation at rest
+        (:attr:`a_matrix`, :attr:`linear`) is kept as computed without them.
+        """
+        twin = copy.copy(self)
+        twin.effects = tuple(effects)
+        twin.model = SMDModel(n_harmonics=1, effects=twin.effects)
+        twin._widths = [(effect, _slot_width(twin.model.effect_slice(effect))) for effect in twin.effects]
+        return twin
 
     def rates(self, x, force_g, t):
         """``(dx/dt, u'')`` for states ``x`` (shape (n_state, ...)) under input ``g F`` at time(s) ``t``."""
@@ -375,7 +390,7 @@ def integrate_response(cycles, time, f_h, xi_h, mass=70.0, effects=None, initial
     mass = check_mass(mass, source="mass")
     effects = _simulation_effects(effects, mass, where=where)
     person = SMDModel(n_harmonics=1)
-    if any(effect.force_harmonics(person) is not None for effect in effects):
+    if any(force_harmonics(effect, person) is not None for effect in effects):
         raise OptionError(f"{where}: extra force harmonics are columns a5, b5, ... of cycles, not an effect here")
     required = {"t_start", "t_end", "f_b", "a0"}
     if not isinstance(cycles, pd.DataFrame) or not required <= set(cycles.columns) or len(cycles) == 0:

@@ -1,0 +1,102 @@
+"""How the record-level person uses an effect: as a default candidate, as force harmonics, its trial starts.
+
+An :class:`~smd_statespace.model.Effect` declares slots and terms only. The
+record-level estimator and its diagnosis need four more things of it; each
+has a default here, and an effect that knows better implements the method
+the matching ``Protocol`` names:
+
+========================== ===================== =====================================================
+function                   protocol              default
+========================== ===================== =====================================================
+:func:`record_default`     :class:`RecordDefault`     the effect with its default options
+:func:`record_harmonics`   :class:`RecordHarmonics`   0 (the effect's parameters are estimated)
+:func:`record_starts`      :class:`RecordStarts`      none (0 where the range holds 0, else the nominal)
+:func:`record_search_size` :class:`RecordSearchSize`  1 (one search, no multiple testing)
+========================== ===================== =====================================================
+
+The cubic spring scales its range to the record's displacement
+(``record_default``), the extra harmonics enter as more harmonics of the
+force's template (``record_harmonics``), the estimated floor mode starts
+from a grid of frequencies and counts them (``record_starts``,
+``record_search_size``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+if TYPE_CHECKING:  # annotations only
+    from ..model import Effect, SMDModel
+    from .results import PersonResult
+
+__all__ = ["RecordDefault", "RecordHarmonics", "RecordSearchSize", "RecordStarts", "record_default",
+           "record_harmonics", "record_search_size", "record_starts"]
+
+
+@runtime_checkable
+class RecordDefault(Protocol):
+    """An effect class that configures itself for a record (a cubic spring's range scaled to its displacement)."""
+
+    def record_default(self, result: "PersonResult") -> "Effect | None":
+        """The effect as a default candidate for the record of ``result``, or None to leave it out."""
+
+
+@runtime_checkable
+class RecordHarmonics(Protocol):
+    """An effect that is more harmonics of the force: the record-level model takes them into its template."""
+
+    def record_harmonics(self, model: "SMDModel") -> int:
+        """How many harmonics of the force's template (varying from cycle to cycle like the others) it adds."""
+
+
+@runtime_checkable
+class RecordStarts(Protocol):
+    """An effect whose parameters need trial starts (a floor mode's frequency over a grid)."""
+
+    def record_starts(self, result: "PersonResult") -> list:
+        """Candidate starting values of the effect's parameters, each a dict by slot name."""
+
+
+@runtime_checkable
+class RecordSearchSize(Protocol):
+    """An effect whose search tries many values of a parameter and keeps the best."""
+
+    def record_search_size(self, result: "PersonResult") -> int:
+        """How many separate trials the search makes (``diagnose`` multiplies the p-value by it)."""
+
+
+def record_default(effect_class: type, result: "PersonResult") -> "Effect | None":
+    """``effect_class`` as a default candidate of the record-level diagnosis, or None to leave it out.
+
+    ``result`` is the base :class:`~smd_statespace.person.results.PersonResult`.
+    Default: the effect with its default options.
+    """
+    return effect_class.record_default(result) if isinstance(effect_class, RecordDefault) else effect_class()
+
+
+def record_harmonics(effect: "Effect", model: "SMDModel") -> int:
+    """Force harmonics ``effect`` adds to the record-level model of ``model`` instead of parameters (default 0)."""
+    return int(effect.record_harmonics(model)) if isinstance(effect, RecordHarmonics) else 0
+
+
+def record_starts(effect: "Effect", result: "PersonResult") -> list:
+    """Candidate starting values of ``effect``'s parameters for the record-level search (default: none).
+
+    ``result`` is the :class:`~smd_statespace.person.results.PersonResult`
+    without the effect. Each candidate is a dict of parameter values; the
+    search starts from the one with the highest likelihood. Parameters not
+    given start at 0 when their range holds 0 (the effect absent), else at
+    their slot's nominal value.
+    """
+    return effect.record_starts(result) if isinstance(effect, RecordStarts) else []
+
+
+def record_search_size(effect: "Effect", result: "PersonResult") -> int:
+    """How many separate trials the record-level search of ``effect``'s parameters makes (default 1).
+
+    An effect whose parameter is found by trying many values (a floor
+    mode's frequency over a grid) takes the best of them, so its likelihood
+    ratio is the largest of that many: ``diagnose`` multiplies its p-value
+    by this number (Bonferroni over the trials) before the test.
+    """
+    return int(effect.record_search_size(result)) if isinstance(effect, RecordSearchSize) else 1
