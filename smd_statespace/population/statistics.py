@@ -359,6 +359,103 @@ class PopulationStats:
         return plot_histograms(self, parameter, path, published=published)
 
 
+def _check_options(min_cycles, n_bootstrap, confidence, seed, a_max, trend_degrees) -> dict:
+    """The trend degree of every parameter: :data:`TREND_DEGREES` with ``trend_degrees``'s overrides.
+
+    Raises an :class:`OptionError` naming the first invalid option of :func:`population_stats`.
+    """
+    for name, value, minimum in (("min_cycles", min_cycles, 3), ("n_bootstrap", n_bootstrap, 0)):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
+            raise OptionError(f"{name} must be a whole number >= {minimum}, got {value!r}")
+    if not 0 < confidence < 1:
+        raise OptionError(f"confidence must be between 0 and 1, got {confidence!r}")
+    whole = isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0
+    if not (isinstance(seed, np.random.SeedSequence) or whole):
+        raise OptionError(f"seed must be a non-negative whole number or a numpy SeedSequence, got {seed!r}")
+    if not (np.isfinite(a_max) and a_max > 0):
+        raise OptionError(f"a_max must be a positive number, got {a_max!r}")
+    degrees = dict(TREND_DEGREES)
+    for name, degree in dict(trend_degrees or {}).items():
+        if name not in PARAMETERS or degree not in (1, 2):
+            raise OptionError(f"trend_degrees: {name!r}: {degree!r}; give parameters of {', '.join(PARAMETERS)} "
+                              "with degree 1 or 2")
+        degrees[name] = degree
+    return degrees
+
+
+def _select_cycles(table: pd.DataFrame, bands: Bands, include_implausible: bool, noun: str) -> tuple:
+    """``(counts, implausible)``: the cycles' tallies and the mask of implausible ``ok`` cycles.
+
+    Adds the column ``band`` to ``table`` (-1 for a cycle that is not used or lies outside the
+    bands); a :class:`RecordError` when no cycle is ``ok``, usable (plausible, from an adequate
+    model, unless ``include_implausible``) or inside the bands.
+    """
+    sources_read = list(dict.fromkeys(table["source"]))
+    by_status = {str(k): int(v) for k, v in table["status"].value_counts().items()}
+    ok = (table["status"] == _STATUS_OK).to_numpy()
+    if not ok.any():
+        detail = ", ".join(f"{n} {s}" for s, n in sorted(by_status.items()))
+        raise RecordError(f"{', '.join(sources_read)}: no 'ok' {noun} to analyse ({detail})")
+    implausible = ok & table["implausible"].to_numpy(dtype=bool)
+    inadequate = ok & ~table[ADEQUATE_COLUMN].to_numpy(dtype=bool)
+    usable = ok & ((~implausible & ~inadequate) | include_implausible)
+    if not usable.any():
+        reasons = reason_counts(table.loc[implausible, "implausible_reason"])
+        why = ", ".join(f"{reason}: {n}" for reason, n in reasons.items())
+        raise RecordError(f"{', '.join(sources_read)}: all {int(ok.sum())} ok {noun} are implausible ({why or 'none'})"
+                          f" or from an inadequate model ({int(inadequate.sum())}); nothing to analyse "
+                          "(--include-implausible keeps them)")
+    band = np.where(usable, bands.assign(table["f_b"].to_numpy()), -1)
+    if not (band >= 0).any():
+        f_ok = table.loc[usable, "f_b"]
+        raise RecordError(f"{', '.join(sources_read)}: none of the {int(usable.sum())} ok {noun} has f_b inside the "
+                          f"bands {bands.intervals[0][0]:g}-{bands.intervals[-1][1]:g} Hz (their f_b: "
+                          f"{f_ok.min():.3g}-{f_ok.max():.3g} Hz); choose --bands to cover them")
+    table["band"] = band
+    counts = {"rows": int(len(table)), "by_status": by_status, "ok": int(ok.sum()),
+              "implausible": int(implausible.sum()),
+              "implausible_reasons": reason_counts(table.loc[implausible, "implausible_reason"]),
+              "inadequate": int(inadequate.sum()), "usable": int(usable.sum()),
+              "outside_bands": int((usable & (band < 0)).sum()), "in_bands": int((band >= 0).sum()),
+              "sources": sources_read}
+    return counts, implausible
+
+
+def _fit_parameter(table: pd.DataFrame, parameter: str, bands: Bands, implausible: np.ndarray, cells: dict,
+                   options: dict, noun: str):
+    """Fit one parameter: its Eq. 19 skew-normal in every band (into ``cells``); returns its trend in ``f_b``.
+
+    Adds the column ``used_<parameter>`` (the cycles its fits use) to ``table``. The trend is a
+    :class:`TrendResult`, or ``"no trend (why)"`` when too few cycles or no spread.
+    """
+    include_undetermined, seed = options["include_undetermined"], options["seed"]
+    p_index = list(PARAMETERS).index(parameter)  # seeds keyed by the parameter, not by what else is fitted
+    spec = PARAMETERS[parameter]
+    band = table["band"].to_numpy()
+    values = table[spec.column].to_numpy(dtype=float)
+    determined = np.logical_and.reduce([table[flag].to_numpy(dtype=bool) for flag in spec.determined_by])
+    if options["include_implausible"]:  # identify clears the *_determined flags of implausible cycles; kept means kept
+        determined = determined | implausible
+    in_band = band >= 0
+    used = in_band & np.isfinite(values) & (determined | include_undetermined)
+    table[f"used_{parameter}"] = used
+    for b in range(len(bands)):
+        here = band == b
+        undetermined = int((here & ~determined).sum())
+        cells[parameter, b] = _fit_cell(
+            parameter, b, values[here & used], 0 if include_undetermined else undetermined, undetermined,
+            min_cycles=options["min_cycles"], n_bootstrap=options["n_bootstrap"], rng=np.random.default_rng(
+                _seed_sequence(seed, 0, p_index, b)), confidence=options["confidence"], a_max=options["a_max"],
+            noun=noun)
+    f_b = table["f_b"].to_numpy()
+    degree = int(options["trend_degrees"].get(parameter, 1))
+    shortfall = _trend_shortfall(f_b[used], degree, noun) or _no_spread(values[used])
+    return f"no trend ({shortfall})" if shortfall else fit_trend(
+        f_b[used], values[used], degree, parameter=parameter, n_bootstrap=options["n_bootstrap"],
+        rng=np.random.default_rng(_seed_sequence(seed, 1, p_index)), confidence=options["confidence"],
+        cov_type=options["cov_type"])
+
+
 def population_stats(sources, *, bands=None, parameters=None, mass=None, min_cycles: int = MIN_CYCLES,
                      n_bootstrap: int = N_BOOTSTRAP, seed=0, include_undetermined: bool = False,
                      include_implausible: bool = False, confidence: float = 0.95, a_max: float = A_MAX,
@@ -413,81 +510,18 @@ def population_stats(sources, *, bands=None, parameters=None, mass=None, min_cyc
         Invalid bands, ``min_cycles``, ``n_bootstrap``, ``confidence`` or parameters.
     """
     bands = Bands.coerce(bands)
-    for name, value, minimum in (("min_cycles", min_cycles, 3), ("n_bootstrap", n_bootstrap, 0)):
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < minimum:
-            raise OptionError(f"{name} must be a whole number >= {minimum}, got {value!r}")
-    if not 0 < confidence < 1:
-        raise OptionError(f"confidence must be between 0 and 1, got {confidence!r}")
-    if not (isinstance(seed, np.random.SeedSequence) or (isinstance(seed, (int, np.integer))
-                                                          and not isinstance(seed, bool) and seed >= 0)):
-        raise OptionError(f"seed must be a non-negative whole number or a numpy SeedSequence, got {seed!r}")
-    if not (np.isfinite(a_max) and a_max > 0):
-        raise OptionError(f"a_max must be a positive number, got {a_max!r}")
-    degrees = dict(TREND_DEGREES)
-    for name, degree in dict(trend_degrees or {}).items():
-        if name not in PARAMETERS or degree not in (1, 2):
-            raise OptionError(f"trend_degrees: {name!r}: {degree!r}; give parameters of {', '.join(PARAMETERS)} "
-                              "with degree 1 or 2")
-        degrees[name] = degree
+    degrees = _check_options(min_cycles, n_bootstrap, confidence, seed, a_max, trend_degrees)
     table = read_results(sources, parameters=parameters, mass=mass)
     parameters, notes, noun = table.attrs["parameters"], list(table.attrs["notes"]), table.attrs["noun"]
-    sources_read = list(dict.fromkeys(table["source"]))
-    by_status = {str(k): int(v) for k, v in table["status"].value_counts().items()}
-    ok = (table["status"] == _STATUS_OK).to_numpy()
-    if not ok.any():
-        detail = ", ".join(f"{n} {s}" for s, n in sorted(by_status.items()))
-        raise RecordError(f"{', '.join(sources_read)}: no 'ok' {noun} to analyse ({detail})")
-    implausible = ok & table["implausible"].to_numpy(dtype=bool)
-    inadequate = ok & ~table[ADEQUATE_COLUMN].to_numpy(dtype=bool)
-    usable = ok & ((~implausible & ~inadequate) | include_implausible)
-    if not usable.any():
-        why = ", ".join(f"{reason}: {n}" for reason, n in reason_counts(table.loc[implausible,
-                                                                                   "implausible_reason"]).items())
-        raise RecordError(f"{', '.join(sources_read)}: all {int(ok.sum())} ok {noun} are implausible ({why or 'none'})"
-                          f" or from an inadequate model ({int(inadequate.sum())}); nothing to analyse "
-                          "(--include-implausible keeps them)")
-    band = np.where(usable, bands.assign(table["f_b"].to_numpy()), -1)
-    if not (band >= 0).any():
-        f_ok = table.loc[usable, "f_b"]
-        raise RecordError(f"{', '.join(sources_read)}: none of the {int(usable.sum())} ok {noun} has f_b inside the "
-                          f"bands {bands.intervals[0][0]:g}-{bands.intervals[-1][1]:g} Hz (their f_b: "
-                          f"{f_ok.min():.3g}-{f_ok.max():.3g} Hz); choose --bands to cover them")
-    table["band"] = band
-    counts = {"rows": int(len(table)), "by_status": by_status, "ok": int(ok.sum()),
-              "implausible": int(implausible.sum()),
-              "implausible_reasons": reason_counts(table.loc[implausible, "implausible_reason"]),
-              "inadequate": int(inadequate.sum()), "usable": int(usable.sum()),
-              "outside_bands": int((usable & (band < 0)).sum()), "in_bands": int((band >= 0).sum()),
-              "sources": sources_read, "notes": notes}
+    counts, implausible = _select_cycles(table, bands, include_implausible, noun)
+    counts["notes"] = notes
     options = {"min_cycles": int(min_cycles), "n_bootstrap": int(n_bootstrap), "seed": seed,
                "include_undetermined": bool(include_undetermined),
                "include_implausible": bool(include_implausible), "confidence": float(confidence),
                "a_max": float(a_max), "cov_type": cov_type, "trend_degrees": degrees}
-
     cells, trends = {}, {}
-    f_b = table["f_b"].to_numpy()
     for parameter in parameters:
-        p_index = list(PARAMETERS).index(parameter)  # seeds keyed by the parameter, not by what else is fitted
-        spec = PARAMETERS[parameter]
-        values = table[spec.column].to_numpy(dtype=float)
-        determined = np.logical_and.reduce([table[flag].to_numpy(dtype=bool) for flag in spec.determined_by])
-        if include_implausible:  # identify clears the *_determined flags of implausible cycles; kept means kept
-            determined = determined | implausible
-        in_band = band >= 0
-        used = in_band & np.isfinite(values) & (determined | include_undetermined)
-        table[f"used_{parameter}"] = used
-        for b in range(len(bands)):
-            here = band == b
-            undetermined = int((here & ~determined).sum())
-            cells[parameter, b] = _fit_cell(
-                parameter, b, values[here & used], 0 if include_undetermined else undetermined, undetermined,
-                min_cycles=min_cycles, n_bootstrap=n_bootstrap, rng=np.random.default_rng(
-                    _seed_sequence(seed, 0, p_index, b)), confidence=confidence, a_max=a_max, noun=noun)
-        degree = int(degrees.get(parameter, 1))
-        shortfall = _trend_shortfall(f_b[used], degree, noun) or _no_spread(values[used])
-        trends[parameter] = f"no trend ({shortfall})" if shortfall else fit_trend(
-            f_b[used], values[used], degree, parameter=parameter, n_bootstrap=n_bootstrap,
-            rng=np.random.default_rng(_seed_sequence(seed, 1, p_index)), confidence=confidence, cov_type=cov_type)
+        trends[parameter] = _fit_parameter(table, parameter, bands, implausible, cells, options, noun)
     return PopulationStats(cycles=table, bands=bands, parameters=parameters, cells=cells, trends=trends,
                            counts=counts, options=options, noun=noun)
 
