@@ -37,6 +37,37 @@ def plot_preprocessed(pre, path=None, zoom_cycles=3) -> Figure:
     matplotlib.figure.Figure
         The figure (made without pyplot, so no GUI backend is needed).
     """
+    rows = _rows(pre)
+    zoom = _zoom_window(pre, zoom_cycles)
+    fig, axes = _figure(rows, zoom is not None)
+    name = Path(str(pre.source)).name or str(pre.source)
+    fig.suptitle(
+        f"{name}: pre-processing, {len(pre.cycles)} cycles ({len(pre.valid_cycles)} valid), "
+        f"fs {pre.fs:g} Hz, high-pass {pre.cutoff:g} Hz",
+        fontsize=11, y=1.0 - 0.12 / fig.get_figheight(), va="top",
+    )
+    n_cols = axes.shape[1]
+    for col in range(n_cols):
+        _draw_steps(pre, axes[:, col], full=(col == 0), dense=(col == 0 and zoom is not None))
+    for ax, (ylabel, title, _) in zip(axes[:, 0], rows):
+        ax.set_title(title, fontsize=10, loc="left", pad=4, y=1.0)  # fixed y: no costly auto-placement
+        ax.set_ylabel(ylabel)
+    axes[0, 0].set_xlim(pre.time[0], pre.time[-1])
+    if zoom is not None:
+        _zoom_column(pre, axes, zoom, zoom_cycles)
+    else:
+        axes[-1, 0].set_xlabel("time (s)")
+    for ax_text, ax_lines in zip(axes[:, -1], axes[:, 0]):
+        handles, labels = ax_lines.get_legend_handles_labels()
+        ax_text.legend(handles, labels, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=3, fontsize=8,
+                       frameon=False, borderaxespad=0.15, handlelength=1.6, columnspacing=1.2)
+    if path is not None:
+        fig.savefig(path, dpi=100)
+    return fig
+
+
+def _rows(pre) -> list:
+    """``(y label, title, height ratio)`` of each row of panels: the steps, and the floor's with a floor signal."""
     rows = [
         ("GRF (N)", "Ground reaction force and cycles", 1.0),
         (r"$\ddot u$ (m/s$^2$)", r"COM acceleration $\ddot u = (GRF - M_h g)/M_h$ (Eq. 3)", 1.0),
@@ -46,14 +77,18 @@ def plot_preprocessed(pre, path=None, zoom_cycles=3) -> Figure:
     ]
     if pre.floor_acc is not None:
         rows.append((r"$\ddot z$ (m/s$^2$)", "Floor acceleration, high-passed", 0.8))
-    zoom = _zoom_window(pre, zoom_cycles)
-    n_cols = 1 if zoom is None else 2
+    return rows
+
+
+def _figure(rows: list, zoomed: bool) -> tuple:
+    """``(figure, axes)``: one row of axes per step, a second (wider) column for the zoom, fixed margins."""
+    n_cols = 2 if zoomed else 1
     ratios = [row[2] for row in rows]
     gap = 0.62  # inches between rows: title or legend above each axis
     unit = 1.65  # inches of a row of ratio 1
     top, bottom = 0.75, 0.55
     height = top + bottom + unit * sum(ratios) + gap * (len(rows) - 1)
-    width = 13.0 if zoom is not None else 9.0
+    width = 13.0 if zoomed else 9.0
     left, right = 0.95, 0.2
     fig = Figure(figsize=(width, height))
     # Fixed margins (in inches): with this many labels the constrained and
@@ -71,46 +106,28 @@ def plot_preprocessed(pre, path=None, zoom_cycles=3) -> Figure:
             "wspace": 0.12,
         },
     )
-    name = Path(str(pre.source)).name or str(pre.source)
-    fig.suptitle(
-        f"{name}: pre-processing, {len(pre.cycles)} cycles ({len(pre.valid_cycles)} valid), "
-        f"fs {pre.fs:g} Hz, high-pass {pre.cutoff:g} Hz",
-        fontsize=11, y=1.0 - 0.12 / height, va="top",
-    )
-    for col in range(n_cols):
-        _draw_steps(pre, axes[:, col], full=(col == 0), dense=(col == 0 and zoom is not None))
-    for ax, (ylabel, title, _) in zip(axes[:, 0], rows):
-        ax.set_title(title, fontsize=10, loc="left", pad=4, y=1.0)  # fixed y: no costly auto-placement
-        ax.set_ylabel(ylabel)
-    axes[0, 0].set_xlim(pre.time[0], pre.time[-1])
-    legend_axes = axes[:, -1]
-    if zoom is not None:
-        first, last = _zoom_cycles(pre, zoom_cycles)
-        axes[0, 0].axvspan(*zoom, color="tab:olive", alpha=0.3, lw=0, zorder=0.5)
-        axes[0, 0].fill_between([], [], color="tab:olive", alpha=0.3, label="zoomed span (right)")
-        axes[-1, 0].set_xlabel("time (s): whole record")
-        axes[-1, 1].set_xlabel(f"time (s): zoom on cycles {first}-{last}, shaded olive in the GRF panel")
-        axes[0, 1].set_xlim(*zoom)
-        inside = (pre.time >= zoom[0]) & (pre.time <= zoom[1])
-        for row, ax_zoom in enumerate(axes[:, 1]):
-            if row == 2:  # the removed part: same scale as the whole record
-                ax_zoom.set_ylim(axes[2, 0].get_ylim())
-                continue
-            values = [np.asarray(line.get_ydata())[inside] for line in ax_zoom.get_lines()
-                      if np.size(line.get_ydata()) == inside.size]
-            low = min(float(v.min()) for v in values)
-            high = max(float(v.max()) for v in values)
-            pad = 0.1 * (high - low) if high > low else 1.0
-            ax_zoom.set_ylim(low - pad, high + pad)
-    else:
-        axes[-1, 0].set_xlabel("time (s)")
-    for ax_text, ax_lines in zip(legend_axes, axes[:, 0]):
-        handles, labels = ax_lines.get_legend_handles_labels()
-        ax_text.legend(handles, labels, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=3, fontsize=8,
-                       frameon=False, borderaxespad=0.15, handlelength=1.6, columnspacing=1.2)
-    if path is not None:
-        fig.savefig(path, dpi=100)
-    return fig
+    return fig, axes
+
+
+def _zoom_column(pre, axes, zoom: tuple, zoom_cycles: int):
+    """The zoom column: its span shaded in the GRF panel, x labels, and y-ranges fitted to the zoomed span."""
+    first, last = _zoom_cycles(pre, zoom_cycles)
+    axes[0, 0].axvspan(*zoom, color="tab:olive", alpha=0.3, lw=0, zorder=0.5)
+    axes[0, 0].fill_between([], [], color="tab:olive", alpha=0.3, label="zoomed span (right)")
+    axes[-1, 0].set_xlabel("time (s): whole record")
+    axes[-1, 1].set_xlabel(f"time (s): zoom on cycles {first}-{last}, shaded olive in the GRF panel")
+    axes[0, 1].set_xlim(*zoom)
+    inside = (pre.time >= zoom[0]) & (pre.time <= zoom[1])
+    for row, ax_zoom in enumerate(axes[:, 1]):
+        if row == 2:  # the removed part: same scale as the whole record
+            ax_zoom.set_ylim(axes[2, 0].get_ylim())
+            continue
+        values = [np.asarray(line.get_ydata())[inside] for line in ax_zoom.get_lines()
+                  if np.size(line.get_ydata()) == inside.size]
+        low = min(float(v.min()) for v in values)
+        high = max(float(v.max()) for v in values)
+        pad = 0.1 * (high - low) if high > low else 1.0
+        ax_zoom.set_ylim(low - pad, high + pad)
 
 
 def _zoom_cycles(pre, zoom_cycles):
