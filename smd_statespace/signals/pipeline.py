@@ -234,6 +234,31 @@ class Preprocessed:
         return plot_preprocessed(self, path, zoom_cycles)
 
 
+def _check_edge_margin(edge_margin) -> float:
+    """``edge_margin`` as a float (s), or an :class:`OptionError` if it is not a non-negative time."""
+    try:
+        edge_margin = float(edge_margin)
+    except (TypeError, ValueError):
+        raise OptionError(f"edge_margin={edge_margin!r} must be a time in s") from None
+    if not (math.isfinite(edge_margin) and edge_margin >= 0):
+        raise OptionError(f"edge_margin={edge_margin!r} must be a non-negative time in s")
+    return edge_margin
+
+
+def _flag_edge_cycles(cycles: list, time: np.ndarray, edge_margin: float) -> list:
+    """``cycles`` with those within ``edge_margin`` (s) of either end of ``time`` marked invalid, saying why."""
+    t_first, t_last = float(time[0]), float(time[-1])
+    flagged = []
+    for cycle in cycles:
+        near = cycle.t_start - t_first < edge_margin or t_last - cycle.t_end < edge_margin
+        if near:
+            note = f"within {edge_margin:g} s of a record end (filter edge effects)"
+            reason = f"{cycle.reason}; {note}" if cycle.reason else note
+            cycle = replace(cycle, valid=False, reason=reason)
+        flagged.append(cycle)
+    return flagged
+
+
 def preprocess(record: Record, cutoff=0.5, fb_range=SUPPORTED_FB, *, order=4, padding="predict",
                edge_margin=2.0) -> Preprocessed:
     """Run the whole pre-processing pipeline on one record.
@@ -272,12 +297,7 @@ def preprocess(record: Record, cutoff=0.5, fb_range=SUPPORTED_FB, *, order=4, pa
         An invalid option, or a record too short for the filter.
     """
     source = record.source
-    try:
-        edge_margin = float(edge_margin)
-    except (TypeError, ValueError):
-        raise OptionError(f"edge_margin={edge_margin!r} must be a time in s") from None
-    if not (math.isfinite(edge_margin) and edge_margin >= 0):
-        raise OptionError(f"edge_margin={edge_margin!r} must be a non-negative time in s")
+    edge_margin = _check_edge_margin(edge_margin)
     time = np.asarray(record.time, dtype=float)
     force = np.asarray(record.force, dtype=float)
     fs = float(record.fs)
@@ -292,16 +312,7 @@ def preprocess(record: Record, cutoff=0.5, fb_range=SUPPORTED_FB, *, order=4, pa
         raise type(exc)(f"{source}: {exc}") from None
 
     if edge_margin > 0:
-        t_first, t_last = float(time[0]), float(time[-1])
-        flagged = []
-        for cycle in cycles:
-            near = cycle.t_start - t_first < edge_margin or t_last - cycle.t_end < edge_margin
-            if near:
-                note = f"within {edge_margin:g} s of a record end (filter edge effects)"
-                reason = f"{cycle.reason}; {note}" if cycle.reason else note
-                cycle = replace(cycle, valid=False, reason=reason)
-            flagged.append(cycle)
-        cycles = flagged
+        cycles = _flag_edge_cycles(cycles, time, edge_margin)
 
     return Preprocessed(
         time=time,
