@@ -60,12 +60,10 @@ from ..io import G
 from . import kalman
 from .dynamics import PersonDynamics, exponentials, harmonic_gains
 from .timing import CycleTiming
+from .variation import VARIATIONS
 
 __all__ = ["VARIATIONS", "Regressor", "RecordSystem", "RecordModel", "coefficient_names"]
 
-VARIATIONS = {"independent": kalman.INDEPENDENT, "random_walk": kalman.RANDOM_WALK, "both": kalman.BOTH,
-              "smooth": kalman.SMOOTH}
-"""Variation models of the force coefficients and their codes in the compiled pass."""
 
 F_H_BOUNDS = (0.5, 6.0)
 """Search range of ``f_h`` (Hz).
@@ -286,7 +284,7 @@ class RecordModel:
         self._rotation = np.exp(1j * angle)  # (N, n)
         self._timing_columns = self._phase_columns() if self.phase_template is not None else None
         self._H_all = self._H if self._timing_columns is None else np.hstack([self._H, self._timing_columns[0]])
-        self._smooth_index = self.param_names.index("log_smooth_time") if self.variation == "smooth" else None
+        self._smooth_index = self.param_names.index("log_smooth_time") if VARIATIONS[self.variation].smooth else None
         self._X = np.column_stack([r.values for r in self.regressors]) if self.regressors else np.zeros(
             (self.time.size, 0))
         self._X_obs = self._X * np.array([r.observed for r in self.regressors], dtype=float)
@@ -382,13 +380,7 @@ class RecordModel:
     @property
     def param_names(self) -> list:
         """Names of the parameters searched by maximum likelihood."""
-        names = ["f_h", "xi_h"]
-        if self.variation in ("independent", "both", "smooth"):
-            names += [f"log_var_d_{i}" for i in self.variance_groups]
-        if self.variation == "smooth":
-            names.append("log_smooth_time")
-        if self.variation in ("random_walk", "both"):
-            names += [f"log_var_e_{i}" for i in self.variance_groups]
+        names = ["f_h", "xi_h"] + VARIATIONS[self.variation].variance_names(self.variance_groups)
         if self.phase_template is not None:
             names += ["log_var_phase", "log_var_rate"]
         if self.drift:
@@ -560,7 +552,7 @@ class RecordModel:
         smooth = matern32_step(np.exp(params[where]), self.dt) if where is not None else (np.zeros((2, 2)),) * 3
         return RecordSystem(hx=dynamics["hx"], H=self._H_all, Phi=dynamics["Phi"], Gam=dynamics["Gam"], Qx=qx,
                             offset=dynamics["offset"], y_known=dynamics["y_known"], X_obs=self._X_obs,
-                            X_tr=dynamics["X_tr"], reset=self._phase[3], code=VARIATIONS[self.variation], D=D, E=E,
+                            X_tr=dynamics["X_tr"], reset=self._phase[3], code=VARIATIONS[self.variation].code, D=D, E=E,
                             drift=S, smooth_phi=smooth[0], smooth_q=smooth[1], smooth_p0=smooth[2])
 
     def timing_rates(self) -> np.ndarray:

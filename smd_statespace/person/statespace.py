@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 from statsmodels.tsa.statespace.mlemodel import MLEModel
 
-from .kalman import state_size
-from .model import VARIATIONS, RecordModel
+from .model import RecordModel
+from .variation import VARIATIONS, StateSpaceLayout
 
 __all__ = ["RecordStateSpace", "nominal_path"]
 
@@ -52,7 +52,7 @@ class RecordStateSpace(MLEModel):
         self.record_model = model
         self.delta = np.asarray(delta, dtype=float)
         p, nx = model.n_force_states, model.n_dynamic
-        k_states = state_size(VARIATIONS[model.variation], nx, p, model.n_coefficients)
+        k_states = VARIATIONS[model.variation].state_size(nx, p, model.n_coefficients)
         super().__init__(model.y, k_states=k_states, k_posdef=k_states)
         self.ssm.filter_concentrated = True
         self.ssm["selection"] = np.eye(k_states)
@@ -86,83 +86,44 @@ class RecordStateSpace(MLEModel):
         params = super().update(params, **kwargs)
         model = self.record_model
         sys = model.system(params)
-        n, p, nx = model.y.size, model.n_force_states, model.n_dynamic
-        m = self.k_states
-        r = sys.X_obs.shape[1]
-        n_template = model.n_coefficients
+        n, nx, m = model.y.size, model.n_dynamic, self.k_states
+        n_template, r = model.n_coefficients, sys.X_obs.shape[1]
         x0, beta = self.delta[:nx], self.delta[nx + n_template:nx + n_template + r]
-        tau = np.zeros(p)  # the phase and rate errors, if any, have mean zero
+        tau = np.zeros(model.n_force_states)  # the phase and rate errors, if any, have mean zero
         tau[:n_template] = self.delta[nx:nx + n_template]
-        alpha, base = slice(nx, nx + p), slice(nx + p, nx + 2 * p)
-        design = np.zeros((1, m, n))
-        design[0, :nx, :] = np.broadcast_to(sys.hx, (n, nx)).T
-        design[0, alpha, :] = sys.H.T
-        transition = np.repeat(np.eye(m)[:, :, None], n, axis=2)
-        transition[:nx, :nx, :] = np.broadcast_to(sys.Phi, (n, nx, nx)).transpose(1, 2, 0)
-        transition[:nx, alpha, :] = sys.Gam.transpose(1, 2, 0)
-        intercept = np.zeros((m, n))
-        intercept[:nx, :] = sys.offset.T + ((sys.X_tr @ beta).T if r else 0.0)
-        state_cov = np.zeros((m, m, n))
-        state_cov[:nx, :nx, :] = sys.Qx[:, :, None]
-        drift = np.diag(sys.drift)
-        state_cov[alpha, alpha, :] += drift[:, :, None]
         # statsmodels' time t maps the state at sample t to sample t + 1: a cycle starting
         # at sample k draws its coefficients in the transition of time k - 1
-        starts = np.flatnonzero(sys.reset) - 1
-        D, E = np.diag(sys.D), np.diag(sys.E)
-        if model.variation == "independent":
-            transition[alpha, :, starts] = 0.0
-            intercept[alpha, starts] = tau[:, None]
-            state_cov[alpha, alpha, starts] = D[:, :, None]
-        elif model.variation == "random_walk":
-            state_cov[alpha, alpha, starts] = (E + drift)[:, :, None]
-        elif model.variation == "smooth":
-            f, qs = sys.smooth_phi, sys.smooth_q
-            for i in range(n_template):
-                rows = [nx + i, nx + p + i]
-                transition[np.ix_(rows, rows)] = f[:, :, None]
-                intercept[rows[0], :] += (1.0 - f[0, 0]) * tau[i]
-                intercept[rows[1], :] -= f[1, 0] * tau[i]
-                state_cov[np.ix_(rows, rows)] += sys.D[i] * qs[:, :, None]
-            timing = slice(nx + n_template, nx + p)  # the phase and rate errors are drawn again per cycle
-            transition[timing, :, starts] = 0.0
-            state_cov[timing, timing, starts] = np.diag(sys.D[n_template:])[:, :, None]
-        else:  # m := m + e, alpha := m + e + d
-            state_cov[base, base, :] += drift[:, :, None]
-            transition[alpha, :, starts] = 0.0
-            for i in range(p):
-                transition[nx + i, nx + p + i, starts] = 1.0
-            step = E + drift
-            state_cov[alpha, alpha, starts] = (step + D)[:, :, None]
-            state_cov[alpha, base, starts] = step[:, :, None]
-            state_cov[base, alpha, starts] = step[:, :, None]
-            state_cov[base, base, starts] = step[:, :, None]
+        layout = StateSpaceLayout(nx, model.n_force_states, n_template, np.flatnonzero(sys.reset) - 1)
+        transition, intercept, state_cov = self._dynamics_matrices(sys, beta, layout, m, n)
+        mean_force, cov_force = VARIATIONS[model.variation].fill_statespace(sys, tau, layout, transition, intercept,
+                                                                            state_cov)
+        design = np.zeros((1, m, n))
+        design[0, :nx, :] = np.broadcast_to(sys.hx, (n, nx)).T
+        design[0, layout.alpha, :] = sys.H.T
         self.ssm["design"] = design
         self.ssm["obs_intercept"] = (sys.y_known + ((sys.X_obs @ beta) if r else 0.0))[None, :]
         self.ssm["transition"] = transition
         self.ssm["state_intercept"] = intercept
         self.ssm["state_cov"] = state_cov
-        mean = np.zeros(m)
-        mean[:nx] = x0
-        cov = np.zeros((m, m))
-        if model.variation == "independent":
-            mean[alpha] = tau
-            cov[alpha, alpha] = D
-        elif model.variation == "random_walk":
-            mean[alpha] = tau
-        elif model.variation == "smooth":
-            mean[alpha] = tau
-            cov[alpha, alpha] = np.diag(sys.D)
-            p0 = sys.smooth_p0
-            for i in range(n_template):
-                rows = [nx + i, nx + p + i]
-                cov[np.ix_(rows, rows)] = sys.D[i] * p0
-        else:
-            mean[alpha] = tau
-            mean[base] = tau
-            cov[alpha, alpha] = D
+        mean, cov = np.zeros(m), np.zeros((m, m))
+        mean[:nx], mean[nx:] = x0, mean_force
+        cov[nx:, nx:] = cov_force
         self.ssm.initialize_known(mean, cov)
         return params
+
+    @staticmethod
+    def _dynamics_matrices(sys, beta, layout, m, n) -> tuple:
+        """Transition, state intercept and state covariance of the dynamics and the per-sample drift (Eq. 2, 17)."""
+        nx, alpha = layout.nx, layout.alpha
+        transition = np.repeat(np.eye(m)[:, :, None], n, axis=2)
+        transition[:nx, :nx, :] = np.broadcast_to(sys.Phi, (n, nx, nx)).transpose(1, 2, 0)
+        transition[:nx, alpha, :] = sys.Gam.transpose(1, 2, 0)
+        intercept = np.zeros((m, n))
+        intercept[:nx, :] = sys.offset.T + ((sys.X_tr @ beta).T if beta.size else 0.0)
+        state_cov = np.zeros((m, m, n))
+        state_cov[:nx, :nx, :] = sys.Qx[:, :, None]
+        state_cov[alpha, alpha, :] += np.diag(sys.drift)[:, :, None]
+        return transition, intercept, state_cov
 
     def smoothed_state(self, params) -> np.ndarray:
         """The smoothed state means at ``params``, shape ``(k_states, N)``: the smoother's state pass alone.
