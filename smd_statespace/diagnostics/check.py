@@ -86,6 +86,18 @@ import pandas as pd
 from ..errors import OptionError
 from ..io import G, Record
 from ..model import TWO_PI
+from .correlation import cross_correlation_table
+from .cycles import absorbable_bases, checked_series, state_over_record
+from .fit import fit_percent, rms
+from .free_simulation import path_sensitivity
+from .phase import phase_locked, phase_profile
+from .report import summary_text
+from .residual_tests import (cycle_numbers, default_lags, jarque_bera_test, ljung_box_table, pooled_acf, split_cycles,
+                             variance_change_test)
+from .spectra import HARMONIC_TOLERANCE, PEAK_FALSE_ALARM, SEGMENT_CYCLES  # noqa: F401 (importable from here too)
+from .spectra import residual_spectrum as spectrum_with_peaks
+from .spectra import welch_spectrum
+from .subspace import remove_projections
 
 __all__ = ["ModelCheck", "check_model", "fit_percent", "INITIAL_STATES"]
 
@@ -94,43 +106,6 @@ INITIAL_STATES = ("estimate", "filtered")
 ``"estimate"`` fits the dynamic slots' starting values to the cycle by least
 squares, as MATLAB's ``compare`` does by default; ``"filtered"`` takes the
 filter's estimate at the cycle's first sample."""
-
-HARMONIC_TOLERANCE = 0.05
-"""A spectral peak within this fraction of ``f_b`` (or 1.5 frequency bins,
-whichever is larger) of ``k f_b`` is labelled "harmonic k"."""
-
-PEAK_FALSE_ALARM = 0.01
-"""Probability that pure noise puts at least one bin of a residual spectrum
-above the peak threshold (sets the threshold from the Welch estimate's
-chi-square distribution)."""
-
-SEGMENT_CYCLES = 6.0
-"""Default Welch segment length in bouncing cycles: frequency resolution
-about ``f_b / 6`` (0.33 Hz at 2 Hz), enough to tell harmonic ``k`` from
-``k +- 1/2``, while a 10 s stretch still gives several segments to average."""
-
-
-def fit_percent(measured, predicted) -> float:
-    """Normalised root-mean-square fit (%), as in system identification toolboxes.
-
-    ``100 (1 - ||y - y_hat|| / ||y - mean(y)||)``: 100 for a perfect
-    prediction, 0 for predicting the mean, negative for worse.
-
-    Parameters
-    ----------
-    measured, predicted : array_like, shape (T,)
-    """
-    y = np.asarray(measured, dtype=float)
-    y_hat = np.asarray(predicted, dtype=float)
-    spread = np.linalg.norm(y - y.mean())
-    if spread == 0:
-        return float("nan")
-    return float(100.0 * (1.0 - np.linalg.norm(y - y_hat) / spread))
-
-
-def _rms(x) -> float:
-    return float(np.sqrt(np.mean(np.square(x))))
-
 
 def check_model(preprocessed=None, model=None, estimator="ekf", runner=None, initial_state="estimate",
                 **runner_options) -> "ModelCheck":
@@ -257,8 +232,6 @@ class ModelCheck:
 
     def __init__(self, table: pd.DataFrame, model, preprocessed, results: Mapping[int, object],
                  initial_state: str = "estimate"):
-        from ..estimators import cycle_data
-
         if initial_state not in INITIAL_STATES:
             raise OptionError(f"initial_state {initial_state!r} is unknown; choose {' or '.join(INITIAL_STATES)}")
         self.initial_state = initial_state
@@ -271,45 +244,8 @@ class ModelCheck:
             raise OptionError(f"{getattr(preprocessed, 'source', 'record')}: no identified cycle to check")
         self.results = {c.index: results[c.index] for c in cycles}
         self.cycles = cycles
-        channel = model.channels.index("u_ddot")
-        dynamic = np.array([slot.kind == "dynamic" for slot in model.slots])
-        mass = float(preprocessed.mass)
-
-        pieces = {name: [] for name in ("time", "cycle", "sample", "phase", "measured", "simulated", "one_step",
-                                        "innovations")}
-        free_counts, nobs, previous_stop, position = [], 0, None, 0
-        self._linear = []
-        for cycle in cycles:
-            result = self.results[cycle.index]
-            data = cycle_data(model, preprocessed, cycle)
-            std = np.asarray(result.std)
-            free = dynamic | np.any(std > 0, axis=0) if std.ndim == 2 and std.size else np.ones(model.n_state, bool)
-            keep = slice(1, None) if cycle.start == previous_stop else slice(None)
-            states = self._free_simulation(result, data, dynamic)
-            if initial_state == "estimate":
-                states = self._fit_initial_state(states, data, dynamic, keep, channel)
-            predicted = model.observe(states, data.t, data.inputs)[:, channel]
-            previous_stop = cycle.stop
-            samples = np.arange(cycle.start, cycle.stop + 1)
-            kept = samples[keep]
-            acc = data.y[keep, channel]
-            pieces["time"].append(data.t[keep])
-            pieces["cycle"].append(np.full(kept.size, cycle.index))
-            pieces["sample"].append(kept)
-            pieces["phase"].append((data.t[keep] - cycle.t_start) / (cycle.t_end - cycle.t_start))
-            pieces["measured"].append(mass * acc)
-            pieces["simulated"].append(mass * predicted[keep])
-            pieces["one_step"].append(mass * (acc - result.innovations[keep, channel]))
-            pieces["innovations"].append(result.standardised_innovations[keep, channel])
-            nobs += len(data)
-            free_counts.append(int(np.sum(free & ~dynamic)))
-            self._linear.append({
-                "rows": slice(position, position + kept.size), "samples": samples, "keep": keep, "data": data,
-                "free": free, "states": states, "harmonic_basis": self._harmonic_basis(cycle, data.t[keep]),
-            })
-            position += kept.size
-
-        joined = {name: np.concatenate(values) for name, values in pieces.items()}
+        joined, self._linear, self.n_parameters, self.nobs = checked_series(model, preprocessed, cycles, self.results,
+                                                                            initial_state)
         self.time = joined["time"]
         self.cycle_index = joined["cycle"].astype(int)
         self.sample_index = joined["sample"].astype(int)
@@ -321,90 +257,23 @@ class ModelCheck:
         self.residual = self.measured - self.simulated
         self.fit_percent = fit_percent(self.measured, self.simulated)
         self.fit_percent_one_step = fit_percent(self.measured, self.one_step)
-        self.residual_rms = _rms(self.residual)
-        self.weight = mass * G
+        self.residual_rms = rms(self.residual)
+        self.weight = float(preprocessed.mass) * G
         self.residual_rms_bw = 100.0 * self.residual_rms / self.weight
         self.log_likelihood = float(sum(float(r.log_likelihood) for r in self.results.values()))
-        self.n_parameters = int(sum(free_counts))
-        self.nobs = int(nobs)
         self.f_b = float(np.median([c.f_b for c in cycles]))
         self.fs = float(preprocessed.fs)
 
-    # -- construction helpers ----------------------------------------------
-
-    def _harmonic_basis(self, cycle, t):
-        """Orthonormal basis of the force regressors of Eq. 4 on a cycle's kept samples, shape (m, p)."""
-        theta = TWO_PI * cycle.f_b * (np.asarray(t, dtype=float) - cycle.t_start)
-        orders = self.harmonic_orders()
-        regressors = np.column_stack([np.ones_like(theta)] + [f(k * theta) for k in orders for f in (np.cos, np.sin)])
-        return _orthonormal_columns(regressors)
-
-    def _free_simulation(self, result, data, dynamic):
-        """States of the free simulation of one cycle, shape (m, n_state).
-
-        Dynamic slots start from the filtered mean at the cycle's first
-        sample, parameters are the final-pass values (``final_mean``);
-        :meth:`SMDModel.transition` without process noise.
-        """
-        x = np.array(result.final_mean, dtype=float)
-        x[dynamic] = np.asarray(result.mean)[0, dynamic]
-        return self._simulate_from(x, data)
-
-    def _simulate_from(self, x, data):
-        """Integrate the model without noise from state ``x`` over the cycle's samples, shape (m, n_state)."""
-        model = self.model
-        states = np.empty((len(data.t), model.n_state))
-        states[0] = x
-        with np.errstate(over="ignore", invalid="ignore"):
-            for k in range(1, len(data.t)):
-                x = model.transition(x, data.t[k - 1], data.t[k] - data.t[k - 1], data.inputs)
-                states[k] = x
-        return states
-
-    def _fit_initial_state(self, states, data, dynamic, keep, channel, iterations=2):
-        """Free simulation from the dynamic starting state that best fits the cycle (least squares).
-
-        The parameters stay at their identified values; only the dynamic
-        slots' starting values (``u``, ``u_dot``, an estimated floor's ``z``,
-        ``z_dot``, ...) change, by Gauss-Newton steps on the measured
-        ``u''`` of the cycle's kept samples, with the sensitivities
-        ``H_k F_{k-1} ... F_0`` of the model's own Jacobians. One step is
-        exact when the model is linear in those slots (every built-in
-        effect but ``cubic_stiffness``).
-        """
-        model = self.model
-        measured = data.y[keep, channel]
-        for _ in range(iterations):
-            sensitivity = self._path_sensitivity(states, data, channel)[keep][:, dynamic]
-            predicted = model.observe(states, data.t, data.inputs)[keep, channel]
-            step, *_ = np.linalg.lstsq(sensitivity, measured - predicted, rcond=None)
-            if not np.all(np.isfinite(step)):
-                return states
-            start = states[0].copy()
-            start[dynamic] += step
-            states = self._simulate_from(start, data)
-        return states
+    # -- construction helpers (the free simulation: diagnostics.free_simulation) ----
 
     def _path_sensitivity(self, states, data, channel):
         """Derivative of the simulated ``u''`` at every sample with respect to the starting state, (m, n_state)."""
-        model = self.model
-        with np.errstate(over="ignore", invalid="ignore"):
-            jacobians = np.array([model.transition_jacobian(states[k - 1], data.t[k - 1],
-                                                            data.t[k] - data.t[k - 1], data.inputs)
-                                  for k in range(1, len(data.t))]).reshape(-1, model.n_state, model.n_state)
-            observation = model.observation_jacobian(states, data.t, data.inputs)[:, channel, :]
-        # d y_k / d x_0 = H_k F_{k-1} ... F_0 (Eq. 11-16 linearised along the free simulation).
-        return _chain_sensitivity(jacobians, observation)
+        return path_sensitivity(self.model, states, data, channel)
 
     @cached_property
     def _absorbable_bases(self):
         """Per cycle, an orthonormal basis of the output changes a re-fit of the cycle could make."""
-        channel = self.model.channels.index("u_ddot")
-        bases = []
-        for piece in self._linear:
-            sensitivity = self._path_sensitivity(piece["states"], piece["data"], channel)[:, piece["free"]]
-            bases.append(_orthonormal_columns(sensitivity[piece["keep"]]))
-        return bases
+        return absorbable_bases(self.model, self._linear)
 
     # -- derived numbers ----------------------------------------------------
 
@@ -435,84 +304,53 @@ class ModelCheck:
 
     def _per_cycle(self, values):
         """Split a (T,) array into the cycles' pieces."""
-        breaks = np.flatnonzero(np.diff(self.cycle_index)) + 1
-        return np.split(np.asarray(values), breaks)
+        return split_cycles(values, self.cycle_index)
 
     # -- tests on the standardised innovations ------------------------------
 
     def default_lags(self) -> int:
         """Default Ljung-Box lag within a cycle: a quarter of the median cycle length, at most 20 (see :meth:`test_serial_correlation`)."""
-        lengths = np.array([piece.size for piece in self._per_cycle(self.innovations)])
-        return int(max(1, min(np.median(lengths) // 4, 20)))
+        return default_lags(self._per_cycle(self.innovations))
 
     def test_serial_correlation(self, lags=None, series="innovations") -> pd.DataFrame:
         """Ljung-Box test of the standardised innovations (or of the residual), per cycle and combined.
 
-        The filter starts afresh in every cycle, so the concatenated
-        innovations are not one time series: correlations across a cycle
-        boundary compare two unrelated filter runs (and each cycle's first
-        samples carry its start-up). The test is therefore run on each
-        cycle's innovations separately
-        (:func:`statsmodels.stats.diagnostic.acorr_ljungbox`). Under the null
-        hypothesis (white innovations) the cycles are independent, so their
-        statistics add: ``Q = sum_c Q_c`` is chi-square with
-        ``sum_c lags_c`` degrees of freedom, which gives the combined p-value.
+        The filter starts afresh in every cycle, so the concatenated innovations
+        are not one time series: each cycle is tested separately and the
+        statistics add (:func:`~.residual_tests.ljung_box_table`).
 
         Parameters
         ----------
         lags : int, optional
-            Largest lag in samples within a cycle. Default
-            :meth:`default_lags`: a quarter of the median cycle length (12
-            samples for a 2 Hz cycle at 100 Hz, i.e. up to 0.12 s), capped at
-            20. This covers the period of the 4th to 5th harmonic and half a
-            period of a floor mode near 4 Hz, where a missing effect puts its
-            structure, while keeping the lag well below the cycle length
-            (statsmodels' own default, ``min(10, n // 5)``, is similar for a
-            50-sample cycle). Cycles shorter than ``2 lags`` use ``n // 2``.
+            Largest lag in samples within a cycle; default :meth:`default_lags`
+            (12 samples for a 2 Hz cycle at 100 Hz, see
+            :func:`~.residual_tests.default_lags`). Cycles shorter than ``2 lags``
+            use ``n // 2``.
         series : {"innovations", "residual"}
             ``"innovations"`` (default, as statsmodels): the filter's
             standardised innovations. ``"residual"``: the free-simulation
-            residual :attr:`residual`, the error a user sees. The
-            innovations of the article's filter are serially correlated even
-            when the model is right (its ``u`` and ``u_dot`` channels are
-            integrals of the measured acceleration, so their errors are
-            not independent, and its observation noise is set at 10 % of the
-            RMS, far above a force plate's), so a missing effect is judged on
-            the residual, whose ``lb_stat / lags`` is about 1.2-1.9 on records
-            without a missing effect and 7-10 with one (measured, see
-            :mod:`smd_statespace.diagnostics.missing`).
+            residual :attr:`residual`, the error a user sees. The article
+            filter's innovations are serially correlated even when the model is
+            right (its ``u`` and ``u_dot`` channels are integrals of the measured
+            acceleration, and its observation noise is 10 % of the RMS), so a
+            missing effect is judged on the residual, whose ``lb_stat / lags`` is
+            about 1.2-1.9 on records without a missing effect and 7-10 with one
+            (measured, see :mod:`smd_statespace.diagnostics.missing`).
 
         Returns
         -------
         pandas.DataFrame
             One row per cycle (index ``cycle``) with ``nobs``, ``lags``,
-            ``lb_stat``, ``lb_pvalue``, and a last row ``"combined"`` with
-            the summed statistic and degrees of freedom and the chi-square
-            p-value.
+            ``lb_stat``, ``lb_pvalue``, and a last row ``"combined"`` with the
+            summed statistic and degrees of freedom and the chi-square p-value.
         """
-        from scipy import stats  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
-        from statsmodels.stats.diagnostic import acorr_ljungbox
-
         lags = self.default_lags() if lags is None else int(lags)
         if lags < 1:
             raise OptionError(f"lags must be a whole number >= 1, got {lags!r}")
         if series not in ("innovations", "residual"):
             raise OptionError(f"series must be 'innovations' or 'residual', got {series!r}")
         values = self.innovations if series == "innovations" else self.residual
-        rows = []
-        for number, piece in zip(self._cycle_numbers(), self._per_cycle(values)):
-            h = min(lags, piece.size // 2)
-            if h < 1 or np.var(piece) == 0:
-                continue
-            test = acorr_ljungbox(piece, lags=[h])
-            rows.append({"cycle": number, "nobs": piece.size, "lags": h, "lb_stat": float(test["lb_stat"].iloc[0]),
-                         "lb_pvalue": float(test["lb_pvalue"].iloc[0])})
-        frame = pd.DataFrame(rows, columns=["cycle", "nobs", "lags", "lb_stat", "lb_pvalue"])
-        q, dof = float(frame["lb_stat"].sum()), int(frame["lags"].sum())
-        combined = {"cycle": "combined", "nobs": int(frame["nobs"].sum()), "lags": dof, "lb_stat": q,
-                    "lb_pvalue": float(stats.chi2.sf(q, dof)) if dof > 0 else float("nan")}
-        frame = pd.concat([frame, pd.DataFrame([combined])], ignore_index=True)
-        return frame.set_index("cycle")
+        return ljung_box_table(self._per_cycle(values), self._cycle_numbers(), lags)
 
     def whiteness_pvalue(self, lags=None, series="innovations") -> float:
         """Combined Ljung-Box p-value of :meth:`test_serial_correlation`."""
@@ -540,36 +378,25 @@ class ModelCheck:
         return int(sum(basis.shape[1] for basis in self._absorbable_bases))
 
     def _cycle_numbers(self):
-        breaks = np.flatnonzero(np.diff(self.cycle_index)) + 1
-        return [int(self.cycle_index[i]) for i in np.r_[0, breaks]]
+        return cycle_numbers(self.cycle_index)
 
     def test_normality(self) -> dict:
-        """Jarque-Bera test of the standardised innovations (all cycles pooled).
+        """Jarque-Bera test of the standardised innovations, all cycles pooled (:func:`~.residual_tests.jarque_bera_test`).
 
         Returns
         -------
         dict
             ``statistic``, ``pvalue``, ``skew`` and ``kurtosis`` (3 for a
-            normal distribution), from
-            :func:`statsmodels.stats.stattools.jarque_bera`.
+            normal distribution).
         """
-        from statsmodels.stats.stattools import jarque_bera
-
-        statistic, pvalue, skew, kurtosis = jarque_bera(self.innovations)
-        return {"statistic": float(statistic), "pvalue": float(pvalue), "skew": float(skew),
-                "kurtosis": float(kurtosis)}
+        return jarque_bera_test(self.innovations)
 
     def test_heteroskedasticity(self, subset_length=1.0 / 3.0) -> dict:
-        """Does the residual variance change over the record? (statsmodels' breakvar test).
+        """Does the residual variance change over the record? (:func:`~.residual_tests.variance_change_test`).
 
-        The test statistic is the sum of squares of the standardised
-        innovations in the last third of the record over that in the first
-        third, F-distributed with ``(h, h)`` degrees of freedom under the null
-        hypothesis of constant variance (two-sided),
-        :func:`statsmodels.tsa.stattools.breakvar_heteroskedasticity_test`.
-        It is run on the innovations rather than on the free-simulation
-        residual because the F distribution needs independent samples; the
-        residual's own ratio is reported beside it as a description.
+        statsmodels' breakvar test on the standardised innovations (last third
+        against first third, F-distributed), with the free-simulation residual's
+        own ratio beside it as a description.
 
         Parameters
         ----------
@@ -579,33 +406,12 @@ class ModelCheck:
         Returns
         -------
         dict
-            ``statistic``, ``pvalue`` (innovations), ``residual_ratio``: the
-            mean square of the free-simulation residual in the last part
-            over that in the first part.
+            ``statistic``, ``pvalue`` (innovations), ``residual_ratio`` (mean
+            square of the residual in the last part over the first).
         """
-        from statsmodels.tsa.stattools import breakvar_heteroskedasticity_test
+        return variance_change_test(self.innovations, self.residual, subset_length)
 
-        statistic, pvalue = breakvar_heteroskedasticity_test(self.innovations, subset_length=subset_length)
-        h = int(np.round(subset_length * self.residual.size))
-        ratio = float(np.mean(self.residual[-h:] ** 2) / np.mean(self.residual[:h] ** 2)) if h > 0 else float("nan")
-        return {"statistic": float(statistic), "pvalue": float(pvalue), "residual_ratio": ratio}
-
-    # -- spectra --------------------------------------------------------------
-
-    def _welch(self, x, nperseg=None):
-        from scipy import signal  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
-
-        n = len(x)
-        if nperseg is None:
-            nperseg = int(round(SEGMENT_CYCLES * self.fs / self.f_b))
-        nperseg = int(min(max(nperseg, 16), n))
-        return signal.welch(x, fs=self.fs, nperseg=nperseg, detrend="constant", scaling="density")
-
-    def _welch_dof(self, n, nperseg):
-        """Equivalent degrees of freedom of a Hann-window, 50 %-overlap Welch estimate."""
-        segments = max(1, 1 + (n - nperseg) // (nperseg // 2))
-        # Overlap correlation of two Hann segments at 50 %: c = 0.167 (Welch 1967; Percival & Walden).
-        return 2.0 * segments / (1.0 + 2.0 * 0.167**2 * (segments - 1) / segments)
+    # -- spectra (diagnostics.spectra) ------------------------------------------
 
     def measured_spectrum(self, nperseg=None):
         """Welch power spectral density of the measured dynamic GRF.
@@ -615,42 +421,29 @@ class ModelCheck:
         freq : ndarray (Hz)
         psd : ndarray (N^2/Hz)
         """
-        return self._welch(self.measured, nperseg)
+        return welch_spectrum(self.measured, self.fs, self.f_b, nperseg)
 
     def residual_spectrum(self, nperseg=None, false_alarm=PEAK_FALSE_ALARM, tolerance=None, min_frequency=None,
                           values=None):
-        """Welch spectrum of the free-simulation residual and its peaks above the noise floor.
+        """Welch spectrum of the free-simulation residual and its peaks above the noise floor (:func:`~.spectra.residual_spectrum`).
 
-        A missing force harmonic leaves a line at ``k f_b``; a floor mode
-        leaves content at its own frequency, in general not a multiple of
-        ``f_b``; a nonlinearity (cubic spring) leaves harmonics above those
+        A missing force harmonic leaves a line at ``k f_b``; a floor mode leaves
+        content at its own frequency; a cubic spring leaves harmonics above those
         the force model has.
-
-        The noise floor is the median of the residual PSD above the high-pass
-        cut-off (measurement noise is white, and model error occupies a
-        minority of the bins). A peak is a local maximum whose PSD exceeds
-        the floor by the factor pure noise would exceed in any bin with
-        probability ``false_alarm`` (chi-square distribution of the Welch
-        estimate with its equivalent degrees of freedom). Peak frequencies are
-        refined by parabolic interpolation of the log PSD.
 
         Parameters
         ----------
         nperseg : int, optional
-            Welch segment length in samples; default :data:`SEGMENT_CYCLES`
-            bouncing periods (frequency resolution about ``f_b / 6``).
+            Welch segment length in samples; default :data:`~.spectra.SEGMENT_CYCLES` bouncing periods.
         false_alarm : float
             Chance that pure noise gives at least one peak.
         tolerance : float, optional
-            Largest distance (Hz) from ``k f_b`` for the label "harmonic k";
-            default the larger of :data:`HARMONIC_TOLERANCE` ``* f_b`` and 1.5
-            frequency bins.
+            Largest distance (Hz) from ``k f_b`` for the label "harmonic k" (:func:`~.spectra.spectral_peaks`).
         min_frequency : float, optional
             Lowest frequency searched for peaks (Hz); default the high-pass cut-off.
         values : array_like, shape (T,), optional
-            Another series on the checked samples to analyse the same way
-            (default :attr:`residual`), e.g. the residual without its
-            phase-locked part (:meth:`phase_locked`).
+            Another series on the checked samples (default :attr:`residual`), e.g.
+            the residual without its phase-locked part (:meth:`phase_locked`).
 
         Returns
         -------
@@ -659,92 +452,52 @@ class ModelCheck:
         psd : ndarray, shape (F,)
             Residual power spectral density (N^2/Hz).
         peaks : pandas.DataFrame
-            One row per peak, strongest first: ``frequency`` (Hz), ``power``
-            (N^2/Hz), ``ratio_to_floor``, ``label`` ("harmonic k" or
-            "non-harmonic"), ``k`` (nearest harmonic order, or <NA> for a
-            non-harmonic peak) and ``f_over_fb``. ``peaks.attrs`` holds
-            ``noise_floor``, ``threshold`` (N^2/Hz), ``f_b``, ``tolerance``
-            (Hz) and ``resolution`` (Hz).
+            One row per peak, strongest first (:func:`~.spectra.spectral_peaks`):
+            ``frequency`` (Hz), ``power`` (N^2/Hz), ``ratio_to_floor``, ``label``,
+            ``k`` and ``f_over_fb``; ``attrs`` holds ``noise_floor``,
+            ``threshold``, ``f_b``, ``tolerance`` and ``resolution``.
         """
-        from scipy import signal, stats  # imported here: scipy.signal, scipy.stats take ~1 s (not needed to start)
+        series = self._series(values)
+        low = float(getattr(self.preprocessed, "cutoff", 0.5)) if min_frequency is None else float(min_frequency)
+        return spectrum_with_peaks(series, self.fs, self.f_b, nperseg, false_alarm, tolerance, low)
 
+    # -- structure of the residual (diagnostics.phase, diagnostics.subspace) ------
+
+    def _series(self, values):
+        """:attr:`residual`, or ``values`` as floats if it has the residual's shape."""
         series = self.residual if values is None else np.asarray(values, dtype=float)
         if series.shape != self.residual.shape:
             raise OptionError(f"values has shape {series.shape}; the check has {self.residual.shape}")
-        freq, psd = self._welch(series, nperseg)
-        n = len(series)
-        segment = int(min(max(int(round(SEGMENT_CYCLES * self.fs / self.f_b)) if nperseg is None else nperseg, 16), n))
-        resolution = float(freq[1] - freq[0])
-        low = float(getattr(self.preprocessed, "cutoff", 0.5)) if min_frequency is None else float(min_frequency)
-        band = freq > low
-        floor = float(np.median(psd[band]))
-        dof = self._welch_dof(n, segment)
-        n_bins = int(band.sum())
-        # Noise PSD ~ level * chi2(dof) / dof; the median of that is level * chi2.median(dof) / dof.
-        ratio = stats.chi2.isf(false_alarm / max(n_bins, 1), dof) / stats.chi2.median(dof)
-        threshold = floor * ratio
-        tol = max(HARMONIC_TOLERANCE * self.f_b, 1.5 * resolution) if tolerance is None else float(tolerance)
-        where, _ = signal.find_peaks(psd)
-        where = where[band[where] & (psd[where] > threshold)]
-        rows = []
-        for i in where:
-            f_peak = float(freq[i])
-            if 0 < i < len(psd) - 1:
-                a, b, c = np.log(psd[i - 1 : i + 2])
-                denominator = a - 2.0 * b + c
-                if denominator < 0:
-                    f_peak += 0.5 * (a - c) / denominator * resolution
-            k = int(np.round(f_peak / self.f_b))
-            harmonic = k >= 1 and abs(f_peak - k * self.f_b) <= tol
-            rows.append({"frequency": f_peak, "power": float(psd[i]), "ratio_to_floor": float(psd[i] / floor),
-                         "label": f"harmonic {k}" if harmonic else "non-harmonic",
-                         "k": k if harmonic else pd.NA, "f_over_fb": f_peak / self.f_b})
-        peaks = pd.DataFrame(rows, columns=["frequency", "power", "ratio_to_floor", "label", "k", "f_over_fb"])
-        peaks["k"] = peaks["k"].astype("Int64")
-        peaks = peaks.sort_values("power", ascending=False).reset_index(drop=True)
-        peaks.attrs.update(noise_floor=floor, threshold=threshold, f_b=self.f_b, tolerance=tol,
-                           resolution=resolution)
-        return freq, psd, peaks
+        return series
 
-    # -- structure of the residual -----------------------------------------
+    def _samples(self, values):
+        """``values`` as floats if it has a value per checked sample."""
+        values = np.asarray(values, dtype=float)
+        if values.shape[0] != self.residual.size:
+            raise OptionError(f"values has {values.shape[0]} samples; the check has {self.residual.size}")
+        return values
 
     def phase_locked(self, values=None, orders=None) -> np.ndarray:
-        """The part of a series that repeats with the bouncing cycle (least squares over the whole record).
-
-        The series is regressed on ``1, cos(2 pi k p), sin(2 pi k p)``,
-        ``p`` the cycle phase (:attr:`phase`), with coefficients common to
-        every cycle. What the person does every cycle (a missing force
-        harmonic, a nonlinearity of the periodic motion) is phase-locked;
-        what another source does to the floor is not, whatever its
-        frequency, even at a multiple of ``f_b``.
+        """The part of a series that repeats with the bouncing cycle (:func:`~.phase.phase_locked` in :attr:`phase`).
 
         Parameters
         ----------
         values : array_like, shape (T,), optional
             Series on the checked samples (default :attr:`residual`, N).
         orders : int, optional
-            Highest order ``k`` (default: up to the Nyquist frequency at the
-            median bouncing frequency).
+            Highest order ``k`` (default: up to the Nyquist frequency at the median bouncing frequency).
 
         Returns
         -------
         ndarray, shape (T,)
             The fitted phase-locked part, in the series' unit.
         """
-        series = self.residual if values is None else np.asarray(values, dtype=float)
-        if series.shape != self.residual.shape:
-            raise OptionError(f"values has shape {series.shape}; the check has {self.residual.shape}")
+        series = self._series(values)
         top = int(0.5 * self.fs / self.f_b) if orders is None else int(orders)
-        angle = TWO_PI * self.phase[:, None] * np.arange(1, max(top, 0) + 1)
-        design = np.column_stack([np.ones_like(self.phase), np.cos(angle), np.sin(angle)])
-        coefficients, *_ = np.linalg.lstsq(design, series, rcond=None)
-        return design @ coefficients
+        return phase_locked(series, self.phase, top)
 
     def phase_profile(self, bins=24) -> pd.DataFrame:
-        """Residual against the bouncing-cycle phase: where in the cycle the model fails.
-
-        The phase of a sample is ``(t - t_start) / (t_end - t_start)`` of its
-        cycle (0 and 1 at the GRF peaks that bound it).
+        """Residual against the bouncing-cycle phase: where in the cycle the model fails (:func:`~.phase.phase_profile`).
 
         Parameters
         ----------
@@ -754,42 +507,20 @@ class ModelCheck:
         Returns
         -------
         pandas.DataFrame
-            One row per bin: ``phase`` (centre), ``phase_low``,
-            ``phase_high``, ``n`` (samples), ``mean`` and ``sd`` of the
-            residual (N), ``mean_bw`` and ``sd_bw`` (% body weight), and
-            ``sem`` (N): the standard error of the mean over cycles
-            (``sd / sqrt(n_cycles)``).
+            One row per bin: ``phase`` (centre), ``phase_low``, ``phase_high``,
+            ``n``, ``mean`` and ``sd`` of the residual (N), ``mean_bw`` and
+            ``sd_bw`` (% body weight), and ``sem`` (N, over cycles).
         """
-        bins = int(bins)
-        if bins < 1:
-            raise OptionError(f"bins must be a whole number >= 1, got {bins!r}")
-        edges = np.linspace(0.0, 1.0, bins + 1)
-        which = np.clip(np.searchsorted(edges, self.phase, side="right") - 1, 0, bins - 1)
-        count = np.bincount(which, minlength=bins)
-        total = np.bincount(which, weights=self.residual, minlength=bins)
-        square = np.bincount(which, weights=self.residual**2, minlength=bins)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            mean = total / count
-            sd = np.sqrt(np.maximum(square / count - mean**2, 0.0) * count / np.maximum(count - 1, 1))
-        frame = pd.DataFrame({
-            "phase": 0.5 * (edges[:-1] + edges[1:]), "phase_low": edges[:-1], "phase_high": edges[1:], "n": count,
-            "mean": mean, "sd": sd, "mean_bw": 100.0 * mean / self.weight, "sd_bw": 100.0 * sd / self.weight,
-            "sem": sd / np.sqrt(max(self.n_cycles, 1)),
-        })
-        return frame
+        return phase_profile(self.residual, self.phase, self.weight, self.n_cycles, bins)
 
     def remove_absorbable(self, values) -> np.ndarray:
         """What is left of a signal after removing, cycle by cycle, what re-identifying the model could absorb.
 
-        Each cycle's free simulation is linearised about its path: the
-        derivative of the simulated ``u''`` at every sample with respect to
-        the cycle's starting state (``u``, ``u_dot`` and every free parameter:
-        ``f_h``, ``xi_h``, the Fourier coefficients, effects' slots) is the
-        chain ``H_k F_{k-1} ... F_0`` of the model's own Jacobians
-        (:meth:`SMDModel.transition_jacobian`, :meth:`SMDModel.observation_jacobian`).
-        Its columns span every change of the simulated output a small change
-        of the cycle's identified values can make; the signal's least-squares
-        projection on that span is removed, cycle by cycle.
+        The derivative of each cycle's simulated ``u''`` with respect to its
+        starting state and free parameters (:func:`~.free_simulation.path_sensitivity`)
+        spans every change of the output a small change of the cycle's identified
+        values can make; the signal's least-squares projection on that span is
+        removed (:func:`~.subspace.remove_projections`).
 
         Parameters
         ----------
@@ -800,14 +531,8 @@ class ModelCheck:
         -------
         ndarray, shape (T,)
         """
-        values = np.asarray(values, dtype=float)
-        if values.shape[0] != self.residual.size:
-            raise OptionError(f"values has {values.shape[0]} samples; the check has {self.residual.size}")
-        out = values.copy()
-        for piece, basis in zip(self._linear, self._absorbable_bases):
-            block = out[piece["rows"]]
-            out[piece["rows"]] = block - basis @ (basis.T @ block)
-        return out
+        blocks = [(piece["rows"], basis) for piece, basis in zip(self._linear, self._absorbable_bases)]
+        return remove_projections(self._samples(values), blocks)
 
     @cached_property
     def residual_unabsorbed(self) -> np.ndarray:
@@ -822,17 +547,14 @@ class ModelCheck:
     @property
     def residual_unabsorbed_rms_bw(self) -> float:
         """RMS of :attr:`residual_unabsorbed` in % of body weight."""
-        return 100.0 * _rms(self.residual_unabsorbed) / self.weight
+        return 100.0 * rms(self.residual_unabsorbed) / self.weight
 
     def remove_force_harmonics(self, values) -> np.ndarray:
         """What is left of a signal after removing, cycle by cycle, its fit by the force model's basis.
 
-        Each checked cycle's samples are regressed (least squares) on the
-        regressors of Eq. 4, ``1, cos(k theta), sin(k theta)`` for the orders
-        of :meth:`harmonic_orders`, ``theta = 2 pi f_b (t - t_start)`` with the
-        cycle's own ``f_b``, and replaced by the regression residual.
-        Anything in that span the identification can absorb into the cycle's
-        force coefficients, so it says nothing about a missing effect.
+        The regressors of Eq. 4, ``1, cos(k theta), sin(k theta)`` for the
+        orders of :meth:`harmonic_orders` and the cycle's own ``f_b``: anything in
+        that span the identification absorbs into the force coefficients.
 
         Parameters
         ----------
@@ -843,15 +565,8 @@ class ModelCheck:
         -------
         ndarray, same shape
         """
-        values = np.asarray(values, dtype=float)
-        if values.shape[0] != self.residual.size:
-            raise OptionError(f"values has {values.shape[0]} samples; the check has {self.residual.size}")
-        out = values.copy()
-        for piece in self._linear:
-            basis = piece["harmonic_basis"]
-            block = out[piece["rows"]]
-            out[piece["rows"]] = block - basis @ (basis.T @ block)
-        return out
+        blocks = [(piece["rows"], piece["harmonic_basis"]) for piece in self._linear]
+        return remove_projections(self._samples(values), blocks)
 
     def harmonic_orders(self) -> np.ndarray:
         """Force harmonic orders of the identified model (:meth:`SMDModel.harmonic_orders`)."""
@@ -973,154 +688,52 @@ class ModelCheck:
         -------
         ndarray, shape (len(preprocessed.time),)
         """
-        i = self.model.index(name)
         pre = self.preprocessed
         fill = {"u": pre.disp, "u_dot": pre.vel}.get(name)
-        if fill is None:
-            values = np.full(len(pre.time), float(np.median([p["states"][-1, i] for p in self._linear])))
-        else:
-            values = np.array(fill, dtype=float)
-        for piece in self._linear:
-            values[piece["samples"]] = piece["states"][:, i]
-        return values
+        return state_over_record(self._linear, self.model.index(name), len(pre.time), fill)
 
     def cross_correlation(self, candidates=None, max_lag_s=0.0, remove_harmonics=True) -> pd.DataFrame:
-        """Correlation of the free-simulation residual with candidate terms: what does the error look like?
+        """Correlation of the free-simulation residual with candidate terms (:func:`~.correlation.cross_correlation_table`).
 
-        By default both the residual and every candidate first lose, cycle
-        by cycle, their least-squares fit by the force model's own basis
-        (:meth:`remove_force_harmonics`). Without that step (measured on
-        synthetic records) every candidate correlates about equally, 0.2-0.3:
-        ``u``, ``u_dot``, ``u^3`` and the floor motion are all dominated by
-        the bouncing harmonics, which is also where the free simulation's
-        unavoidable error sits, and what lies in that span the identification
-        absorbs into the force coefficients anyway. After it, a cubic spring
-        makes its term ``cubic_stiffness`` the strongest (about twice its value
-        on the same record without the effect), and missing force harmonics
-        make ``harmonics`` the strongest.
-
-        Multi-column candidates (``harmonics``: cosines and sines) are scored
-        by the multiple correlation of a least-squares fit of all their
-        columns (``corr`` is then NaN); single columns by the Pearson
-        correlation. For each lag ``tau`` (whole samples, ``|tau| <=
-        max_lag_s``) the candidate ``c(t - tau)`` is used (``tau > 0``: the
-        candidate leads the residual) and the lag with the largest absolute
-        correlation is reported. The default is no lag: the candidate terms
-        act on the acceleration at once, and searching over lags lets any
-        near-periodic candidate match the residual's periodic error (on the
-        raw signals the best lag sat at the +-0.1 s edge of the search for
-        most candidates); a lag is for a sensor with its own delay.
+        By default the residual and every candidate first lose, cycle by cycle,
+        their fit by the force model's own basis (:meth:`remove_force_harmonics`):
+        without it every candidate correlates about equally (0.2-0.3, measured),
+        all being dominated by the bouncing harmonics the identification absorbs
+        anyway; with it a cubic spring makes ``cubic_stiffness`` the strongest
+        (about twice its value without the effect) and missing force harmonics
+        ``harmonics``. Multi-column candidates are scored by their multiple
+        correlation. The default is no lag: the candidate terms act on the
+        acceleration at once, and a lag search lets any near-periodic candidate
+        match the residual's periodic error; a lag is for a sensor with its own delay.
 
         Parameters
         ----------
         candidates : mapping of str to array_like, optional
-            Signals over the whole record, each of shape
-            ``(len(preprocessed.time),)`` or ``(len(preprocessed.time), q)``.
-            Default :meth:`default_candidates`; to add your own:
-            ``check.cross_correlation({**check.default_candidates(), "mine": x})``.
+            Signals over the whole record, shape ``(len(preprocessed.time),)`` or
+            ``(len(preprocessed.time), q)``; default :meth:`default_candidates`.
+            To add your own: ``check.cross_correlation({**check.default_candidates(), "mine": x})``.
         max_lag_s : float
-            Largest lag (s).
+            Largest lag (s); at lag ``tau > 0`` the candidate leads the residual.
         remove_harmonics : bool
             Remove the per-cycle force-basis fit first (see above).
 
         Returns
         -------
         pandas.DataFrame
-            One row per candidate, strongest first: ``signal``,
-            ``max_abs_corr``, ``corr`` (signed value there, NaN for
-            multi-column candidates), ``lag_s`` (s), ``corr_at_zero`` (no
-            lag) and ``explained`` (``max_abs_corr^2``: fraction of the
-            residual's variance a least-squares multiple of the candidate
-            removes).
+            One row per candidate, strongest first: ``signal``, ``max_abs_corr``,
+            ``corr`` (NaN for multi-column candidates), ``lag_s`` (s),
+            ``corr_at_zero`` and ``explained`` (``max_abs_corr^2``).
         """
         candidates = self.default_candidates() if candidates is None else dict(candidates)
-        n_record = len(self.preprocessed.time)
-        max_lag = int(np.floor(float(max_lag_s) * self.fs + 1e-9))
-        if max_lag < 0:
-            raise OptionError(f"max_lag_s must be >= 0, got {max_lag_s!r}")
-        lags = np.arange(-max_lag, max_lag + 1)
         target = self.remove_force_harmonics(self.residual) if remove_harmonics else self.residual
-        rows = []
-        for name, values in candidates.items():
-            values = np.asarray(values, dtype=float)
-            columns = values[:, None] if values.ndim == 1 else values
-            if columns.ndim != 2 or columns.shape[0] != n_record:
-                raise OptionError(
-                    f"candidate {name!r} has shape {values.shape}; give ({n_record},) or ({n_record}, q): "
-                    "values over the whole record"
-                )
-            if not np.all(np.isfinite(columns)):
-                raise OptionError(f"candidate {name!r} holds NaN or infinite values")
-            corr = np.empty(lags.size)
-            for j, lag in enumerate(lags):
-                where = np.clip(self.sample_index - lag, 0, n_record - 1)
-                block = columns[where]
-                if remove_harmonics:
-                    block = self.remove_force_harmonics(block)
-                corr[j] = _corr(target, block[:, 0]) if block.shape[1] == 1 else _multiple_corr(target, block)
-            if np.all(np.isnan(corr)):
-                best, value = max_lag, float("nan")
-            else:
-                best = int(np.nanargmax(np.abs(corr)))
-                value = float(corr[best])
-            rows.append({"signal": name, "max_abs_corr": abs(value), "corr": value if columns.shape[1] == 1 else np.nan,
-                         "lag_s": lags[best] / self.fs, "corr_at_zero": float(corr[max_lag]), "explained": value**2})
-        frame = pd.DataFrame(rows, columns=["signal", "max_abs_corr", "corr", "lag_s", "corr_at_zero", "explained"])
-        return frame.sort_values("max_abs_corr", ascending=False, na_position="last").reset_index(drop=True)
+        return cross_correlation_table(target, candidates, self.sample_index, len(self.preprocessed.time), self.fs,
+                                       max_lag_s, self.remove_force_harmonics if remove_harmonics else None)
 
     # -- text -----------------------------------------------------------------
 
     def summary(self, n_peaks=5, n_signals=5) -> str:
-        """Readable report: fit, residual size, tests, spectral peaks, strongest correlations."""
-        pre = self.preprocessed
-        lb = self.test_serial_correlation()
-        combined = lb.loc["combined"]
-        normal = self.test_normality()
-        hetero = self.test_heteroskedasticity()
-        _, _, peaks = self.residual_spectrum()
-        corr = self.cross_correlation()
-        estimator = self.table["estimator"].iloc[0] if "estimator" in self.table and len(self.table) else "?"
-        width = 78
-        lines = [
-            "Model check".center(width),
-            "=" * width,
-            f"record: {getattr(pre, 'source', '?')}    model: {self.model!r}",
-            f"estimator: {estimator}    cycles checked: {self.n_cycles}    samples: {self.residual.size}"
-            f"    median f_b: {self.f_b:.3f} Hz",
-            f"log-likelihood: {self.log_likelihood:.1f}    parameters: {self.n_parameters}"
-            f"    AIC: {self.aic:.1f}    BIC: {self.bic:.1f}",
-            "-" * width,
-            f"fit, free simulation:        {self.fit_percent:6.2f} %",
-            f"fit, one-step prediction:    {self.fit_percent_one_step:6.2f} %",
-            f"residual RMS (free sim.):    {self.residual_rms:8.2f} N = {self.residual_rms_bw:.2f} % of body weight"
-            f" ({self.weight:.0f} N)",
-            f"  of which no re-fit of the cycles could remove: {self.residual_unabsorbed_rms_bw:.2f} % of body weight",
-            f"innovation variance:         {self.innovation_variance:6.3f}   (1 if the filter's noise levels fit)",
-            "-" * width,
-            "Tests on the standardised innovations of u''",
-            f"  Ljung-Box (per cycle, {int(combined['lags'])} dof):  Q = {combined['lb_stat']:.1f},"
-            f"  p = {combined['lb_pvalue']:.3g}",
-            f"  Jarque-Bera:  JB = {normal['statistic']:.1f},  p = {normal['pvalue']:.3g},"
-            f"  skew = {normal['skew']:.2f},  kurtosis = {normal['kurtosis']:.2f}",
-            f"  Heteroskedasticity (last/first third):  H = {hetero['statistic']:.2f},  p = {hetero['pvalue']:.3g}"
-            f"  (residual ratio {hetero['residual_ratio']:.2f})",
-            "-" * width,
-            f"Residual spectrum peaks (noise floor {peaks.attrs['noise_floor']:.3g} N^2/Hz, threshold "
-            f"x{peaks.attrs['threshold'] / peaks.attrs['noise_floor']:.1f}):",
-        ]
-        if len(peaks):
-            for _, row in peaks.head(n_peaks).iterrows():
-                lines.append(f"  {row['frequency']:6.2f} Hz  ({row['f_over_fb']:.2f} f_b)  x{row['ratio_to_floor']:7.1f}"
-                             f"  {row['label']}")
-        else:
-            lines.append("  none above the threshold")
-        lines.append("-" * width)
-        lines.append("Strongest correlations of the residual with candidate terms (force-basis fit removed):")
-        for _, row in corr.head(n_signals).iterrows():
-            signed = f"{row['corr']:+.3f}" if np.isfinite(row["corr"]) else f"R={row['max_abs_corr']:.3f}"
-            lines.append(f"  {row['signal']:<16s} {signed}")
-        lines.append("=" * width)
-        return "\n".join(lines)
+        """Readable report: fit, residual size, tests, spectral peaks, strongest correlations (:func:`~.report.summary_text`)."""
+        return summary_text(self, n_peaks, n_signals)
 
     def __repr__(self):
         return (f"ModelCheck(cycles={self.n_cycles}, fit={self.fit_percent:.1f} %, "
@@ -1137,62 +750,14 @@ class ModelCheck:
     def pooled_acf(self, nlags=None) -> np.ndarray:
         """Autocorrelation of the standardised innovations, pooled within cycles (lags 0..nlags).
 
-        ``sum_c sum_t z_t z_{t-k} / sum_c sum_t z_t^2`` with both samples in the same cycle.
+        ``sum_c sum_t z_t z_{t-k} / sum_c sum_t z_t^2`` with both samples in the same cycle
+        (:func:`~.residual_tests.pooled_acf`).
         """
         nlags = self.default_lags() if nlags is None else int(nlags)
-        pieces = [p - p.mean() for p in self._per_cycle(self.innovations)]
-        denominator = sum(float(np.dot(p, p)) for p in pieces)
-        out = np.empty(nlags + 1)
-        for k in range(nlags + 1):
-            out[k] = sum(float(np.dot(p[k:], p[: p.size - k])) for p in pieces if p.size > k) / denominator
-        return out
+        return pooled_acf(self._per_cycle(self.innovations), nlags)
 
     def plot_diagnostics(self, path=None, lags=None):
         """One figure to read at a glance where and how the model fails (:func:`~smd_statespace.plotting.check.plot_diagnostics`)."""
         from ..plotting.check import plot_diagnostics
 
         return plot_diagnostics(self, path, lags)
-
-
-def _corr(a, b) -> float:
-    """Pearson correlation of two equal-length arrays (NaN when either is constant)."""
-    a = a - a.mean()
-    b = b - b.mean()
-    denominator = np.sqrt(np.dot(a, a) * np.dot(b, b))
-    return float(np.dot(a, b) / denominator) if denominator > 0 else float("nan")
-
-
-def _multiple_corr(target, columns) -> float:
-    """Multiple correlation of ``target`` with a least-squares fit of ``columns`` (and a constant)."""
-    design = np.column_stack([np.ones(target.size), columns])
-    coefficients, *_ = np.linalg.lstsq(design, target, rcond=None)
-    centred = target - target.mean()
-    total = float(np.dot(centred, centred))
-    if total == 0:
-        return float("nan")
-    left = target - design @ coefficients
-    return float(np.sqrt(max(0.0, 1.0 - float(np.dot(left, left)) / total)))
-
-
-def _chain_sensitivity(jacobians, obs_jacobians):
-    """Rows ``H_k F_{k-1} ... F_0``: derivative of each output with respect to the first state, shape (m, n)."""
-    m, n = obs_jacobians.shape
-    out = np.empty((m, n))
-    phi = np.eye(n)
-    out[0] = obs_jacobians[0]
-    for k in range(1, m):
-        phi = jacobians[k - 1] @ phi
-        out[k] = obs_jacobians[k] @ phi
-    return out
-
-
-def _orthonormal_columns(matrix, rtol=1e-7):
-    """Orthonormal basis of the column space of ``matrix`` (columns scaled to unit norm first)."""
-    matrix = np.asarray(matrix, dtype=float)
-    norms = np.linalg.norm(matrix, axis=0)
-    usable = np.isfinite(norms) & (norms > 0)
-    if not usable.any():
-        return np.zeros((matrix.shape[0], 0))
-    scaled = matrix[:, usable] / norms[usable]
-    u, s, _ = np.linalg.svd(scaled, full_matrices=False)
-    return u[:, s > rtol * s[0]]
