@@ -322,6 +322,26 @@ def _run_on(executor, pending, model, estimator, runner_options, check, parts: P
         bar.update()
 
 
+def _prepare_folder(out: Path, settings: dict, resume: bool) -> Path:
+    """The run's ``parts`` folder in ``out``, made ready for the records' parts.
+
+    The settings are checked against ``run.json`` (``resume``) or written to it, and
+    any part left half-written by a killed run is removed.
+    """
+    parts = out / "parts"
+    parts.mkdir(parents=True, exist_ok=True)
+    sidecar = out / "run.json"
+    settings = json.loads(json.dumps(settings))  # as stored
+    _check_settings(sidecar, settings, resume, parts)
+    if not resume:
+        temporary = sidecar.with_name(".run.json.tmp")
+        temporary.write_text(json.dumps(settings, indent=2), encoding="utf-8")
+        os.replace(temporary, sidecar)
+    for stale in parts.glob(".*.tmp"):  # a part being written when the run was killed
+        stale.unlink()
+    return parts
+
+
 def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_options=None, jobs: int = 1,
               resume: bool = False, progress: bool = True, check: bool = True, executor=None) -> BatchSummary:
     """Identify every record, writing each finished one at once; see the module docstring.
@@ -365,17 +385,7 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     model = SMDModel() if model is None else model
     runner_options = dict(runner_options or {})
     out = Path(out)
-    parts = out / "parts"
-    parts.mkdir(parents=True, exist_ok=True)
-    sidecar = out / "run.json"
-    settings = json.loads(json.dumps(_settings(records, model, estimator, runner_options)))  # as stored
-    _check_settings(sidecar, settings, resume, parts)
-    if not resume:
-        temporary = sidecar.with_name(".run.json.tmp")
-        temporary.write_text(json.dumps(settings, indent=2), encoding="utf-8")
-        os.replace(temporary, sidecar)
-    for stale in parts.glob(".*.tmp"):  # a part being written when the run was killed
-        stale.unlink()
+    parts = _prepare_folder(out, _settings(records, model, estimator, runner_options), resume)
     pending = [r for r in records if not (parts / r.part).exists()]
     bar = tqdm(total=len(records), initial=len(records) - len(pending), desc=f"identify ({estimator})",
                unit="record", disable=not progress)
