@@ -312,6 +312,29 @@ def _gait(weight_fraction, dt, period) -> Finding | None:
     return None
 
 
+def _mass_mismatch(mass: float, fraction: np.ndarray, active: np.ndarray, dt: float):
+    """A ``mass_mismatch`` warning, or None if the body mass fits the force.
+
+    The warning says that the mean force while bouncing, or else over at least 1 s of
+    quiet standing, differs from ``M g`` by more than :data:`MASS_TOLERANCE`
+    (``fraction`` is the force in units of ``M g``).
+    """
+    quiet = ~active
+    mean_ratio = float(np.mean(fraction[active]))
+    if abs(mean_ratio - 1.0) > MASS_TOLERANCE:
+        return Finding(
+            "mass_mismatch", False,
+            f"the mean force while bouncing is {mean_ratio:.3f} times M g ({mass:.1f} kg): the body mass "
+            f"given or the plate's zero is off (the force says {mass * mean_ratio:.1f} kg)")
+    if quiet.sum() * dt >= 1.0 and abs(float(np.mean(fraction[quiet])) - 1.0) > MASS_TOLERANCE:
+        ratio = float(np.mean(fraction[quiet]))
+        return Finding(
+            "mass_mismatch", False,
+            f"quiet standing ({quiet.sum() * dt:.1f} s) weighs {ratio:.3f} times M g ({mass:.1f} kg): the "
+            f"body mass given or the plate's zero is off (standing says {mass * ratio:.1f} kg)")
+    return None
+
+
 def check_bouncing(record: Record) -> BouncingCheck:
     """Check that ``record`` is one person bouncing in contact with the plate.
 
@@ -380,17 +403,7 @@ def check_bouncing(record: Record) -> BouncingCheck:
             "partly_active", False,
             f"the person bounces in {check.active_seconds:.1f} s of {duration:.1f} s "
             f"({_times(time, starts, stops)}); the quiet parts carry no information on the person"))
-    quiet = ~active
-    mean_ratio = float(np.mean(fraction[active]))
-    if abs(mean_ratio - 1.0) > MASS_TOLERANCE:
-        check.findings.append(Finding(
-            "mass_mismatch", False,
-            f"the mean force while bouncing is {mean_ratio:.3f} times M g ({record.mass:.1f} kg): the body mass "
-            f"given or the plate's zero is off (the force says {record.mass * mean_ratio:.1f} kg)"))
-    elif quiet.sum() * dt >= 1.0 and abs(float(np.mean(fraction[quiet])) - 1.0) > MASS_TOLERANCE:
-        ratio = float(np.mean(fraction[quiet]))
-        check.findings.append(Finding(
-            "mass_mismatch", False,
-            f"quiet standing ({quiet.sum() * dt:.1f} s) weighs {ratio:.3f} times M g ({record.mass:.1f} kg): the "
-            f"body mass given or the plate's zero is off (standing says {record.mass * ratio:.1f} kg)"))
+    mass = _mass_mismatch(record.mass, fraction, active, dt)
+    if mass is not None:
+        check.findings.append(mass)
     return check
