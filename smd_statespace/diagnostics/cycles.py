@@ -6,7 +6,9 @@ What :class:`~smd_statespace.diagnostics.check.ModelCheck` is built from:
 - :func:`checked_series`: every checked cycle, joined (a boundary sample shared by two
   consecutive cycles is kept once, in the earlier cycle, where the free simulation has run longest);
 - :func:`absorbable_bases`: per cycle, an orthonormal basis of the output changes a re-fit could make;
-- :func:`state_over_record`: a slot of the free simulation's state over the whole record.
+- :func:`state_over_record`: a slot of the free simulation's state over the whole record;
+- :func:`cycle_harmonic`: a force harmonic of each cycle over the whole record;
+- :func:`identified_runner`: the cycle-by-cycle identification a check compares with.
 
 Forces in N (``M_h u''``), times in s. A cycle's *piece* is a dict with
 ``rows`` (its slice of the joined series), ``samples`` (its record samples),
@@ -14,18 +16,42 @@ Forces in N (``M_h u''``), times in s. A cycle's *piece* is a dict with
 :class:`~smd_statespace.estimators.CycleData`), ``free`` (the slots the
 identification estimated), ``states`` (the free simulation, shape (m, n_state))
 and ``harmonic_basis`` (orthonormal force regressors of Eq. 4 on the kept samples).
+
+Two predictions of the dynamic GRF ``M_h u''`` (N, Eq. 3) are made:
+
+free simulation (:attr:`ModelCheck.simulated`)
+    Each cycle is integrated with the model alone (:meth:`SMDModel.transition`,
+    no process noise, no measurement update) with the cycle's identified
+    parameters held at their final-pass values, from the dynamic starting
+    state (``u``, ``u_dot``, an estimated floor's ``z``, ``z_dot``) that fits
+    the cycle best in the least-squares sense, as MATLAB's ``compare`` does
+    by default (``initial_state="filtered"`` starts from the filter's
+    estimate at the first sample instead: for a slot no channel measures,
+    such as an estimated floor's motion, that is only its prior). What the
+    model cannot produce stays in the residual ``measured - simulated``:
+    this is the signal the missing-effect diagnostics look at.
+one-step-ahead prediction (:attr:`ModelCheck.one_step`)
+    The filter's prediction of each sample from all earlier ones
+    (measurement minus innovation). The filter corrects the state at every
+    sample, so this fits better and hides model error in the state
+    corrections; its standardised innovations are what the serial
+    correlation, normality and heteroskedasticity tests examine (as in
+    statsmodels).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..errors import OptionError
+from ..io import Record
 from ..model import TWO_PI
 from .free_simulation import fit_initial_state, free_simulation, path_sensitivity
 from .phase import harmonic_regressors
 from .subspace import orthonormal_columns
 
-__all__ = ["SERIES", "checked_cycle", "checked_series", "absorbable_bases", "state_over_record"]
+__all__ = ["SERIES", "checked_cycle", "checked_series", "absorbable_bases", "state_over_record", "cycle_harmonic",
+           "identified_runner"]
 
 SERIES = ("time", "cycle", "sample", "phase", "measured", "simulated", "one_step", "innovations")
 """Names of the per-sample series of :func:`checked_series`."""
@@ -48,7 +74,7 @@ def checked_cycle(model, preprocessed, cycle, result, keep, initial_state="estim
         The cycle's samples to keep (all, or all but a first sample shared with the previous cycle).
     initial_state : {"estimate", "filtered"}
         Start of the free simulation: fitted by least squares
-        (:func:`~.free_simulation.fit_initial_state`) or the filter's estimate.
+        (:func:`free_simulation.fit_initial_state`) or the filter's estimate.
 
     Returns
     -------
@@ -132,9 +158,9 @@ def checked_series(model, preprocessed, cycles, results, initial_state="estimate
 def absorbable_bases(model, pieces) -> list:
     """Per cycle, an orthonormal basis of the changes of the simulated ``u''`` a re-fit of the cycle could make.
 
-    The columns of :func:`~.free_simulation.path_sensitivity` for the slots
+    The columns of :func:`free_simulation.path_sensitivity` for the slots
     the identification estimated, on the kept samples, orthonormalised
-    (:func:`~.subspace.orthonormal_columns`).
+    (:func:`subspace.orthonormal_columns`).
 
     Returns
     -------
@@ -163,3 +189,76 @@ def state_over_record(pieces, index, n_record, fill=None) -> np.ndarray:
     for piece in pieces:
         values[piece["samples"]] = piece["states"][:, index]
     return values
+
+
+def cycle_harmonic(time, cycles, order) -> np.ndarray:
+    """``[cos(k theta), sin(k theta)]`` of each cycle over the whole record, shape (len(time), 2).
+
+    ``theta = 2 pi f_b (t - t_start)`` of the cycle (Eq. 4), ``k = order``;
+    zero outside the cycles. A force harmonic the model lacks adds ``g (a_k
+    cos + b_k sin)`` to the COM acceleration.
+
+    Parameters
+    ----------
+    time : array_like, shape (n,)
+        The record's sample times (s).
+    cycles : list of Cycle
+        The cycles (``start``, ``stop``, ``t_start``, ``f_b``).
+    order : int
+        Harmonic order ``k``.
+    """
+    time = np.asarray(time, dtype=float)
+    out = np.zeros((time.size, 2))
+    for cycle in cycles:
+        span = slice(cycle.start, cycle.stop + 1)
+        theta = TWO_PI * cycle.f_b * (time[span] - cycle.t_start)
+        out[span, 0], out[span, 1] = np.cos(order * theta), np.sin(order * theta)
+    return out
+
+
+def identified_runner(preprocessed, model, estimator, runner, runner_options):
+    """The finished cycle-by-cycle identification :func:`~smd_statespace.diagnostics.check.check_model` compares with.
+
+    Without ``runner``, a :class:`~smd_statespace.identify.runner.CycleRunner`
+    of ``model`` and ``estimator`` with ``runner_options`` (``progress``
+    False unless given, ``keep_results`` True) is run on ``preprocessed`` (a
+    :class:`~smd_statespace.io.Record` is preprocessed first); a given
+    ``runner`` is checked instead.
+
+    Returns
+    -------
+    CycleRunner
+        A runner with ``table_``, ``results_``, ``model`` and ``preprocessed_``.
+
+    Raises
+    ------
+    OptionError
+        Nothing to identify, options for a finished runner, a runner that has
+        not run or kept no filter results, or a record it did not identify.
+    """
+    from ..identify.runner import CycleRunner
+    from ..signals import preprocess
+
+    if runner is None:
+        if preprocessed is None:
+            raise OptionError("check_model needs a preprocessed record or a finished runner")
+        if isinstance(preprocessed, Record):
+            preprocessed = preprocess(preprocessed)
+        runner_options.setdefault("progress", False)
+        runner_options["keep_results"] = True
+        runner = CycleRunner(model, estimator=estimator, **runner_options)
+        runner.run(preprocessed)
+    else:
+        if runner_options:
+            raise OptionError(
+                f"check_model: runner options {', '.join(sorted(runner_options))} cannot apply to a finished runner"
+            )
+        if not hasattr(runner, "table_"):
+            raise OptionError("check_model: the runner has not run yet; call runner.run(record) first")
+        if not getattr(runner, "results_", None):
+            raise OptionError("check_model: the runner kept no filter results; make it with keep_results=True")
+        if preprocessed is not None and isinstance(preprocessed, Record):
+            raise OptionError("check_model: with a finished runner, pass the Preprocessed it ran on (or nothing)")
+        if preprocessed is not None and preprocessed is not runner.preprocessed_:
+            raise OptionError("check_model: preprocessed is not the record the runner identified")
+    return runner

@@ -70,7 +70,7 @@ def free_simulation(model, result, data, dynamic) -> np.ndarray:
 def path_sensitivity(model, states, data, channel) -> np.ndarray:
     """Derivative of the simulated output ``channel`` at every sample with respect to the starting state.
 
-    The chain ``H_k F_{k-1} ... F_0`` (:func:`~.subspace.chain_sensitivity`)
+    The chain ``H_k F_{k-1} ... F_0`` (:func:`subspace.chain_sensitivity`)
     of the model's own Jacobians (:meth:`SMDModel.transition_jacobian`,
     :meth:`SMDModel.observation_jacobian`) along ``states`` (Eq. 11-16
     linearised along the free simulation).

@@ -103,7 +103,7 @@ def phase_profile(values, phase, weight, n_cycles, bins=24) -> pd.DataFrame:
 
 
 def harmonic_regressors(theta, orders) -> np.ndarray:
-    """The force regressors of Eq. 4: ``1, cos(k theta), sin(k theta)`` for each order ``k``, shape (m, 1 + 2 len(orders)).
+    """The force regressors of Eq. 4: ``1, cos(k theta), sin(k theta)`` per order ``k``, shape (m, 1 + 2 len(orders)).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""The model check as readable text (:meth:`ModelCheck.summary <smd_statespace.diagnostics.check.ModelCheck.summary>`)."""
+"""The model check as readable text (:meth:`smd_statespace.diagnostics.check.ModelCheck.summary`)."""
 
 from __future__ import annotations
 

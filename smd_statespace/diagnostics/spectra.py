@@ -116,7 +116,7 @@ def welch_dof(n, nperseg) -> float:
 
 
 def peak_threshold(floor, n_bins, dof, false_alarm=PEAK_FALSE_ALARM) -> float:
-    """The level white noise of median PSD ``floor`` exceeds in at least one of ``n_bins`` bins with probability ``false_alarm``.
+    """The level white noise of median PSD ``floor`` exceeds in some of ``n_bins`` bins with chance ``false_alarm``.
 
     A bin of the noise PSD is ``level chi2(dof) / dof``, whose median is
     ``level chi2.median(dof) / dof``; each bin gets the false-alarm

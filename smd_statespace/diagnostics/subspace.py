@@ -8,6 +8,34 @@ Functions over arrays, used by :meth:`ModelCheck.remove_absorbable
   simulated path with respect to its starting state;
 - :func:`orthonormal_columns`: an orthonormal basis of a matrix's column space;
 - :func:`remove_projections`: a signal minus its least-squares projection on a basis, block by block.
+
+What a per-cycle model can and cannot show
+------------------------------------------
+Each cycle has its own ``f_h``, ``xi_h``, ``1 + 2n`` force coefficients and
+starting ``u``, ``u_dot`` (13 numbers for ``n = 4``) for about 50 samples (a
+2 Hz cycle at 100 Hz). A
+smooth extra term below about ``n f_b`` is largely absorbed into them, so it
+barely reaches the residual (measured on synthetic records of
+:func:`~smd_statespace.simulation.simulate_bouncing`, 12 s, 1 % BW noise, EKF):
+
+=================== ======================================== ============================================
+hidden effect       what reaches the residual                which diagnostic shows it
+=================== ======================================== ============================================
+``harmonics``       lines at ``(n+1) f_b``, ``(n+2) f_b``:   :meth:`ModelCheck.residual_spectrum`: top
+                    fit 95 -> 82-87 %, residual 1.1-1.3 ->   peak "harmonic 5"; candidate
+                    3.3-4.6 % BW                             ``harmonics`` (R about 0.9) strongest
+``cubic_stiffness`` mostly absorbed (identified ``f_h`` up   :meth:`ModelCheck.cross_correlation`:
+                    3-12 %); fit -0.5 to -1.5 points,        ``cubic_stiffness`` strongest, 2-3.5 times
+                    residual +0.1-0.3 % BW                   its value without the effect
+``floor_mode``      below ``n f_b`` (the article's 3.48 Hz   nothing: fit, residual and correlations as
+                    plate): about 99 % absorbed              on a rigid floor. Above ``n f_b`` (a floor
+                                                             excited by other sources): candidate
+                                                             ``floor_mode`` and a non-harmonic peak
+=================== ======================================== ============================================
+
+:attr:`ModelCheck.residual_unabsorbed` (the residual minus everything a small
+change of the cycles' identified values could remove) separates estimator
+error from model error: on a clean record it is the measurement noise.
 """
 
 from __future__ import annotations
