@@ -167,7 +167,7 @@ class RecordSystem:
     def pass_arguments(self, y, n_template) -> tuple:
         """The positional arguments of :func:`~smd_statespace.person.kalman.augmented_pass` for the measured
         ``y`` (the known part subtracted) and ``n_template`` template coefficients; the first ones of
-        :func:`~smd_statespace.person.score.sensitivity_pass` too."""
+        :func:`~smd_statespace.person.sensitivity.sensitivity_pass` too."""
         return (y - self.y_known, self.hx, self.H, self.Phi, self.Gam, self.Qx, self.offset, self.X_obs, self.X_tr,
                 self.reset, self.code, self.D, self.E, self.drift, n_template, self.smooth_phi, self.smooth_q,
                 self.smooth_p0)
