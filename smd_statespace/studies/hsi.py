@@ -342,6 +342,17 @@ def _scaled(floor: FloorModel, scale: float) -> FloorModel:
                       name=f"{floor.name}, modal masses x{scale:g}")
 
 
+def _person(person) -> dict:
+    """:data:`HSI_PERSON` with the overrides in ``person``, or an :class:`OptionError` naming unknown keys."""
+    who = dict(HSI_PERSON)
+    if person:
+        unknown = set(person) - set(HSI_PERSON)
+        if unknown:
+            raise OptionError(f"hsi_study: unknown person keys {sorted(unknown)}; valid: {', '.join(HSI_PERSON)}")
+        who.update(person)
+    return who
+
+
 def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, max_passes=None, fs=None,
               noise=None, repeats=None, mass_scales=None, identify=True, progress=False) -> HSIStudy:
     """Simulate Section 6 with a person whose parameters do not change, and identify them.
@@ -405,12 +416,7 @@ def hsi_study(duration=None, seed=0, warmup=None, person=None, estimator=None, m
     started = _time.perf_counter()
     settings = _settings({"duration": duration, "warmup": warmup, "estimator": estimator, "max_passes": max_passes,
                           "fs": fs, "noise": noise, "repeats": repeats, "mass_scales": mass_scales})
-    who = dict(HSI_PERSON)
-    if person:
-        unknown = set(person) - set(HSI_PERSON)
-        if unknown:
-            raise OptionError(f"hsi_study: unknown person keys {sorted(unknown)}; valid: {', '.join(HSI_PERSON)}")
-        who.update(person)
+    who = _person(person)
     plate, mode1 = FloorModel.table3(), FloorModel.table3([1])
     ls_rows, records, states, floor_rows = _simulate_conditions(who, settings, seed, plate, mode1)
 
