@@ -55,258 +55,24 @@ shape ``(n_state,)`` or a particle cloud of shape ``(n_particles, n_state)``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
 
 from ..errors import OptionError, check_range
 from ..io import G
+from .discretisation import step, step_jacobian
 from .effect import Effect, FloorMotion, HarmonicOrders
+from .equations import acceleration_frf, blf, c_h, k_h, smd_acceleration  # noqa: F401 (importable from here too)
 from .inputs import TWO_PI, CycleInputs
-
-
-# Positions of the base slots, which always open the state vector (Eq. 7).
-U, U_DOT, F_H, XI_H = 0, 1, 2, 3
+from .prior import ONE_WORD_PER_DOUBLE, Prior  # noqa: F401 (importable from here too)
+from .slots import F_H, U, U_DOT, XI_H, Slot, base_slots  # noqa: F401 (Slot importable from here too)
 
 DISCRETISATIONS = ("euler", "rk4")
 """Names accepted by ``SMDModel(discretisation=...)``."""
 
 OBSERVATIONS = {"full": ("u", "u_dot", "u_ddot"), "acc": ("u_ddot",)}
 """Observation options: channel names observed by each (Eq. 14-16)."""
-
-
-# ---------------------------------------------------------------------------
-# Derived quantities (Eq. 5, 17, 18)
-# ---------------------------------------------------------------------------
-
-
-def k_h(f_h, mass):
-    """Leg stiffness ``K_h = M_h (2 pi f_h)^2`` in N/m (Eq. 17).
-
-    Parameters
-    ----------
-    f_h : float or ndarray
-        SMD natural frequency (Hz).
-    mass : float or ndarray
-        Body mass ``M_h`` (kg).
-    """
-    return np.asarray(mass) * (TWO_PI * np.asarray(f_h)) ** 2
-
-
-def c_h(xi_h, f_h, mass):
-    """Leg damping ``C_h = 2 xi_h M_h (2 pi f_h)`` in N s/m (Eq. 18).
-
-    Parameters
-    ----------
-    xi_h : float or ndarray
-        SMD damping ratio (-).
-    f_h : float or ndarray
-        SMD natural frequency (Hz).
-    mass : float or ndarray
-        Body mass ``M_h`` (kg).
-    """
-    return 2.0 * np.asarray(xi_h) * np.asarray(mass) * TWO_PI * np.asarray(f_h)
-
-
-def smd_acceleration(u, u_dot, f_h, xi_h, force_g):
-    """COM acceleration of the SMD, Eq. 2: the one place the equation is written.
-
-    ``u'' = -omega_h^2 u - 2 xi_h omega_h u' + g F``, ``omega_h = 2 pi f_h``.
-    :meth:`SMDModel.acceleration` (every estimator), the record-level model
-    (through the model's rates) and the simulator
-    (:mod:`smd_statespace.simulation.dynamics`; relative to the floor in
-    :mod:`smd_statespace.simulation.floor`) all call it; only the compiled
-    particle-filter kernel keeps a tested twin.
-
-    Parameters
-    ----------
-    u, u_dot : float or ndarray
-        COM displacement (m) and velocity (m/s).
-    f_h : float or ndarray
-        SMD natural frequency (Hz).
-    xi_h : float or ndarray
-        SMD damping ratio (-).
-    force_g : float or ndarray
-        The force per unit mass ``F_bio / M_h = g F`` (m/s^2). Arrays broadcast.
-
-    Returns
-    -------
-    ndarray
-        ``u''`` (m/s^2).
-    """
-    omega = TWO_PI * np.asarray(f_h)
-    return -omega**2 * u - 2.0 * np.asarray(xi_h) * omega * u_dot + force_g  # Eq. 2
-
-
-def acceleration_frf(frequency, f_h, xi_h):
-    """Frequency response of Eq. 2 from force (in g) to COM acceleration (in g).
-
-    Parameters
-    ----------
-    frequency : float or array_like
-        Excitation frequency (Hz).
-    f_h : float or array_like
-        SMD natural frequency (Hz).
-    xi_h : float or array_like
-        SMD damping ratio (-) (arrays broadcast with ``frequency``).
-
-    Returns
-    -------
-    complex ndarray
-        ``H = -w^2 / (w_h^2 - w^2 + 2 i xi_h w_h w)``: the harmonic
-        ``g C e^{i w t}`` of ``g F`` produces ``H g C e^{i w t}`` in ``u''``.
-    """
-    omega = 2.0 * np.pi * np.asarray(frequency, dtype=float)
-    omega_h = 2.0 * np.pi * f_h
-    return -(omega**2) / (omega_h**2 - omega**2 + 2j * xi_h * omega_h * omega)
-
-
-# ---------------------------------------------------------------------------
-# effects
-
-
-def blf(a, b):
-    """Biomechanical load factor ``BLF_i = sqrt(a_i^2 + b_i^2)`` in g (Eq. 5)."""
-    return np.hypot(a, b)
-
-
-# ---------------------------------------------------------------------------
-# Building blocks
-# ---------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Slot:
-    """One entry of the augmented state.
-
-    Parameters
-    ----------
-    name : str
-        Name used by :meth:`SMDModel.index` (e.g. ``"f_h"``).
-    kind : {"dynamic", "parameter"}
-        Dynamic slots (``u``, ``u_dot``, a floor displacement, ...) evolve by
-        the model's rate; parameters are random walks.
-    unit : str
-        SI unit, for tables and plots.
-    low, high : float, optional
-        Uniform prior range of a parameter.
-    nominal : float, optional
-        Nominal magnitude; the default process noise of the slot is
-        ``process_noise * nominal`` per step. For dynamic slots that are
-        scaled by the data, leave ``None`` and set ``scale``.
-    scale : str, optional
-        For dynamic slots: the data channel (``"u"`` or ``"u_dot"``) whose RMS
-        is the slot's nominal magnitude and prior spread.
-    description : str
-        One line for documentation and reports.
-    linear : bool
-        Whether the rate and observation are linear in this slot once the
-        non-linear slots are fixed (``f_h`` and ``xi_h`` are not linear; ``u``,
-        ``u_dot`` and the Fourier coefficients are). Rao-Blackwellised
-        estimators sample the non-linear slots and Kalman-filter the rest.
-    search : (float, float), optional
-        A parameter's search range in the record-level maximum likelihood
-        (:class:`~smd_statespace.person.model.RecordModel`), where it differs
-        from the prior range ``low``-``high`` of the per-cycle estimators. A
-        prior is information (a particle filter spreads its particles over it);
-        a search range only boxes the optimiser, so it may be wider.
-    limit : bool
-        True when the lower end of the search range is a physical limit (a
-        damping ratio of 0): an estimate there says "no more than the record
-        can tell apart from it", not that the fit ran away, and is not
-        counted as sitting on a search bound.
-    """
-
-    name: str
-    kind: str
-    unit: str
-    low: float | None = None
-    high: float | None = None
-    nominal: float | None = None
-    scale: str | None = None
-    description: str = ""
-    linear: bool = True
-    search: tuple | None = None
-    limit: bool = False
-
-    def __post_init__(self):
-        if self.kind not in ("dynamic", "parameter"):
-            raise OptionError(f"slot {self.name!r}: kind must be 'dynamic' or 'parameter', got {self.kind!r}")
-        if self.kind == "parameter" and (self.low is None or self.high is None or not self.low < self.high):
-            raise OptionError(f"slot {self.name!r}: a parameter needs a prior range low < high")
-        if self.search is not None and not self.search[0] <= self.low < self.high <= self.search[1]:
-            raise OptionError(f"slot {self.name!r}: the search range {tuple(self.search)} must hold the prior "
-                              f"range ({self.low}, {self.high})")
-        if self.nominal is None and self.scale is None:
-            raise OptionError(f"slot {self.name!r}: give a nominal magnitude or a data channel to scale by")
-
-
-ONE_WORD_PER_DOUBLE = (np.random.SFC64, np.random.PCG64, np.random.PCG64DXSM, np.random.Philox)
-"""Bit generators whose ``random()`` uses exactly one ``random_raw`` word per number (not MT19937: two)."""
-
-
-@dataclass(frozen=True)
-class Prior:
-    """Independent prior of every state slot.
-
-    Parameters slots are uniform on ``[low, high]``; dynamic slots are normal
-    with ``mean`` and ``std``. ``kinds[i]`` says which.
-    """
-
-    names: tuple[str, ...]
-    kinds: tuple[str, ...]
-    first: np.ndarray
-    second: np.ndarray
-
-    @property
-    def mean(self) -> np.ndarray:
-        """Prior mean of every slot."""
-        uniform = np.array([kind == "uniform" for kind in self.kinds])
-        return np.where(uniform, 0.5 * (self.first + self.second), self.first)
-
-    @property
-    def std(self) -> np.ndarray:
-        """Prior standard deviation of every slot (the yardstick for identifiability)."""
-        uniform = np.array([kind == "uniform" for kind in self.kinds])
-        return np.where(uniform, (self.second - self.first) / np.sqrt(12.0), self.second)
-
-    @property
-    def cov(self) -> np.ndarray:
-        """Diagonal prior covariance."""
-        return np.diag(self.std**2)
-
-    def sample(self, rng: np.random.Generator, size: int, columns=None) -> np.ndarray:
-        """Draw ``size`` states, shape ``(size, n_state)``.
-
-        ``columns`` (a boolean mask over the slots, or slot indices in
-        increasing order) returns only those slots, and leaves ``rng`` exactly where the
-        full draw would: the uniform slots' numbers are skipped, not computed,
-        when none of them is asked for (a restart needs only the two motion
-        slots). The uniform slots draw first, then the normal ones.
-        """
-        uniform = np.array([kind == "uniform" for kind in self.kinds])
-        normal = ~uniform
-        wanted = np.ones(len(self.names), dtype=bool)
-        if columns is not None:
-            wanted[:] = False
-            wanted[columns] = True  # a boolean mask or slot indices
-        draws = np.empty((size, len(self.names)))
-        n_uniform = int(uniform.sum())
-        if (wanted & uniform).any() or not isinstance(rng.bit_generator, ONE_WORD_PER_DOUBLE):
-            # low + (high - low) * U and mean + std * Z, in place: what rng.uniform and rng.normal compute
-            # element by element (the same numbers), without their slow per-element parameter broadcasting.
-            values = rng.random((size, n_uniform))
-            values *= self.second[uniform] - self.first[uniform]
-            values += self.first[uniform]
-            draws[:, uniform] = values
-        else:
-            rng.bit_generator.random_raw(size * n_uniform)  # the words rng.random would have used
-        values = rng.standard_normal((size, int(normal.sum())))
-        values *= self.second[normal]
-        values += self.first[normal]
-        draws[:, normal] = values
-        return draws if columns is None else draws[:, wanted]
 
 
 # ---------------------------------------------------------------------------
@@ -363,17 +129,7 @@ class SMDModel:
         process_noise: float = 0.01,
         observation_noise: float = 0.10,
     ):
-        if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) or n_harmonics < 1:
-            raise OptionError(f"n_harmonics must be a whole number >= 1, got {n_harmonics!r}")
-        if discretisation not in DISCRETISATIONS:
-            raise OptionError(f"discretisation {discretisation!r} is unknown; choose one of {', '.join(DISCRETISATIONS)}")
-        if observation not in OBSERVATIONS:
-            raise OptionError(f"observation {observation!r} is unknown; choose one of {', '.join(OBSERVATIONS)}")
-        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-            raise OptionError(f"substeps must be a whole number >= 1, got {substeps!r}")
-        for label, value in (("process_noise", process_noise), ("observation_noise", observation_noise)):
-            if not np.isfinite(value) or value <= 0:
-                raise OptionError(f"{label} must be a positive fraction, got {value!r}")
+        self._check_options(n_harmonics, discretisation, observation, substeps, process_noise, observation_noise)
         self.options = dict(
             n_harmonics=int(n_harmonics),
             discretisation=discretisation,
@@ -392,19 +148,57 @@ class SMDModel:
         self.observation = observation
         self.process_noise = float(process_noise)
         self.observation_noise = float(observation_noise)
-        self.effects = tuple(effects)
-        for effect in self.effects:
+        self.effects = self._checked_effects(effects)
+        self._floor = next((effect for effect in self.effects if isinstance(effect, FloorMotion)), None)
+        base = base_slots(self.options)
+        effect_slots, self.constants = self._effect_slots()
+        self._set_layout(base, effect_slots)
+        self.channels = OBSERVATIONS[observation]
+        self.n_obs = len(self.channels)
+        self.requires = tuple(sorted({name for effect in self.effects for name in effect.requires}))
+
+    @staticmethod
+    def _check_options(n_harmonics, discretisation, observation, substeps, process_noise, observation_noise):
+        """Raise an OptionError for a bad number of harmonics, scheme, observation, substeps or noise fraction."""
+        if isinstance(n_harmonics, bool) or not isinstance(n_harmonics, (int, np.integer)) or n_harmonics < 1:
+            raise OptionError(f"n_harmonics must be a whole number >= 1, got {n_harmonics!r}")
+        if discretisation not in DISCRETISATIONS:
+            raise OptionError(f"discretisation {discretisation!r} is unknown; "
+                              f"choose one of {', '.join(DISCRETISATIONS)}")
+        if observation not in OBSERVATIONS:
+            raise OptionError(f"observation {observation!r} is unknown; choose one of {', '.join(OBSERVATIONS)}")
+        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+            raise OptionError(f"substeps must be a whole number >= 1, got {substeps!r}")
+        for label, value in (("process_noise", process_noise), ("observation_noise", observation_noise)):
+            if not np.isfinite(value) or value <= 0:
+                raise OptionError(f"{label} must be a positive fraction, got {value!r}")
+
+    @staticmethod
+    def _checked_effects(effects) -> tuple[Effect, ...]:
+        """``effects`` as a tuple, after checking that each is an :class:`Effect` given once (by name)."""
+        effects = tuple(effects)
+        for effect in effects:
             if not isinstance(effect, Effect):
                 raise OptionError(f"effects must be Effect objects, got {effect!r}")
-        self._floor = next((effect for effect in self.effects if isinstance(effect, FloorMotion)), None)
-
-        names = [effect.name for effect in self.effects]
+        names = [effect.name for effect in effects]
         for name in names:
             if names.count(name) > 1:
                 raise OptionError(f"effect {name!r} is given twice; give each effect once")
-        base = self._base_slots()
+        return effects
+
+    def _effect_slots(self):
+        """Each effect's own slots (those it was not given a value for) and the values it was given.
+
+        Returns
+        -------
+        effect_slots : list of tuple of Slot
+            One group per effect, in the order of :attr:`effects`.
+        constants : dict
+            ``{slot name: value}`` of the parameters the effects were given
+            (:attr:`Effect.values <smd_statespace.model.Effect.values>`): known, not estimated.
+        """
         effect_slots = []
-        self.constants = {}
+        constants = {}
         for effect in self.effects:
             declared = tuple(effect.slots(self))
             known = effect.values
@@ -415,8 +209,15 @@ class SMDModel:
                     f"effect {effect.name!r} has no parameter slot {unknown[0]!r} to give a value; "
                     f"its parameters: {', '.join(sorted(parameters)) or 'none'}"
                 )
-            self.constants.update(known)
+            constants.update(known)
             effect_slots.append(tuple(slot for slot in declared if slot.name not in known))
+        return effect_slots, constants
+
+    def _set_layout(self, base, effect_slots):
+        """The state vector's layout: :attr:`slots`, :attr:`state_names`, the index and the effects' slices.
+
+        Raises an OptionError when two slots share a name.
+        """
         self.slots = base + tuple(slot for group in effect_slots for slot in group)
         self.state_names = tuple(slot.name for slot in self.slots)
         seen = set()
@@ -430,9 +231,6 @@ class SMDModel:
             seen.add(name)
         self._index = {name: i for i, name in enumerate(self.state_names)}
         self.n_state = len(self.slots)
-        self.channels = OBSERVATIONS[observation]
-        self.n_obs = len(self.channels)
-        self.requires = tuple(sorted({name for effect in self.effects for name in effect.requires}))
         # Offsets of the effects' own slots in the state vector.
         self._effect_slices = []
         start = len(base)
@@ -441,30 +239,6 @@ class SMDModel:
             start += len(group)
 
     # -- layout -------------------------------------------------------------
-
-    def _base_slots(self) -> tuple[Slot, ...]:
-        opts = self.options
-        coef_lo, coef_hi = opts["coefficient_range"]
-        a0_lo, a0_hi = opts["a0_range"] or opts["coefficient_range"]
-        coef_nominal = max(abs(coef_lo), abs(coef_hi)) / 2.0
-        f_lo, f_hi = opts["f_h_range"]
-        x_lo, x_hi = opts["xi_h_range"]
-        slots = [
-            Slot("u", "dynamic", "m", scale="u", description="COM displacement from static equilibrium"),
-            Slot("u_dot", "dynamic", "m/s", scale="u_dot", description="COM velocity"),
-            Slot("f_h", "parameter", "Hz", f_lo, f_hi, nominal=0.5 * (f_lo + f_hi),
-                 description="SMD natural frequency", linear=False),
-            Slot("xi_h", "parameter", "-", x_lo, x_hi, nominal=0.5 * (x_lo + x_hi),
-                 description="SMD damping ratio", linear=False),
-            Slot("a0", "parameter", "g", a0_lo, a0_hi, nominal=max(abs(a0_lo), abs(a0_hi)) / 2.0,
-                 description="mean biomechanical force"),
-        ]
-        for i in range(1, self.n_harmonics + 1):
-            slots.append(Slot(f"a{i}", "parameter", "g", coef_lo, coef_hi, nominal=coef_nominal,
-                              description=f"cosine coefficient of harmonic {i}"))
-            slots.append(Slot(f"b{i}", "parameter", "g", coef_lo, coef_hi, nominal=coef_nominal,
-                              description=f"sine coefficient of harmonic {i}"))
-        return tuple(slots)
 
     def index(self, name: str) -> int:
         """Position of slot ``name`` in the state vector."""
@@ -635,18 +409,9 @@ class SMDModel:
         """
         x = np.asarray(x, dtype=float)
         h = dt / self.substeps
-        for step in range(self.substeps):
-            x = self._step(x, t + step * h, h, inputs)
+        for i in range(self.substeps):
+            x = step(self, x, t + i * h, h, inputs)
         return x
-
-    def _step(self, x, t, h, inputs):
-        if self.discretisation == "euler":
-            return x + h * self.rate(x, t, inputs)  # Eq. 11-12: A_d = I + A dt
-        k1 = self.rate(x, t, inputs)
-        k2 = self.rate(x + 0.5 * h * k1, t + 0.5 * h, inputs)
-        k3 = self.rate(x + 0.5 * h * k2, t + 0.5 * h, inputs)
-        k4 = self.rate(x + h * k3, t + h, inputs)
-        return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
     def transition_jacobian(self, x, t, dt, inputs: CycleInputs):
         """Derivative of :meth:`transition` with respect to ``x``, shape ``x.shape + (n_state,)``.
@@ -658,29 +423,10 @@ class SMDModel:
         eye = np.broadcast_to(np.eye(self.n_state), x.shape + (self.n_state,))
         jac = eye.copy()
         h = dt / self.substeps
-        for step in range(self.substeps):
-            x, step_jac = self._step_jacobian(x, t + step * h, h, inputs, eye)
+        for i in range(self.substeps):
+            x, step_jac = step_jacobian(self, x, t + i * h, h, inputs, eye)
             jac = step_jac @ jac
         return jac
-
-    def _step_jacobian(self, x, t, h, inputs, eye):
-        if self.discretisation == "euler":
-            return x + h * self.rate(x, t, inputs), eye + h * self.rate_jacobian(x, t, inputs)
-        stages = []
-        increment, increment_jac = 0.0, 0.0
-        for c, weight in ((0.0, 1.0), (0.5, 2.0), (0.5, 2.0), (1.0, 1.0)):
-            if stages:
-                k_prev, dk_prev = stages[-1]
-                point = x + c * h * k_prev
-                point_jac = eye + c * h * dk_prev
-            else:
-                point, point_jac = x, eye
-            k = self.rate(point, t + c * h, inputs)
-            dk = self.rate_jacobian(point, t + c * h, inputs) @ point_jac
-            stages.append((k, dk))
-            increment = increment + weight * k
-            increment_jac = increment_jac + weight * dk
-        return x + (h / 6.0) * increment, eye + (h / 6.0) * increment_jac
 
     def observe(self, x, t, inputs: CycleInputs):
         """Noise-free observation ``Y = C_d X`` (Eq. 13-16), shape ``x.shape[:-1] + (n_obs,)``.

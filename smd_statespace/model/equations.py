@@ -1,0 +1,105 @@
+"""The closed-form equations of the SMD model (Eq. 2, 5, 17, 18): no state layout, no effects.
+
+================================ ==================================================
+function                         what it computes
+================================ ==================================================
+:func:`smd_acceleration`         the COM acceleration of Eq. 2, the one place it is written
+:func:`acceleration_frf`         Eq. 2's frequency response from force to acceleration
+:func:`k_h`, :func:`c_h`         leg stiffness and damping (Eq. 17, 18)
+:func:`blf`                      biomechanical load factor (Eq. 5)
+================================ ==================================================
+
+They are re-exported by :mod:`smd_statespace.model.core` and :mod:`smd_statespace.model`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .inputs import TWO_PI
+
+
+def k_h(f_h, mass):
+    """Leg stiffness ``K_h = M_h (2 pi f_h)^2`` in N/m (Eq. 17).
+
+    Parameters
+    ----------
+    f_h : float or ndarray
+        SMD natural frequency (Hz).
+    mass : float or ndarray
+        Body mass ``M_h`` (kg).
+    """
+    return np.asarray(mass) * (TWO_PI * np.asarray(f_h)) ** 2
+
+
+def c_h(xi_h, f_h, mass):
+    """Leg damping ``C_h = 2 xi_h M_h (2 pi f_h)`` in N s/m (Eq. 18).
+
+    Parameters
+    ----------
+    xi_h : float or ndarray
+        SMD damping ratio (-).
+    f_h : float or ndarray
+        SMD natural frequency (Hz).
+    mass : float or ndarray
+        Body mass ``M_h`` (kg).
+    """
+    return 2.0 * np.asarray(xi_h) * np.asarray(mass) * TWO_PI * np.asarray(f_h)
+
+
+def smd_acceleration(u, u_dot, f_h, xi_h, force_g):
+    """COM acceleration of the SMD, Eq. 2: the one place the equation is written.
+
+    ``u'' = -omega_h^2 u - 2 xi_h omega_h u' + g F``, ``omega_h = 2 pi f_h``.
+    :meth:`SMDModel.acceleration` (every estimator), the record-level model
+    (through the model's rates) and the simulator
+    (:mod:`smd_statespace.simulation.dynamics`; relative to the floor in
+    :mod:`smd_statespace.simulation.floor`) all call it; only the compiled
+    particle-filter kernel keeps a tested twin.
+
+    Parameters
+    ----------
+    u, u_dot : float or ndarray
+        COM displacement (m) and velocity (m/s).
+    f_h : float or ndarray
+        SMD natural frequency (Hz).
+    xi_h : float or ndarray
+        SMD damping ratio (-).
+    force_g : float or ndarray
+        The force per unit mass ``F_bio / M_h = g F`` (m/s^2). Arrays broadcast.
+
+    Returns
+    -------
+    ndarray
+        ``u''`` (m/s^2).
+    """
+    omega = TWO_PI * np.asarray(f_h)
+    return -omega**2 * u - 2.0 * np.asarray(xi_h) * omega * u_dot + force_g  # Eq. 2
+
+
+def acceleration_frf(frequency, f_h, xi_h):
+    """Frequency response of Eq. 2 from force (in g) to COM acceleration (in g).
+
+    Parameters
+    ----------
+    frequency : float or array_like
+        Excitation frequency (Hz).
+    f_h : float or array_like
+        SMD natural frequency (Hz).
+    xi_h : float or array_like
+        SMD damping ratio (-) (arrays broadcast with ``frequency``).
+
+    Returns
+    -------
+    complex ndarray
+        ``H = -w^2 / (w_h^2 - w^2 + 2 i xi_h w_h w)``: the harmonic
+        ``g C e^{i w t}`` of ``g F`` produces ``H g C e^{i w t}`` in ``u''``.
+    """
+    omega = 2.0 * np.pi * np.asarray(frequency, dtype=float)
+    omega_h = 2.0 * np.pi * f_h
+    return -(omega**2) / (omega_h**2 - omega**2 + 2j * xi_h * omega_h * omega)
+
+
+def blf(a, b):
+    """Biomechanical load factor ``BLF_i = sqrt(a_i^2 + b_i^2)`` in g (Eq. 5)."""
+    return np.hypot(a, b)
