@@ -136,6 +136,34 @@ class PhoneRecord:
         return csv_path, truth_path
 
 
+def _check_phone_options(fs, drop, amounts) -> None:
+    """Refuse invalid phone options with an :class:`OptionError` naming the option.
+
+    A rate ``fs`` outside 50-500 Hz, a ``drop`` outside [0, 0.5) or any of the
+    ``(name, value)`` ``amounts`` that is not a finite number >= 0.
+    """
+    if not 50.0 <= float(fs) <= 500.0:
+        raise OptionError(f"simulate_phone: fs {fs!r} Hz is outside 50-500 Hz (phones' accelerometer rates)")
+    if not 0.0 <= float(drop) < 0.5:
+        raise OptionError(f"simulate_phone: drop {drop!r} must be a fraction in [0, 0.5)")
+    for name, value in amounts:
+        if not np.isfinite(value) or value < 0:
+            raise OptionError(f"simulate_phone: {name} {value!r} must be a finite number >= 0")
+
+
+def _sample_instants(rng, n: int, fs: float, jitter: float, drop: float, fine_time: np.ndarray) -> tuple:
+    """``(t, keep)``: the phone's sampling instants (s) and which of the ``n`` nominal samples were kept.
+
+    The nominal instants ``k / fs`` are jittered (sd ``jitter``), a fraction ``drop``
+    is lost (never the first or last), and the rest are sorted and kept within
+    ``fine_time``.
+    """
+    instants = np.arange(n) / fs + rng.normal(0.0, jitter, n)
+    keep = rng.random(n) >= drop
+    keep[[0, -1]] = True
+    return np.sort(np.clip(instants[keep], fine_time[0], fine_time[-1])), keep
+
+
 def simulate_phone(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30.0, *, fs=PHONE_DEFAULTS["fs"],
                    tilt=PHONE_DEFAULTS["tilt"], sway=PHONE_DEFAULTS["sway"],
                    sway_frequency=PHONE_DEFAULTS["sway_frequency"], bias=PHONE_DEFAULTS["bias"],
@@ -176,14 +204,9 @@ def simulate_phone(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30.0, *, fs=P
     """
     from .bouncing import simulate_bouncing
 
-    if not 50.0 <= float(fs) <= 500.0:
-        raise OptionError(f"simulate_phone: fs {fs!r} Hz is outside 50-500 Hz (phones' accelerometer rates)")
-    if not 0.0 <= float(drop) < 0.5:
-        raise OptionError(f"simulate_phone: drop {drop!r} must be a fraction in [0, 0.5)")
-    for name, value in (("tilt", tilt), ("sway", sway), ("bias", bias), ("noise", noise), ("jitter", jitter),
-                        ("horizontal", horizontal), ("sway_frequency", sway_frequency)):
-        if not np.isfinite(value) or value < 0:
-            raise OptionError(f"simulate_phone: {name} {value!r} must be a finite number >= 0")
+    _check_phone_options(fs, drop, (("tilt", tilt), ("sway", sway), ("bias", bias), ("noise", noise),
+                                    ("jitter", jitter), ("horizontal", horizontal),
+                                    ("sway_frequency", sway_frequency)))
     person_seed, phone_seed = np.random.SeedSequence(seed).spawn(2)
     fine = max(1000.0, 5.0 * float(fs))  # the person's response finely, then read at the phone's instants
     synthetic = simulate_bouncing(mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=duration, fs=fine, noise=0.0,
@@ -196,10 +219,7 @@ def simulate_phone(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, duration=30.0, *, fs=P
     # 0.2 m/s^2 into the record that no real, continuous force makes (one record's f_h moved by +60 %)
     sensed = sensor_filter(states["u_ddot"].to_numpy(), fs, fine)
     n = int(np.floor(duration * fs)) + 1
-    instants = np.arange(n) / fs + rng.normal(0.0, jitter, n)
-    keep = rng.random(n) >= drop
-    keep[[0, -1]] = True
-    t = np.sort(np.clip(instants[keep], fine_time[0], fine_time[-1]))
+    t, keep = _sample_instants(rng, n, fs, jitter, drop, fine_time)
     vertical = np.interp(t, fine_time, sensed)
     w = 2.0 * np.pi * f_b
     world = np.column_stack([horizontal * np.sin(w * t + 1.0), 0.7 * horizontal * np.sin(2.0 * w * t),
