@@ -347,6 +347,138 @@ def weigh_block(u, v, freq, damping, force, weights, log_weights, observed, inve
     return (e0, e1, e2, c00, c01, c02, c11, c12, c22), top
 
 
+@numba.njit(inline="always")
+def sample_block_pass(k, cloud, weights, log_weights, steps, move_basis, obs_basis, c0, rk4, full, noisy, q,
+                      noisy_low, noisy_high, quiet, quiet_low, quiet_high, state, draws, forces, observed,
+                      inverse_noise, log_norm, pending):
+    """One sample over every block of particles: move, jitter, reflect (``k > 0``) and weigh.
+
+    Returns the nine sums of the weighted residuals of the predicted
+    observation and their products, and the largest log-weight.
+    """
+    d, n = cloud.shape
+    nb = obs_basis.shape[1]
+    f_start, f_mid, f_end, force = forces[0], forces[1], forces[2], forces[3]
+    u, v, freq, damping = cloud[0], cloud[1], cloud[2], cloud[3]
+    h = steps[k]
+    sums = np.zeros(9)
+    top = -np.inf
+    for start in range(0, n, BLOCK):
+        length = min(BLOCK, n - start)
+        block = slice(start, start + length)
+        if k > 0:
+            # Predict (Eq. 11-12): RK4 or Euler on u, u'; the parameters are random walks (Eq. 6).
+            for s in range(move_basis.shape[1]):
+                block_forces(cloud, c0, nb, move_basis[k, s], start, length, f_start, f_mid, f_end)
+                move_block(u[block], v[block], freq[block], damping[block], f_start, f_mid, f_end, h, rk4)
+            # Process noise, drawn particle by particle as rng.standard_normal((n, n_noisy)) does;
+            # then the parameters that left their prior box are reflected back.
+            if noisy.size:
+                fill_normal_transposed(state, draws[:, :length])
+            for j in range(noisy.size):
+                jitter_block(cloud[noisy[j]][block], draws[j], q[j], noisy_low[j], noisy_high[j])
+            for j in range(quiet.size):
+                reflect_block(cloud[quiet[j]][block], quiet_low[j], quiet_high[j])
+        # Predicted observation (Eq. 13-16) and reweighting by its likelihood, in logs.
+        block_force(cloud, c0, nb, obs_basis[k], start, length, force)
+        block_sums, block_top = weigh_block(u[block], v[block], freq[block], damping[block], force, weights[block],
+                                            log_weights[block], observed, inverse_noise, log_norm, pending, full)
+        for j in range(9):
+            sums[j] += block_sums[j]
+        top = max(top, block_top)
+    return sums, top
+
+
+@numba.njit(inline="always")
+def record_innovation(k, sums, scale, full, variances, innovations, innovation_cov):
+    """The innovation of sample ``k`` and its predicted covariance, from the previous sample's weights."""
+    var0, var1, var2 = variances
+    e0, e1, e2, c00, c01, c02, c11, c12, c22 = sums
+    e0, e1, e2 = e0 * scale, e1 * scale, e2 * scale
+    if full:
+        innovations[k, 0], innovations[k, 1], innovations[k, 2] = -e0, -e1, -e2
+        innovation_cov[k, 0, 0] = c00 * scale - e0 * e0 + var0
+        innovation_cov[k, 1, 1] = c11 * scale - e1 * e1 + var1
+        innovation_cov[k, 2, 2] = c22 * scale - e2 * e2 + var2
+        innovation_cov[k, 0, 1] = innovation_cov[k, 1, 0] = c01 * scale - e0 * e1
+        innovation_cov[k, 0, 2] = innovation_cov[k, 2, 0] = c02 * scale - e0 * e2
+        innovation_cov[k, 1, 2] = innovation_cov[k, 2, 1] = c12 * scale - e1 * e2
+    else:
+        innovations[k, 0] = -e2
+        innovation_cov[k, 0, 0] = c22 * scale - e2 * e2 + var2
+
+
+@numba.njit(inline="always")
+def block_moments(cloud, weights, log_weights, top, block_weight, block_mean, block_m2):
+    """New weights (``exp(log_weights - top)``) and each block's weighted moments; returns their total and sum
+    of squares.
+
+    Each block's moments are summed in one sweep, shifted by the block's
+    first particle (so a fixed slot has sd 0 and a collapsed one keeps its
+    digits).
+    """
+    d, n = cloud.shape
+    total = 0.0
+    sum_squares = 0.0
+    for number, start in enumerate(range(0, n, BLOCK)):
+        stop = min(start + BLOCK, n)
+        wb = weights[start:stop]
+        exponentiate(log_weights[start:stop], top, wb)
+        block_total = 0.0
+        for i in range(stop - start):
+            block_total += wb[i]
+            sum_squares += wb[i] * wb[i]
+        total += block_total
+        block_weight[number] = block_total
+        inverse = 1.0 / block_total if block_total > 0.0 else 0.0
+        for j in range(d):
+            row = cloud[j][start:stop]
+            offset = row[0]
+            s1 = s2 = 0.0
+            for i in range(stop - start):
+                x = row[i] - offset
+                s1 += wb[i] * x
+                s2 += wb[i] * x * x
+            centre = s1 * inverse
+            block_mean[number, j] = offset + centre
+            block_m2[number, j] = max(s2 - centre * s1, 0.0)
+    return total, sum_squares
+
+
+@numba.njit(inline="always")
+def combine_moments(k, scale, block_weight, block_mean, block_m2, mean, std):
+    """The filtered mean and sd of sample ``k`` from the blocks' moments (Chan et al.'s parallel variance)."""
+    n_blocks, d = block_mean.shape
+    for j in range(d):
+        centre = 0.0
+        for number in range(n_blocks):
+            centre += block_weight[number] * block_mean[number, j]
+        centre *= scale
+        spread = 0.0
+        for number in range(n_blocks):
+            x = block_mean[number, j] - centre
+            spread += block_m2[number, j] + block_weight[number] * x * x
+        mean[k, j] = centre
+        std[k, j] = math.sqrt(max(spread * scale, 0.0))
+
+
+@numba.njit(inline="always")
+def resample(cloud, spare, weights, log_weights, scale, state, counts, index):
+    """Systematic resampling into ``spare`` (as ``systematic_resample``: one uniform, N evenly spaced pointers);
+    the weights become equal."""
+    d, n = cloud.shape
+    systematic_index(weights, scale, next_unit_double(state), counts, index)
+    for j in range(d):
+        row, target = cloud[j], spare[j]
+        for i in range(n):
+            target[i] = row[index[i]]
+    uniform = -math.log(n)
+    flat = math.exp(uniform)
+    for i in range(n):
+        log_weights[i] = uniform
+        weights[i] = flat
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy", fastmath=SUMS)
 def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full, noisy, q, noisy_low, noisy_high,
              quiet, quiet_low, quiet_high, r, ess_threshold, state, mean, std, innovations, innovation_cov, ess):
@@ -361,24 +493,19 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
     """
     d, n = cloud.shape
     m, n_obs = y.shape
-    nb = obs_basis.shape[1]
-    n_noisy = noisy.size
     log_norm = -0.5 * n_obs * math.log(TWO_PI)
     for c in range(n_obs):
         log_norm -= math.log(r[c])
     inverse_noise = (1.0 / r[0], 1.0 / r[n_obs - 2], 1.0 / r[n_obs - 1])
-    var0, var1, var2 = r[0] * r[0], r[n_obs - 2] * r[n_obs - 2], r[n_obs - 1] * r[n_obs - 1]
+    variances = (r[0] * r[0], r[n_obs - 2] * r[n_obs - 2], r[n_obs - 1] * r[n_obs - 1])
     # Weights of the previous sample: weights * scale; log-weights: log_weights - pending.
     weights = np.empty(n)
     exponentiate(log_weights, 0.0, weights)
     scale = 1.0
     pending = 0.0
     spare = np.empty_like(cloud)
-    f_start = np.empty(BLOCK)
-    f_mid = np.empty(BLOCK)
-    f_end = np.empty(BLOCK)
-    force = np.empty(BLOCK)
-    draws = np.empty((n_noisy, BLOCK))
+    forces = np.empty((4, BLOCK))  # the force at a step's start, middle and end, and at the sample
+    draws = np.empty((noisy.size, BLOCK))
     n_blocks = (n + BLOCK - 1) // BLOCK
     block_weight = np.empty(n_blocks)
     block_mean = np.empty((n_blocks, d))
@@ -388,106 +515,22 @@ def run_pass(cloud, log_weights, y, steps, move_basis, obs_basis, c0, rk4, full,
     total_log_likelihood = 0.0
     resamples = 0
     for k in range(m):
-        u, v, freq, damping = cloud[0], cloud[1], cloud[2], cloud[3]
         observed = (y[k, 0], y[k, n_obs - 2], y[k, n_obs - 1])
-        h = steps[k]
-        # Sums of the weighted residuals of the predicted observation, and of their products.
-        sums = np.zeros(9)
-        top = -np.inf
-        for start in range(0, n, BLOCK):
-            length = min(BLOCK, n - start)
-            block = slice(start, start + length)
-            if k > 0:
-                # Predict (Eq. 11-12): RK4 or Euler on u, u'; the parameters are random walks (Eq. 6).
-                for s in range(move_basis.shape[1]):
-                    block_forces(cloud, c0, nb, move_basis[k, s], start, length, f_start, f_mid, f_end)
-                    move_block(u[block], v[block], freq[block], damping[block], f_start, f_mid, f_end, h, rk4)
-                # Process noise, drawn particle by particle as rng.standard_normal((n, n_noisy)) does;
-                # then the parameters that left their prior box are reflected back.
-                if n_noisy:
-                    fill_normal_transposed(state, draws[:, :length])
-                for j in range(n_noisy):
-                    jitter_block(cloud[noisy[j]][block], draws[j], q[j], noisy_low[j], noisy_high[j])
-                for j in range(quiet.size):
-                    reflect_block(cloud[quiet[j]][block], quiet_low[j], quiet_high[j])
-            # Predicted observation (Eq. 13-16) and reweighting by its likelihood, in logs.
-            block_force(cloud, c0, nb, obs_basis[k], start, length, force)
-            block_sums, block_top = weigh_block(u[block], v[block], freq[block], damping[block], force, weights[block],
-                                                log_weights[block], observed, inverse_noise, log_norm, pending, full)
-            for j in range(9):
-                sums[j] += block_sums[j]
-            top = max(top, block_top)
-        # Innovation and its predicted covariance, with the weights of the previous sample (sums shifted by y).
-        e0, e1, e2, c00, c01, c02, c11, c12, c22 = sums
-        e0, e1, e2 = e0 * scale, e1 * scale, e2 * scale
-        if full:
-            innovations[k, 0], innovations[k, 1], innovations[k, 2] = -e0, -e1, -e2
-            innovation_cov[k, 0, 0] = c00 * scale - e0 * e0 + var0
-            innovation_cov[k, 1, 1] = c11 * scale - e1 * e1 + var1
-            innovation_cov[k, 2, 2] = c22 * scale - e2 * e2 + var2
-            innovation_cov[k, 0, 1] = innovation_cov[k, 1, 0] = c01 * scale - e0 * e1
-            innovation_cov[k, 0, 2] = innovation_cov[k, 2, 0] = c02 * scale - e0 * e2
-            innovation_cov[k, 1, 2] = innovation_cov[k, 2, 1] = c12 * scale - e1 * e2
-        else:
-            innovations[k, 0] = -e2
-            innovation_cov[k, 0, 0] = c22 * scale - e2 * e2 + var2
+        sums, top = sample_block_pass(k, cloud, weights, log_weights, steps, move_basis, obs_basis, c0, rk4, full,
+                                      noisy, q, noisy_low, noisy_high, quiet, quiet_low, quiet_high, state, draws,
+                                      forces, observed, inverse_noise, log_norm, pending)
+        record_innovation(k, sums, scale, full, variances, innovations, innovation_cov)
         if not math.isfinite(top):
             return 1, k, total_log_likelihood, resamples, cloud, log_weights
-        # New weights, effective sample size, filtered mean and sd. Each block's moments are summed in one
-        # sweep, shifted by the block's first particle (so a fixed slot has sd 0 and a collapsed one keeps
-        # its digits), and the blocks are combined as in Chan et al.'s parallel variance.
-        total = 0.0
-        sum_squares = 0.0
-        for number, start in enumerate(range(0, n, BLOCK)):
-            stop = min(start + BLOCK, n)
-            wb = weights[start:stop]
-            exponentiate(log_weights[start:stop], top, wb)
-            block_total = 0.0
-            for i in range(stop - start):
-                block_total += wb[i]
-                sum_squares += wb[i] * wb[i]
-            total += block_total
-            block_weight[number] = block_total
-            inverse = 1.0 / block_total if block_total > 0.0 else 0.0
-            for j in range(d):
-                row = cloud[j][start:stop]
-                offset = row[0]
-                s1 = s2 = 0.0
-                for i in range(stop - start):
-                    x = row[i] - offset
-                    s1 += wb[i] * x
-                    s2 += wb[i] * x * x
-                centre = s1 * inverse
-                block_mean[number, j] = offset + centre
-                block_m2[number, j] = max(s2 - centre * s1, 0.0)
+        total, sum_squares = block_moments(cloud, weights, log_weights, top, block_weight, block_mean, block_m2)
         pending = top + math.log(total)
         total_log_likelihood += pending
         scale = 1.0 / total
-        for j in range(d):
-            centre = 0.0
-            for number in range(n_blocks):
-                centre += block_weight[number] * block_mean[number, j]
-            centre *= scale
-            spread = 0.0
-            for number in range(n_blocks):
-                x = block_mean[number, j] - centre
-                spread += block_m2[number, j] + block_weight[number] * x * x
-            mean[k, j] = centre
-            std[k, j] = math.sqrt(max(spread * scale, 0.0))
+        combine_moments(k, scale, block_weight, block_mean, block_m2, mean, std)
         ess[k] = total * total / sum_squares
         if ess[k] < ess_threshold * n and k < m - 1:
-            # Systematic resampling (as systematic_resample): one uniform, N evenly spaced pointers.
-            systematic_index(weights, scale, next_unit_double(state), counts, index)
-            for j in range(d):
-                row, target = cloud[j], spare[j]
-                for i in range(n):
-                    target[i] = row[index[i]]
+            resample(cloud, spare, weights, log_weights, scale, state, counts, index)
             cloud, spare = spare, cloud
-            uniform = -math.log(n)
-            flat = math.exp(uniform)
-            for i in range(n):
-                log_weights[i] = uniform
-                weights[i] = flat
             scale = 1.0
             pending = 0.0
             resamples += 1
