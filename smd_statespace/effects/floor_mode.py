@@ -526,6 +526,8 @@ class FloorMode(Effect):
                 "xi_f": values.get("xi_f", plate.damping), "mass_ratio": float(ratio)}
 
     def for_simulation(self, model, mass):
+        """A known floor mode for a simulated person of ``mass`` (kg): frequency, damping and mass ratio as the truth
+        (:meth:`simulation_values`), the simulation's own options (modal mass, noise, ambient) kept."""
         values = self.simulation_values(mass)
         twin = FloorMode("modal", frequency=values["f_f"], damping=values["xi_f"], mass_ratio=values["mass_ratio"],
                          **self.simulation_given)
@@ -541,11 +543,15 @@ class FloorMode(Effect):
         return twin
 
     def measured_signals(self, states, normals, noise):
+        """The record's ``floor_acc`` column: the simulated floor acceleration ``z''`` (m/s^2) plus noise, ``noise``
+        (or the floor's own ``noise`` option) times its RMS, one standard normal of ``normals`` per sample."""
         z_ddot = states["z_ddot"].to_numpy()
         level = noise if self.noise is None else self.noise
         return {"floor_acc": z_ddot + level * float(np.sqrt(np.mean(z_ddot**2))) * normals}
 
     def simulation_truth(self):
+        """The simulated floor's frequency (Hz), damping, mass ratio, noise and ambient level, and its modal mass
+        (kg) when the person's mass is known."""
         values = self.values
         truth = {"frequency": values["f_f"], "damping": values["xi_f"], "mass_ratio": values["mass_ratio"],
                  "noise": self.noise, "ambient": self.ambient}

@@ -86,6 +86,8 @@ class Harmonics(Effect):
         return self.with_values(**{name: 0.0 for name in self._names(model)})
 
     def force_harmonics(self, model):
+        """``(blf, phases)`` of the extra harmonics for the simulator: the given amplitudes (g), else the first
+        ``count`` of :data:`DEFAULT_BLF`, and the given phases (rad) or None."""
         if self.blf is None and self.count > len(self.DEFAULT_BLF):
             raise OptionError(f"harmonics: give blf=... (g) to simulate {self.count} extra harmonics")
         return (self.blf or self.DEFAULT_BLF[:self.count]), self.phases
@@ -95,6 +97,7 @@ class Harmonics(Effect):
         return self.count
 
     def simulation_truth(self):
+        """The simulated extra harmonics' amplitudes (g) and phases (rad, None for the simulator's default)."""
         return {"blf": list(self.blf or self.DEFAULT_BLF[:self.count]),
                 "phases": None if self.phases is None else list(self.phases)}
 
