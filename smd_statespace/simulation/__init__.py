@@ -4,8 +4,14 @@
 module              what it holds
 =================== ==========================================================
 :mod:`.bouncing`    :func:`simulate_bouncing`: the record (Eq. 2-4, GRF
-                    plus noise, any registered effect), its truth, the
-                    shipped sample
+                    plus noise, any registered effect); the public names
+                    of the five modules below are importable from it too
+:mod:`.settings`    its arguments checked and completed, the seed policy
+:mod:`.force_shape` the default force shape (:func:`default_phases`)
+:mod:`.synthetic`   its result, :class:`SyntheticRecord`, and the measured
+                    record (Eq. 3 plus noise)
+:mod:`.truth`       the truth behind a record
+:mod:`.sample`      the shipped sample's settings and files
 :mod:`.dynamics`    the equations of motion with the effects' own terms and
                     their integration, :func:`integrate_response`
 :mod:`.variation`   cycle-to-cycle variation of the force: jumps or smooth

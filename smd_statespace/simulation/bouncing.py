@@ -57,29 +57,36 @@ change the random numbers used by the rest of the record (with
 ``variation="smooth"`` the knots of the smooth processes take the place of the
 cycles, and the knots of the run-in before the record come last; the
 generators of :mod:`.generators` draw their own blocks first, then the noise).
+
+Where the parts live
+--------------------
+:func:`simulate_bouncing`, its fixed blocks of random numbers and the jumps
+and smooth records are here; the checked settings and the seed policy in
+:mod:`.settings`, the default force shape (:func:`default_phases`) in
+:mod:`.force_shape`, the result (:class:`SyntheticRecord`) in
+:mod:`.synthetic`, its truth in :mod:`.truth`, the shipped sample's settings
+and files in :mod:`.sample`. Every name is importable from here too.
 """
 
 from __future__ import annotations
 
-import json
-import math
-from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-import pandas as pd
 
 from ..errors import OptionError
-from ..io import G, Record, check_mass, make_record, write_record
-from ..model import SMDModel, c_h, k_h
-from ..model import acceleration_frf
-from .dynamics import _cycle_states, _number, _simulation_effects, _System, _vector
-from .effect_adapter import draw_inputs, force_harmonics, measured_signals, simulation_truth
-from .generators import GENERATORS, TEMPO_MAX_FB_VARIATION, _check_pulses
-from .variation import (SMOOTH_CORRELATION_CYCLES, TRUNCATION_SD, VARIATIONS, _cycles_frame, _draw_cycles,
-                        _smooth_cycles, _smooth_force, _smooth_geometry, _smooth_run_in, _smooth_states)
+from ..model import SMDModel
+from .dynamics import _cycle_states
+from .effect_adapter import draw_inputs, force_harmonics
+from .force_shape import DEFAULT_BLF, GRF_PHASE_LAG, default_phases, steady_grf_shape  # noqa: F401 (from here too)
+from .generators import GENERATORS
+from .sample import SAMPLE_CSV, SAMPLE_SETTINGS, SAMPLE_TRUTH, sample_path, sample_truth_path  # noqa: F401
+from .settings import _check_simulation, _resolve_seed
+from .synthetic import SyntheticRecord, _measured_record
+from .truth import _truth
+from .variation import (TRUNCATION_SD, _cycles_frame, _draw_cycles, _smooth_cycles, _smooth_force, _smooth_geometry,
+                        _smooth_run_in, _smooth_states)
 
 __all__ = [
     "DEFAULT_BLF",
@@ -93,272 +100,9 @@ __all__ = [
     "sample_truth_path",
 ]
 
-DEFAULT_BLF = (0.25, 0.15, 0.05, 0.02)
-"""Default harmonic amplitudes ``BLF_1..BLF_4`` of the biomechanical force (g)."""
-
-GRF_PHASE_LAG = math.pi / 4
-"""Phase lag (rad) of every GRF harmonic in the default force shape.
-
-With ``phases=None`` the force phases are chosen so that, on a rigid floor in
-steady state, harmonic ``i`` of the dynamic GRF is
-``A_i cos(i theta - pi/4)`` (then shifted so that the main peak is at the
-cycle start): a sharp main peak with a fast rise and a slower fall, between
-the symmetric all-cosine shape (peak 1.5-1.7 BW, shallow double trough) and a
-sawtooth (all-sine, peak-to-trough range largest).
-"""
-
-SAMPLE_SETTINGS = {
-    "mass": 70.0,
-    "f_b": 2.0,
-    "f_h": 2.5,
-    "xi_h": 0.3,
-    "duration": 30.0,
-    "fs": 100.0,
-    "seed": 2019,
-}
-"""Settings of the shipped sample record (other arguments at their defaults)."""
-
-SAMPLE_CSV = "sample.csv"
-SAMPLE_TRUTH = "sample_truth.json"
-
-
-# ---------------------------------------------------------------------------
-# small helpers
-
-
-def steady_grf_shape(grf_amplitude, points):
-    """Dynamic GRF over one cycle from its harmonics' amplitudes, with the phases of :func:`default_phases`.
-
-    Harmonic ``k`` contributes ``A_k cos(k theta - pi/4)`` (:data:`GRF_PHASE_LAG`).
-
-    Parameters
-    ----------
-    grf_amplitude : array_like, shape (..., K)
-        Amplitudes ``A_k = |H(k f_b)| BLF_k`` of harmonics 1..K (body weights, or g).
-    points : int
-        Phases ``theta`` per cycle.
-
-    Returns
-    -------
-    theta : ndarray, shape (points,)
-        Cycle phases (rad), from 0, not reaching ``2 pi``.
-    shape : ndarray, shape (..., points)
-        The dynamic GRF at each phase, in the amplitudes' unit.
-    """
-    grf_amplitude = np.asarray(grf_amplitude, dtype=float)
-    orders = np.arange(1, grf_amplitude.shape[-1] + 1)
-    theta = np.linspace(0.0, 2.0 * np.pi, int(points), endpoint=False)
-    return theta, grf_amplitude @ np.cos(np.outer(orders, theta) - GRF_PHASE_LAG)
-
-
-def default_phases(blf, f_b, f_h, xi_h, extra_blf=()):
-    """Force phases that give a realistic GRF shape on a rigid floor.
-
-    The phases ``psi_i`` (rad, see the module docstring for the convention) are
-    chosen so that in steady state harmonic ``i`` of the dynamic GRF is
-    ``|H_i| BLF_i cos(i (theta + theta_p) - pi/4)``, ``H_i`` the response of
-    Eq. 2 at ``i f_b`` (:func:`acceleration_frf`) and ``theta_p`` the shift
-    that puts the main GRF peak of the base harmonics at the start of each
-    cycle (``theta = 0``), where the article starts its cycles.
-
-    Parameters
-    ----------
-    blf : array_like, shape (n,)
-        Base harmonic amplitudes (g).
-    f_b, f_h, xi_h : float
-        Bouncing frequency (Hz), SMD natural frequency (Hz), damping ratio.
-    extra_blf : array_like, shape (m,), optional
-        Amplitudes of harmonics ``n+1..n+m`` (the ``harmonics`` effect); they
-        get phases by the same rule without changing ``theta_p``.
-
-    Returns
-    -------
-    base : ndarray, shape (n,)
-        Phases of harmonics 1..n (rad, in (-pi, pi]).
-    extra : ndarray, shape (m,)
-        Phases of harmonics n+1..n+m (rad).
-    """
-    blf = np.asarray(blf, dtype=float)
-    extra_blf = np.asarray(extra_blf, dtype=float).reshape(-1)
-    n = blf.size
-    orders = np.arange(1, n + extra_blf.size + 1)
-    response = acceleration_frf(orders * f_b, f_h, xi_h)
-    grf_amplitude = np.abs(response[:n]) * blf
-    theta, shape = steady_grf_shape(grf_amplitude, 4096)
-    theta_peak = float(theta[np.argmax(shape)]) if np.any(grf_amplitude > 0) else 0.0
-    grf_phase = GRF_PHASE_LAG - orders * theta_peak
-    force_phase = grf_phase + np.angle(response)
-    wrapped = np.pi - np.mod(np.pi - force_phase, 2.0 * np.pi)
-    return wrapped[:n], wrapped[n:]
-
-
-def _resolve_seed(seed):
-    """Return ``(generator, record)``: the Generator and a JSON-able seed record."""
-    if isinstance(seed, np.random.Generator):
-        return np.random.default_rng(seed), None  # the same Generator, its state not recordable
-    if seed is None:
-        seed = np.random.SeedSequence()
-    if isinstance(seed, np.random.SeedSequence):
-        if seed.spawn_key:
-            record = {"entropy": seed.entropy, "spawn_key": list(seed.spawn_key)}
-        else:
-            record = seed.entropy
-        return np.random.default_rng(seed), record
-    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise OptionError(
-            f"seed must be None, a non-negative int, a numpy SeedSequence or a numpy Generator, got {seed!r}"
-        )
-    return np.random.default_rng(int(seed)), int(seed)
-
-
-# ---------------------------------------------------------------------------
-# the simulated record
-
-
-@dataclass(frozen=True)
-class SyntheticRecord:
-    """A simulated record with everything that produced it.
-
-    Attributes
-    ----------
-    record : Record
-        The measurement an estimator sees: ``time`` (s), ``force`` (GRF, N,
-        Eq. 3 plus noise), ``mass`` (kg) and, with ``floor_mode``,
-        ``floor_acc`` (m/s^2, plus noise).
-    truth : dict
-        JSON-serialisable settings and derived values: ``mass, f_b, f_h,
-        xi_h, K_h, C_h`` (Eq. 17-18), ``n_harmonics`` (base harmonics of the
-        model, ``n``), ``n_force_harmonics`` (including the ``harmonics``
-        effect), ``blf, phases, a0``, ``effects`` (with all parameters),
-        ``seed, fs, duration, noise, variations``, ``n_cycles``.
-    states : pandas.DataFrame
-        Noise-free states per sample: ``time, cycle, u, u_dot, u_ddot,
-        force_bio`` (absolute COM, SI; ``force_bio = g F`` in m/s^2) and, with
-        a floor, ``z, z_dot, z_ddot``.
-    cycles : pandas.DataFrame
-        One row per force cycle: ``cycle, t_start, t_end, f_b, a0, a1, b1,
-        ..., blf1, ...``: the coefficients of Eq. 4 referred to the cycle's
-        own start (``F = a0 + sum a_i cos(2 pi i f_b (t - t_start)) + b_i
-        sin(...)``) and the amplitudes (Eq. 5). The first cycle may start
-        before ``t = 0`` and the last end after the record.
-    """
-
-    record: Record
-    truth: dict
-    states: pd.DataFrame
-    cycles: pd.DataFrame
-
-    def write(self, csv_path, truth_path=None):
-        """Write the record as CSV and the truth as JSON.
-
-        Parameters
-        ----------
-        csv_path : str or path-like
-            Record file (columns ``time, force[, floor_acc]``, 6 decimals).
-        truth_path : str or path-like, optional
-            Truth file; default ``<csv stem>_truth.json`` beside the CSV. It
-            holds :attr:`truth` plus ``"cycles"``: the per-cycle table as a
-            dict of columns.
-
-        Returns
-        -------
-        tuple of pathlib.Path
-            ``(csv_path, truth_path)``.
-        """
-        csv_path = Path(csv_path)
-        truth_path = csv_path.with_name(f"{csv_path.stem}_truth.json") if truth_path is None else Path(truth_path)
-        write_record(csv_path, self.record)
-        content = dict(self.truth)
-        content["cycles"] = {
-            column: [round(float(v), 10) if column != "cycle" else int(v) for v in self.cycles[column]]
-            for column in self.cycles.columns
-        }
-        truth_path.write_text(_format_json(content), encoding="utf-8")
-        return csv_path, truth_path
-
-
-def _format_json(content):
-    """JSON text with one top-level key (or one key of a nested dict) per line."""
-    lines = []
-    for key, value in content.items():
-        if isinstance(value, dict) and value:
-            inner = [f"  {json.dumps(k)}: {json.dumps(v)}" for k, v in value.items()]
-            lines.append(f" {json.dumps(key)}: {{\n" + ",\n".join(inner) + "\n }")
-        else:
-            lines.append(f" {json.dumps(key)}: {json.dumps(value)}")
-    return "{\n" + ",\n".join(lines) + "\n}\n"
-
 
 # ---------------------------------------------------------------------------
 # the public simulator's parts
-
-
-def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_variation, coef_variation, noise,
-                      effects, variation):
-    """Validate the arguments of :func:`simulate_bouncing`; return them checked and completed (a namespace)."""
-    mass = check_mass(mass, source="mass")
-    f_b = _number(f_b, "f_b (Hz)", positive=True)
-    f_h = _number(f_h, "f_h (Hz)", positive=True)
-    xi_h = _number(xi_h, "xi_h", positive=True)
-    duration = _number(duration, "duration (s)", positive=True)
-    fs = _number(fs, "fs (Hz)", positive=True)
-    blf = _vector(blf, "blf (g)", nonnegative=True)
-    a0 = _number(a0, "a0 (g)")
-    fb_variation = _number(fb_variation, "fb_variation", nonnegative=True)
-    coef_variation = _number(coef_variation, "coef_variation", nonnegative=True)
-    noise = _number(noise, "noise", nonnegative=True)
-    if fb_variation > 0.2:
-        raise OptionError(f"simulate_bouncing: fb_variation must be 0-0.2 (relative), got {fb_variation!r}")
-    if coef_variation > 1.0:
-        raise OptionError(f"simulate_bouncing: coef_variation must be 0-1 (relative), got {coef_variation!r}")
-    if not isinstance(variation, str) or variation not in VARIATIONS:
-        raise OptionError(
-            f"simulate_bouncing: variation must be one of {', '.join(map(repr, VARIATIONS))}, got {variation!r}"
-        )
-    if variation == "tempo" and fb_variation > TEMPO_MAX_FB_VARIATION:
-        raise OptionError(f"simulate_bouncing: fb_variation must be 0-{TEMPO_MAX_FB_VARIATION:g} with "
-                          f"variation='tempo', got {fb_variation!r}")
-    if duration < 1.0 / f_b:
-        raise OptionError(
-            f"simulate_bouncing: duration {duration:g} s is shorter than one bouncing cycle (1/f_b = {1 / f_b:.3g} s)"
-        )
-    effects = _simulation_effects(effects, mass)
-    person = SMDModel(n_harmonics=1)
-    forcing = [force_harmonics(effect, person) for effect in effects]
-    extra = [pair for pair in forcing if pair is not None]
-    extra_blf = np.concatenate([np.asarray(pair[0], dtype=float) for pair in extra]) if extra else np.empty(0)
-    given_extra = [pair[1] for pair in extra]
-    system = _System(f_h, xi_h, [effect for effect, pair in zip(effects, forcing) if pair is None])
-    n_base, n_extra = blf.size, extra_blf.size
-    natural = np.abs(system.eigenvalues().imag).max() / (2.0 * np.pi) if system.effects else 0.0
-    highest = max((n_base + n_extra) * f_b, natural)
-    if fs < 4.0 * highest:
-        raise OptionError(
-            f"simulate_bouncing: fs {fs:g} Hz is too low; it must be at least 4 x the highest frequency "
-            f"({highest:g} Hz), i.e. >= {4 * highest:g} Hz"
-        )
-    default_base, default_extra = default_phases(blf, f_b, f_h, xi_h, extra_blf)
-    phases_given = phases is not None
-    if phases is None:
-        phases = default_base
-    else:
-        phases = _vector(phases, "phases (rad)")
-        if phases.size != n_base:
-            raise OptionError(f"simulate_bouncing: phases has {phases.size} values, blf has {n_base}")
-    extra_phases = np.asarray(default_extra, dtype=float)
-    if any(given is not None for given in given_extra):
-        extra_phases = np.concatenate([default_extra[:len(pair[0])] if given is None else np.asarray(given, float)
-                                       for pair, given in zip(extra, given_extra)])
-    settings = SimpleNamespace(
-        mass=mass, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=duration, fs=fs, blf=blf, phases=phases, a0=a0,
-        fb_variation=fb_variation, coef_variation=coef_variation, noise=noise, effects=effects, system=system,
-        extra_phases=extra_phases, phases_given=phases_given,
-        variation=variation, all_blf=np.concatenate([blf, extra_blf]),
-        all_phases=np.concatenate([phases, extra_phases]),
-    )
-    if variation == "pulses":
-        _check_pulses(settings)
-    return settings
 
 
 def _draw_blocks(rng, n_rows, n_base, n_extra, n_samples):
@@ -419,74 +163,6 @@ def _with_drawn_inputs(settings, rng):
     dynamic = [effect for effect in drawn if force_harmonics(effect, SMDModel(n_harmonics=1)) is None]
     system = settings.system.with_drawn_inputs(dynamic) if dynamic else settings.system
     return SimpleNamespace(**{**vars(settings), "effects": drawn, "system": system})
-
-
-def _measured_record(settings, states, grf_noise, floor_noise):
-    """The :class:`Record` an estimator sees: Eq. 3 plus noise (and the noisy floor acceleration)."""
-    s = settings
-    weight = s.mass * G
-    force = s.mass * (G + states["u_ddot"].to_numpy()) + s.noise * weight * grf_noise  # Eq. 3
-    columns = {}
-    for effect in s.effects:
-        columns.update(measured_signals(effect, states, floor_noise, s.noise))
-    return make_record(states["time"].to_numpy(), force, s.mass, source="synthetic", **columns)
-
-
-def _effects_truth(settings):
-    """``{name: {key: value}}`` of the simulated effects, with the extra harmonics' phases as simulated."""
-    out = {}
-    for effect in settings.effects:
-        truth = {key: (list(value) if isinstance(value, tuple) else value)
-                 for key, value in simulation_truth(effect).items()}
-        if "phases" in truth and force_harmonics(effect, SMDModel(n_harmonics=1)) is not None:
-            truth["phases"] = [float(v) for v in settings.extra_phases]
-        out[effect.name] = truth
-    return out
-
-
-def _truth(settings, seed_record, n_cycles, generator=None):
-    """The JSON-serialisable truth of :attr:`SyntheticRecord.truth`.
-
-    ``generator`` (the generators of :mod:`.generators`) holds the truth's
-    ``variations`` and, for ``"pulses"``, its ``blf`` and ``phases``.
-    """
-    s = settings
-    generator = generator or {}
-    variations = generator.get("variations") or {
-        "fb_variation": s.fb_variation,
-        "coef_variation": s.coef_variation,
-        "phase_jitter_rad": s.coef_variation,
-        "truncation_sd": TRUNCATION_SD,
-        "generator": s.variation,
-    }
-    if s.variation == "smooth":
-        variations["correlation_cycles"] = SMOOTH_CORRELATION_CYCLES
-        variations["correlation_time_s"] = SMOOTH_CORRELATION_CYCLES / s.f_b
-    return {
-        "source": "smd_statespace.simulation.simulate_bouncing",
-        "mass": s.mass,
-        "f_b": s.f_b,
-        "f_h": s.f_h,
-        "xi_h": s.xi_h,
-        "K_h": float(k_h(s.f_h, s.mass)),  # Eq. 17
-        "C_h": float(c_h(s.xi_h, s.f_h, s.mass)),  # Eq. 18
-        "n_harmonics": int(s.blf.size),
-        "n_force_harmonics": int(s.all_blf.size),
-        "blf": generator.get("blf", [float(v) for v in s.blf]),
-        "phases": generator.get("phases", [float(v) for v in s.phases]),
-        "a0": s.a0,
-        "effects": _effects_truth(s),
-        "seed": seed_record,
-        "fs": s.fs,
-        "duration": s.duration,
-        "noise": s.noise,
-        "variations": variations,
-        "n_cycles": int(n_cycles),
-        "units": {
-            "mass": "kg", "f_b": "Hz", "f_h": "Hz", "xi_h": "-", "K_h": "N/m", "C_h": "N*s/m",
-            "blf": "g", "a0": "g", "phases": "rad", "fs": "Hz", "duration": "s", "noise": "body weight",
-        },
-    }
 
 
 # ---------------------------------------------------------------------------
@@ -722,16 +398,6 @@ def simulate_bouncing(
 
 # ---------------------------------------------------------------------------
 # the shipped sample
-
-
-def sample_path() -> Path:
-    """Path of the shipped sample record ``data/sample.csv`` (70 kg, see :data:`SAMPLE_SETTINGS`)."""
-    return Path(str(resources.files("smd_statespace").joinpath("data", SAMPLE_CSV)))
-
-
-def sample_truth_path() -> Path:
-    """Path of the truth of the shipped sample, ``data/sample_truth.json``."""
-    return Path(str(resources.files("smd_statespace").joinpath("data", SAMPLE_TRUTH)))
 
 
 def write_sample(directory) -> SyntheticRecord:
