@@ -45,10 +45,10 @@ variation depends on the duration (a longer record has more cycles that can
 dip), so the same seed gives the same crowd for the same duration.
 """
 
+
 from __future__ import annotations
 
 import time as _time
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,12 +58,12 @@ import pandas as pd
 from .. import article
 from ..errors import OptionError
 from ..io import G
-from ..model import SMDModel, acceleration_frf
-from .bouncing import default_phases, steady_grf_shape
-from .dynamics import _cycle_states, _simulation_effects, _System
-from .effect_adapter import force_harmonics
+from ..model import acceleration_frf
+from .crowd_forces import CHUNK, N_HARMONICS, _person_cycles, _simulate_forces  # noqa: F401 (CHUNK from here too)
+from .crowd_table import TABLE_PARAMETERS, fit_table  # noqa: F401 (TABLE_PARAMETERS from here too)
+from .dynamics import _simulation_effects
+from .force_shape import steady_grf_shape
 from .population import _population_columns, with_stiffness_and_damping
-from .variation import TRUNCATION_SD, _draw_cycles
 
 __all__ = [
     "CROWD_SETTINGS",
@@ -77,10 +77,6 @@ __all__ = [
     "periodic_grf_minimum",
     "simulate_crowd",
 ]
-
-N_HARMONICS = 3
-"""Harmonics of each person's biomechanical force: BLF1-3, the ones Table 2 gives."""
-
 CROWD_SETTINGS = {
     "fs": 200.0,
     "fb_variation": 0.02,
@@ -92,9 +88,6 @@ the cycle frequency and of the harmonics from cycle to cycle (as
 :func:`~smd_statespace.simulation.simulate_bouncing`), spread of the phase
 offsets (fraction of a cycle; 1 = unsynchronised, 0 = all start together)."""
 
-TABLE_PARAMETERS = ("f_h", "xi_h", "BLF1", "BLF2", "BLF3")
-"""Parameters a fit table must give (the others of Table 2 are not used)."""
-
 DEFAULT_DURATION = 30.0
 """Default length (s) of :func:`simulate_crowd` and ``smd-statespace crowd``: 40-110 cycles over
 the article's bands, enough to resolve the total force's harmonics to ``1/30`` Hz."""
@@ -102,12 +95,9 @@ the article's bands, enough to resolve the total force's harmonics to ``1/30`` H
 MAX_DRAWS = 50
 """Draws of one person before :func:`simulate_crowd` gives up finding one who stays in contact."""
 
-CHUNK = 64
-"""People integrated together by :func:`simulate_crowd` (memory ~ CHUNK x samples)."""
-
 
 # ---------------------------------------------------------------------------
-# seeds and tables
+# seeds
 
 
 def _root(seed) -> np.random.SeedSequence:
@@ -146,95 +136,6 @@ def person_seeds(seed, index, draw=0):
     key = tuple(root.spawn_key) + (int(index),)
     return tuple(np.random.SeedSequence(root.entropy, spawn_key=key + (2 * int(draw) + j,), pool_size=root.pool_size)
                  for j in (0, 1))
-
-
-def _parameter_name(text):
-    key = str(text).strip().lower().replace("_", "")
-    names = {"fh": "f_h", "xih": "xi_h", "kh": "K_h", "ch": "C_h", "blf1": "BLF1", "blf2": "BLF2", "blf3": "BLF3"}
-    return names.get(key, str(text))
-
-
-def fit_table(source, f_b):
-    """Skew-normal fits (Eq. 19) for bouncing frequency ``f_b``, in the layout :func:`sample_population` takes.
-
-    Parameters
-    ----------
-    source : None, mapping, pandas.DataFrame, str or path-like
-        None: the article's Table 2. A mapping in the layout of
-        :data:`article.TABLE2` is used as it is. A DataFrame or CSV file in
-        the layout of :func:`article.table2_frame` (what ``smd-statespace
-        stats`` writes as ``table2.csv``): one row per (parameter, band) with
-        columns ``parameter, band, m, s, a`` (location, scale, shape) and
-        optionally ``low, high`` (band edges, Hz). With ``low, high`` the row
-        whose band holds ``f_b`` is used; without, ``band`` indexes the
-        article's bands. Parameter names ``f_h, xi_h, BLF1..3`` (also
-        ``blf_1``...).
-    f_b : float
-        Bouncing frequency (Hz).
-
-    Returns
-    -------
-    mapping
-        ``table[parameter][band] = (m, s, a)`` for the article band of ``f_b``.
-
-    Raises
-    ------
-    OptionError
-        Unreadable file, missing columns or parameters, no row for ``f_b``,
-        or a fit that is missing (e.g. a band with too few cycles) or invalid.
-    """
-    if source is None:
-        return article.TABLE2
-    if isinstance(source, Mapping):
-        return source
-    band = article.band_of(f_b)
-    if band is None:
-        edges = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in article.BANDS)
-        raise OptionError(f"crowd: f_b = {f_b!r} Hz is outside the article's bands ({edges} Hz)")
-    label = "table"
-    if isinstance(source, pd.DataFrame):
-        frame = source.reset_index() if isinstance(source.index, pd.MultiIndex) or source.index.name else source
-    else:
-        label = str(source)
-        try:
-            frame = pd.read_csv(source)
-        except FileNotFoundError:
-            raise OptionError(f"--table {label}: no such file") from None
-        except (OSError, ValueError, pd.errors.ParserError) as exc:
-            raise OptionError(f"--table {label}: cannot read it as CSV ({exc})") from None
-    frame = frame.rename(columns=lambda c: str(c).strip())
-    missing = [c for c in ("parameter", "m", "s", "a") if c not in frame.columns]
-    has_edges = {"low", "high"} <= set(frame.columns)
-    if not has_edges and "band" not in frame.columns:
-        missing.append("band (or low, high)")
-    if missing:
-        raise OptionError(f"{label}: missing column(s) {', '.join(missing)}; expected the layout of "
-                          "article.table2_frame(): parameter, band, m, s, a[, low, high]")
-    frame = frame.assign(parameter=frame["parameter"].map(_parameter_name))
-    fits = {}
-    for parameter in TABLE_PARAMETERS:
-        rows = frame[frame["parameter"] == parameter]
-        if has_edges:
-            low, high = rows["low"].astype(float), rows["high"].astype(float)
-            rows = rows[(low <= f_b) & ((f_b < high) | ((f_b == high) & (high == high.max())))]
-        else:
-            rows = rows[pd.to_numeric(rows["band"], errors="coerce") == band]
-        if rows.empty:
-            where = f"a band holding f_b = {f_b:g} Hz" if has_edges else f"band {band}"
-            raise OptionError(f"{label}: no row for parameter {parameter!r} in {where}")
-        row = rows.iloc[0]
-        try:
-            m, s, a = (float(row[c]) for c in ("m", "s", "a"))
-        except (TypeError, ValueError):
-            raise OptionError(f"{label}: the fit of {parameter!r} at f_b = {f_b:g} Hz is not numeric") from None
-        if not all(np.isfinite((m, s, a))):
-            note = f" ({row['note']})" if "note" in row.index and isinstance(row["note"], str) and row["note"] else ""
-            raise OptionError(f"{label}: no fit for {parameter!r} at f_b = {f_b:g} Hz{note}; "
-                              "give a table with a fit in that band")
-        if s <= 0:
-            raise OptionError(f"{label}: scale s of {parameter!r} at f_b = {f_b:g} Hz must be > 0, got {s:g}")
-        fits[parameter] = {band: (m, s, a)}
-    return fits
 
 
 # ---------------------------------------------------------------------------
@@ -332,32 +233,7 @@ def periodic_grf_minimum(f_b, f_h, xi_h, blf, points=2048):
 
 
 # ---------------------------------------------------------------------------
-# forces
-
-
-def _person_cycles(force_seed, f_b, f_h, xi_h, blf, duration, fb_variation, coef_variation, phase_spread):
-    """One person's force cycles, drawn in the order of :func:`~smd_statespace.simulation.simulate_bouncing`."""
-    rng = np.random.default_rng(force_seed)
-    n = blf.size
-    shortest = 1.0 / (f_b * (1.0 + TRUNCATION_SD * fb_variation))
-    longest = 1.0 / (f_b * (1.0 - TRUNCATION_SD * fb_variation))
-    n_max = int(np.ceil((duration + longest) / shortest)) + 2
-
-    def normals(shape):
-        return np.clip(rng.standard_normal(shape), -TRUNCATION_SD, TRUNCATION_SD)
-
-    start_fraction = phase_spread * rng.random()
-    eps = normals(n_max)
-    amp_noise, phase_noise = normals((n_max, n)), normals((n_max, n))
-    phases, _ = default_phases(blf, f_b, f_h, xi_h)
-    t_start, t_end, frequency, amplitude, phase = _draw_cycles(
-        (start_fraction, eps, amp_noise, phase_noise), duration, f_b, blf, phases, fb_variation, coef_variation)
-    columns = {"cycle": np.arange(t_start.size), "t_start": t_start, "t_end": t_end, "f_b": frequency,
-               "a0": np.zeros(t_start.size)}
-    for i in range(n):
-        columns[f"a{i + 1}"] = amplitude[:, i] * np.cos(phase[:, i])
-        columns[f"b{i + 1}"] = amplitude[:, i] * np.sin(phase[:, i])
-    return pd.DataFrame(columns), start_fraction
+# the crowd
 
 
 @dataclass
@@ -510,57 +386,6 @@ class Crowd:
         return plot_crowd(self, path, n_people)
 
 
-def _simulate_forces(indices, parameters, cycles, time, out, effects=()):
-    """GRFs (N) of people ``indices`` into rows of ``out``: Eq. 2-3 solved exactly, ``CHUNK`` people at a time.
-
-    With ``effects``, each person's model (Eq. 2 plus the effects' own
-    terms, prepared for that person's mass) is integrated instead, one
-    person at a time (:func:`~smd_statespace.simulation.integrate_response`'s
-    engine); an effect's extra force harmonics join the person's cycles
-    with the simulator's default phases and no cycle-to-cycle variation.
-    """
-    from .floor import batch_response, system_matrices
-
-    if effects:
-        person = SMDModel(n_harmonics=1)
-        for i in indices:
-            mass = float(parameters["mass"][i])
-            prepared = _simulation_effects(effects, mass, where="crowd")
-            harmonics = [force_harmonics(effect, person) for effect in prepared]
-            person_cycles = _with_extra_harmonics(cycles[i], [h for h in harmonics if h is not None],
-                                                  parameters, i)
-            system = _System(parameters["f_h"][i], parameters["xi_h"][i],
-                             [effect for effect, h in zip(prepared, harmonics) if h is None])
-            states = _cycle_states(system, person_cycles, time)
-            out[i] = mass * (G + states["u_ddot"].to_numpy())  # Eq. 3
-        return
-    for start in range(0, len(indices), CHUNK):
-        chunk = indices[start:start + CHUNK]
-        mass = parameters["mass"][chunk]
-        systems = [system_matrices(parameters["mass"][i], parameters["f_h"][i], parameters["xi_h"][i]) for i in chunk]
-        a_matrices = np.stack([a for a, _ in systems])
-        b_vectors = np.stack([b for _, b in systems])
-        _, rates, _ = batch_response(a_matrices, b_vectors, [cycles[i] for i in chunk], time)
-        out[chunk] = mass[:, None] * (G + rates[:, :, 1])  # Eq. 3
-
-
-def _with_extra_harmonics(cycles, extra, parameters, i):
-    """A person's cycles with the extra force harmonics ``[(blf, phases), ...]`` of effects appended."""
-    if not extra:
-        return cycles
-    blf = np.concatenate([np.asarray(amplitudes, dtype=float) for amplitudes, _ in extra])
-    base = np.array([parameters[f"blf{k}"][i] for k in range(1, N_HARMONICS + 1)])
-    given = [phases for _, phases in extra]
-    default = default_phases(base, float(np.median(cycles["f_b"])), parameters["f_h"][i], parameters["xi_h"][i],
-                             blf)[1]
-    phases = default if all(p is None for p in given) else np.concatenate(
-        [default[:len(a)] if p is None else np.asarray(p, float) for (a, _), p in zip(extra, given)])
-    cycles = cycles.copy()
-    for k, (amplitude, phase) in enumerate(zip(blf, phases), start=N_HARMONICS + 1):
-        cycles[f"a{k}"], cycles[f"b{k}"] = amplitude * np.cos(phase), amplitude * np.sin(phase)
-    return cycles
-
-
 def _check_settings(duration, fs, fb_variation, coef_variation, phase_spread, f_b):
     def number(value, name, low=None, high=None, positive=False):
         try:
@@ -654,6 +479,47 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
     n_samples = int(np.floor(duration * fs + 1e-9)) + 1
     time = np.arange(n_samples) / fs
 
+    parameters, cycles, offsets, forces, draw, rejected = _draw_in_contact(
+        n, f_b, root, fits, bounds, time, duration, fb_variation, coef_variation, phase_spread, effects)
+    people, frame = _people_and_forces(parameters, forces, offsets, draw, rejected, root, time, f_b, fs)
+    table_label = "Table 2" if table is None else ("a user table" if not isinstance(table, (str, Path))
+                                                   else f"table {table}")
+    settings.update(n=n, f_b=f_b, duration=duration, fs=fs, fb_variation=fb_variation,
+                    coef_variation=coef_variation, phase_spread=phase_spread, seed=root.entropy, table=table_label,
+                    redrawn=int(np.count_nonzero(draw)), rejected_steady=int(rejected["steady"].sum()),
+                    rejected_cycles=int(rejected["cycles"].sum()), effects=[effect.name for effect in checked])
+    return Crowd(people=people, forces=frame, settings=settings, cycles=cycles,
+                 seconds=_time.perf_counter() - started)
+
+
+def _draw_in_contact(n, f_b, root, fits, bounds, time, duration, fb_variation, coef_variation, phase_spread, effects):
+    """Draw every person, and redraw those who would lose contact, until all stay on the floor.
+
+    A draw is rejected when its steady periodic GRF dips below zero
+    (:func:`periodic_grf_minimum`) or its simulated GRF does; the person is
+    redrawn from their next seeds (:func:`person_seeds`).
+
+    Returns
+    -------
+    parameters : dict of ndarray
+        The kept draws' parameters (:func:`draw_people`'s columns), per person.
+    cycles : list of pandas.DataFrame
+        Each person's force cycles.
+    offsets : ndarray
+        Each person's phase offset (fraction of a cycle).
+    forces : ndarray, shape (n, samples)
+        Each person's GRF (N).
+    draw : ndarray of int
+        The draw kept per person (0: the first).
+    rejected : dict of ndarray
+        ``"steady"`` and ``"cycles"``: rejected draws per person by reason.
+
+    Raises
+    ------
+    OptionError
+        A person still out of contact after :data:`MAX_DRAWS` draws.
+    """
+    n_samples = time.size
     draw = np.zeros(n, dtype=int)
     rejected = {"steady": np.zeros(n, dtype=int), "cycles": np.zeros(n, dtype=int)}
     parameters, cycles, offsets = {}, [None] * n, np.empty(n)
@@ -682,7 +548,21 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
         rejected["cycles"][dipped] += 1
         pending = np.sort(np.concatenate([pending[steady], dipped]))
         draw[pending] += 1
+    return parameters, cycles, offsets, forces, draw, rejected
 
+
+def _people_and_forces(parameters, forces, offsets, draw, rejected, root, time, f_b, fs):
+    """The people table and the forces frame of :class:`Crowd` from the kept draws and their GRFs.
+
+    Returns
+    -------
+    people : pandas.DataFrame
+        :attr:`Crowd.people`: the parameters plus weight, phase offset, GRF
+        peak and minimum, dynamic load factors, draws and seeds.
+    frame : pandas.DataFrame
+        :attr:`Crowd.forces`: ``time``, one GRF column per person, ``total``.
+    """
+    n, n_samples = forces.shape
     people = pd.DataFrame(parameters)
     people.insert(0, "person", np.arange(n))
     mass = people["mass"].to_numpy()
@@ -707,11 +587,4 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
     people["rejected_cycles"] = rejected["cycles"]
     people["seed"] = str(root.entropy)
     people["spawn_key"] = [" ".join(map(str, tuple(root.spawn_key) + (i,))) for i in range(n)]
-    table_label = "Table 2" if table is None else ("a user table" if not isinstance(table, (str, Path))
-                                                   else f"table {table}")
-    settings.update(n=n, f_b=f_b, duration=duration, fs=fs, fb_variation=fb_variation,
-                    coef_variation=coef_variation, phase_spread=phase_spread, seed=root.entropy, table=table_label,
-                    redrawn=int(np.count_nonzero(draw)), rejected_steady=int(rejected["steady"].sum()),
-                    rejected_cycles=int(rejected["cycles"].sum()), effects=[effect.name for effect in checked])
-    return Crowd(people=people, forces=frame, settings=settings, cycles=cycles,
-                 seconds=_time.perf_counter() - started)
+    return people, frame
