@@ -13,7 +13,7 @@ from smd_statespace.errors import CycleError, SMDInputError
 from smd_statespace.io import G, make_record
 from smd_statespace.person import CycleTiming, RecordModel, Regressor, estimate_timing, identify_person
 from smd_statespace.person.search import fit_model, information
-from smd_statespace.person.model import expm2
+from smd_statespace.person.system import expm2
 from smd_statespace.person.results import PersonResult
 from smd_statespace.person.statespace import RecordStateSpace
 from smd_statespace.signals import find_cycles

@@ -32,7 +32,7 @@ and the smoother of the augmented filter, and is not used here.)
 variance ratios enter as ``exp``: the derivative of ``D``, ``E``, the drift
 and the process noise ``Qx`` is the value itself on the entries the
 parameter sets. ``log_smooth_time`` enters through the
-Matern-3/2 step (:func:`~smd_statespace.person.model.matern32_step`),
+Matern-3/2 step (:func:`~smd_statespace.person.system.matern32_step`),
 differentiated in closed form. ``f_h``, ``xi_h`` and the effects'
 parameters change the dynamics (``Phi``, ``Gam``, ``offset``, ``X_tr``,
 ``hx``, ``y_known``, ``Qx``): with linear dynamics (the person, a floor
@@ -99,7 +99,7 @@ DYNAMIC_ARRAYS = ("hx", "Phi", "Gam", "offset", "X_tr", "y_known", "Qx")
 
 
 def _matern32_derivatives(length_scale, dt):
-    """Derivatives of :func:`~smd_statespace.person.model.matern32_step`'s ``(Phi, Q, P_inf)`` w.r.t. ``log ell``.
+    """Derivatives of :func:`~smd_statespace.person.system.matern32_step`'s ``(Phi, Q, P_inf)`` w.r.t. ``log ell``.
 
     ``lambda = sqrt(3) / ell``, so ``d lambda / d log ell = -lambda``;
     ``Phi = exp(-lambda dt) [[1 + lambda dt, dt], [-lambda^2 dt, 1 - lambda dt]]``,
@@ -167,7 +167,7 @@ def _dynamics_derivative(model: RecordModel, params, j, h, base: _Discretisation
     """
     from ..io import G
     from .dynamics import expm_stack
-    from .model import _integrated_white_noise, _regressor_steps, _step_mean
+    from .system import integrated_white_noise, regressor_steps, step_mean
 
     up, down = params.copy(), params.copy()
     up[j] += h
@@ -206,17 +206,17 @@ def _dynamics_derivative(model: RecordModel, params, j, h, base: _Discretisation
     if model._timing_columns is not None:
         gam = np.concatenate([gam, d_g0[:, :, None] * model._timing_columns[1][:, None, :]], axis=2)
     d_qx = np.zeros((n, n)) if rate == 0 else rate * (
-        _integrated_white_noise(plus.A.mean(axis=0), plus.b.mean(axis=0), dt)
-        - _integrated_white_noise(minus.A.mean(axis=0), minus.b.mean(axis=0), dt)) / (2.0 * h)
+        integrated_white_noise(plus.A.mean(axis=0), plus.b.mean(axis=0), dt)
+        - integrated_white_noise(minus.A.mean(axis=0), minus.b.mean(axis=0), dt)) / (2.0 * h)
     dynamic = np.array([r.dynamic for r in model.regressors], dtype=bool)
     d_c, d_d = diff("c"), diff("d")
     d_offset = np.zeros((N, n))
     if lin.c is not None:
-        d_offset += np.einsum("kij,kj->ki", d_integral, _step_mean(lin.c))
+        d_offset += np.einsum("kij,kj->ki", d_integral, step_mean(lin.c))
     if d_c is not None:
-        d_offset += np.einsum("kij,kj->ki", integral, _step_mean(d_c))
+        d_offset += np.einsum("kij,kj->ki", integral, step_mean(d_c))
     return {"hx": diff("hx"), "Phi": d_phi, "Gam": gam, "offset": d_offset,
-            "X_tr": _regressor_steps(d_g0, model._X * dynamic),
+            "X_tr": regressor_steps(d_g0, model._X * dynamic),
             "y_known": np.zeros(N) if d_d is None else d_d, "Qx": d_qx}
 
 
