@@ -29,25 +29,25 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     params = fitted["params"]
     cov, free = information(model, params, cov_type)
     factors = CALIBRATION[model.variation]
+    where = {name: model.param_names.index(name) for name in model.param_names}
     if intervals == "calibrated":
         scale = np.ones(params.size)
-        scale[0], scale[1] = factors["f_h"], factors["xi_h"]
+        scale[where["f_h"]], scale[where["xi_h"]] = factors["f_h"], factors["xi_h"]
         cov = cov * np.outer(scale, scale)
-    se = np.sqrt(np.diag(cov))
-    f_h = model.unpack(params)["f_h"]
+    se = dict(zip(model.param_names, np.sqrt(np.diag(cov))))
+    named = model.unpack(params)
+    bounds = dict(zip(model.param_names, model.bounds))
     interval = {}
-    for which, name in enumerate(("f_h", "xi_h")):
+    for name in ("f_h", "xi_h"):
         if intervals == "profile":
-            interval[name] = profile_interval(model, params, fitted["loglike"], which, se[which], level)
+            interval[name] = profile_interval(model, params, fitted["loglike"], where[name], se[name], level)
         else:
             # the floor widens the interval, not the sd: the sd says what the record determines
-            floor = 0.0 if intervals == "wald" else model_error_floor(name, f_h, model.variation)
-            interval[name] = wald_interval(params[which], float(np.hypot(se[which], floor)), level,
-                                           model.bounds[which])
+            floor = 0.0 if intervals == "wald" else model_error_floor(name, named["f_h"], model.variation)
+            interval[name] = wald_interval(named[name], float(np.hypot(se[name], floor)), level, bounds[name])
     for name in model.effect_parameters:  # the effects' parameters: Wald intervals from the information
-        which = model.param_names.index(name)
-        interval[name] = (wald_interval(params[which], se[which], level, model.bounds[which])
-                          if np.isfinite(se[which]) else tuple(model.bounds[which]))
+        interval[name] = (wald_interval(named[name], se[name], level, bounds[name])
+                          if np.isfinite(se[name]) else tuple(bounds[name]))
     method = {"profile": "profile", "wald": f"wald ({cov_type})"}.get(
         intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, {factors['xi_h']:g}, "
                    "with a model-error floor; undetermined: the yardstick's width)")
@@ -100,12 +100,11 @@ def undetermined_interval(result, name) -> tuple:
     calibrated ``f_h`` intervals that missed the truth, 8 belonged to estimates already
     flagged as not determined (3 smooth-drift records, 5 pulse trains).
     """
-    which = {"f_h": 0, "xi_h": 1}[name]
     low, high = result.intervals[name]
-    bounds = result.model.bounds[which]
+    bounds = dict(zip(result.model.param_names, result.model.bounds))[name]
     if result.artefact(name):
         return float(bounds[0]), float(bounds[1])
     if result.determined(name):
         return low, high
-    wide = wald_interval(result.params[which], PRIOR_SD[name], result.level, bounds)
+    wide = wald_interval(result.model.unpack(result.params)[name], PRIOR_SD[name], result.level, bounds)
     return min(low, wide[0]), max(high, wide[1])
