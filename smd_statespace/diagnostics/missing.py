@@ -68,6 +68,7 @@ import numpy as np
 import pandas as pd
 
 from .check import ModelCheck, check_model
+from .effect_adapter import candidate, diagnosis_notes
 from ..effects import EFFECTS, make_effect
 from ..errors import OptionError
 from ..model import SMDModel
@@ -215,13 +216,13 @@ def _effect_parameters(check: ModelCheck) -> dict:
 def default_candidates(model: SMDModel, base: ModelCheck) -> list:
     """Every registered effect not yet in ``model``, configured for this record by its own class.
 
-    :meth:`Effect.candidate <smd_statespace.model.Effect.candidate>` decides
+    :func:`~smd_statespace.diagnostics.effect_adapter.candidate` decides
     (``floor_mode``: the measured floor when the record has one, else a known
     mode at the strongest line of the residual that is not locked to the
     bouncing cycle, or nothing); an effect that returns None is left out.
     """
     present = {effect.name for effect in model.effects}
-    chosen = (cls.candidate(base) for name, cls in EFFECTS.items() if name not in present)
+    chosen = (candidate(cls, base) for name, cls in EFFECTS.items() if name not in present)
     return [effect for effect in chosen if effect is not None]
 
 
@@ -288,5 +289,5 @@ def diagnose(preprocessed, model: SMDModel | None = None, estimator: str = "ekf"
         judged.append(_judge(base, check, effect, len(effects), alpha, min_improvement))
     judged.sort(key=lambda c: (not c.significant, -c.score))
     notes = [note for name, cls in EFFECTS.items() if not any(c.significant and c.name == name for c in judged)
-             for note in cls.diagnosis_notes(base, judged)]
+             for note in diagnosis_notes(cls, base, judged)]
     return Diagnosis(base, judged, alpha, min_improvement, notes)
