@@ -18,7 +18,8 @@ simulation (:attr:`ModelCheck.simulated`) and the one-step-ahead prediction
 What a per-cycle model can and cannot show (which hidden effect reaches the
 residual, and which diagnostic shows it): see :mod:`smd_statespace.diagnostics.subspace`.
 
-The series, in SI units, are :class:`ModelCheck`'s attributes.
+The series (SI units) are :class:`ModelCheck`'s attributes; its tools are functions over arrays in the
+modules beside it (spectra, correlation, phase, subspace, residual_tests, cycles, free_simulation).
 """
 
 from __future__ import annotations
