@@ -207,90 +207,6 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _augmented_start(code, a, A, P, p, D, E, n_template, smooth_p0, nx):
-    """The state at the first sample (in place): ``x_0`` and the template as columns of ``delta``, the first draw."""
-    for i in range(nx):
-        A[i, i] = 1.0
-    if code == INDEPENDENT:
-        _reset(code, a, A, P, p, D, E, nx, n_template)
-    elif code == RANDOM_WALK:
-        for i in range(n_template):
-            A[nx + i, nx + i] = 1.0
-    elif code == SMOOTH:  # stationary start: deviation variance D, rate variance D lambda^2
-        for i in range(n_template):
-            A[nx + i, nx + i] = 1.0
-            P[nx + i, nx + i] = D[i] * smooth_p0[0, 0]
-            P[nx + i, nx + p + i] = D[i] * smooth_p0[0, 1]
-            P[nx + p + i, nx + i] = D[i] * smooth_p0[1, 0]
-            P[nx + p + i, nx + p + i] = D[i] * smooth_p0[1, 1]
-        _reset(code, a, A, P, p, D, E, nx, n_template)
-    else:
-        for i in range(n_template):
-            A[nx + p + i, nx + i] = 1.0
-        _reset(code, a, A, P, p, D, E, nx, n_template, False)
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _augmented_predict(a, A, P, T, G, Qx, offset, has_offset, X_tr, n_template, work):
-    """The dynamic rows of one step (in place): ``x = Phi x + Gam alpha + offset (+ X_tr beta)``, ``P = T P T' + Q``."""
-    nx = T.shape[0]
-    m = a.size
-    step_rows(T, G, P, P, work)  # T P
-    step_rows(T, G, P.T, P.T, work)  # (T P) T'
-    for i in range(nx):
-        for j in range(nx):
-            P[i, j] += Qx[i, j]
-    step_rows(T, G, a.reshape((m, 1)), a.reshape((m, 1)), work)  # the mean
-    if has_offset:
-        for i in range(nx):
-            a[i] += offset[i]
-    step_rows(T, G, A, A, work)  # and its delta-columns
-    for j in range(X_tr.shape[1]):  # known regressors: the state's dependence on beta
-        for i in range(nx):
-            A[i, nx + n_template + j] += X_tr[i, j]
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _augmented_update(a, A, P, h, Ph, Ev, y_k, X_obs_k, n_obs, first_beta):
-    """Update with one observation (in place); returns the innovation at ``delta = 0`` and its variance.
-
-    ``Ev`` becomes the innovation's regression on ``delta``. The observation sees the first ``n_obs`` states
-    (``x`` and ``alpha``, not the smooth rates nor the random walk's base); ``delta``'s regressors' columns
-    start at ``first_beta``.
-    """
-    m, q = A.shape
-    for c in range(m):
-        v = 0.0
-        for i in range(n_obs):
-            v += P[c, i] * h[i]
-        Ph[c] = v
-    f = 1.0
-    e = y_k
-    for i in range(n_obs):
-        f += h[i] * Ph[i]
-        e -= h[i] * a[i]
-    for c in range(q):
-        Ev[c] = 0.0
-    for i in range(n_obs):
-        hi = h[i]
-        for c in range(q):
-            Ev[c] += hi * A[i, c]
-    for j in range(X_obs_k.size):
-        Ev[first_beta + j] += X_obs_k[j]
-    inv_f = 1.0 / f
-    for i in range(m):
-        K = Ph[i] * inv_f
-        a[i] += K * e
-        for c in range(q):
-            A[i, c] -= K * Ev[c]
-        for c in range(i, m):  # P is symmetric: the upper triangle, mirrored
-            v = P[i, c] - K * Ph[c]
-            P[i, c] = v
-            P[c, i] = v
-    return e, f
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                    smooth_phi, smooth_q, smooth_p0):
     """Run the augmented Kalman filter over one record.
@@ -358,7 +274,8 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
     varying = Phi.shape[0] > 1
     r = X_obs.shape[1]
     m = state_size(code, nx, p, n_template)
-    q = nx + n_template + r  # delta = [x0 (n_x), template (p), beta (r)]
+    n_free = nx  # delta = [x0 (n_x), template (p), beta (r)]
+    q = nx + n_template + r
     a = np.zeros(m)
     A = np.zeros((m, q))
     P = np.zeros((m, m))
@@ -366,19 +283,51 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
     T = Phi[0].copy()
     row = hx[0].copy()
     has_offset = np.any(offset != 0.0)
-    _augmented_start(code, a, A, P, p, D, E, n_template, smooth_p0, nx)
+    for i in range(nx):
+        A[i, i] = 1.0
+    if code == INDEPENDENT:
+        _reset(code, a, A, P, p, D, E, n_free, n_template)
+    elif code == RANDOM_WALK:
+        for i in range(n_template):
+            A[nx + i, n_free + i] = 1.0
+    elif code == SMOOTH:  # stationary start: deviation variance D, rate variance D lambda^2
+        for i in range(n_template):
+            A[nx + i, n_free + i] = 1.0
+            P[nx + i, nx + i] = D[i] * smooth_p0[0, 0]
+            P[nx + i, nx + p + i] = D[i] * smooth_p0[0, 1]
+            P[nx + p + i, nx + i] = D[i] * smooth_p0[1, 0]
+            P[nx + p + i, nx + p + i] = D[i] * smooth_p0[1, 1]
+        _reset(code, a, A, P, p, D, E, n_free, n_template)
+    else:
+        for i in range(n_template):
+            A[nx + p + i, n_free + i] = 1.0
+        _reset(code, a, A, P, p, D, E, n_free, n_template, False)
     e_out = np.empty(N)
     Ev_out = np.empty((N, q))
     f_out = np.empty(N)
     h = np.zeros(m)
     Ph = np.zeros(m)
     Ev = np.zeros(q)
+    n_obs = nx + p  # the observation sees x and alpha only (not the smooth rates nor the random walk's base)
     for k in range(N):
         if k > 0:
+            # predict the dynamic rows: x = Phi x + Gam alpha + offset (+ X_tr beta)
             G = Gam[k - 1]
             if varying:
                 T = Phi[k - 1]
-            _augmented_predict(a, A, P, T, G, Qx, offset[k - 1], has_offset, X_tr[k - 1], n_template, work)
+            step_rows(T, G, P, P, work)  # T P
+            step_rows(T, G, P.T, P.T, work)  # (T P) T'
+            for i in range(nx):
+                for j in range(nx):
+                    P[i, j] += Qx[i, j]
+            step_rows(T, G, a.reshape((m, 1)), a.reshape((m, 1)), work)  # the mean
+            if has_offset:
+                for i in range(nx):
+                    a[i] += offset[k - 1, i]
+            step_rows(T, G, A, A, work)  # and its delta-columns
+            for j in range(r):  # known regressors: the state's dependence on beta
+                for i in range(nx):
+                    A[i, nx + n_template + j] += X_tr[k - 1, i, j]
             if code == SMOOTH:
                 _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx)
             for i in range(p):
@@ -386,7 +335,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
                 if code == BOTH:
                     P[nx + p + i, nx + p + i] += drift[i]
             if reset[k]:
-                _reset(code, a, A, P, p, D, E, nx, n_template)
+                _reset(code, a, A, P, p, D, E, n_free, n_template)
         # update with y_k
         if varying:
             row = hx[k]
@@ -394,11 +343,38 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
             h[i] = row[i]
         for i in range(p):
             h[nx + i] = H[k, i]
-        e, f = _augmented_update(a, A, P, h, Ph, Ev, y[k], X_obs[k], nx + p, nx + n_template)
+        for c in range(m):
+            v = 0.0
+            for i in range(n_obs):
+                v += P[c, i] * h[i]
+            Ph[c] = v
+        f = 1.0
+        e = y[k]
+        for i in range(n_obs):
+            f += h[i] * Ph[i]
+            e -= h[i] * a[i]
+        for c in range(q):
+            Ev[c] = 0.0
+        for i in range(n_obs):
+            hi = h[i]
+            for c in range(q):
+                Ev[c] += hi * A[i, c]
+        for j in range(r):
+            Ev[nx + n_template + j] += X_obs[k, j]
+        inv_f = 1.0 / f
         e_out[k] = e
         f_out[k] = f
         for c in range(q):
             Ev_out[k, c] = Ev[c]
+        for i in range(m):
+            K = Ph[i] * inv_f
+            a[i] += K * e
+            for c in range(q):
+                A[i, c] -= K * Ev[c]
+            for c in range(i, m):  # P is symmetric: the upper triangle, mirrored
+                v = P[i, c] - K * Ph[c]
+                P[i, c] = v
+                P[c, i] = v
     # the sums of the concentrated likelihood, after the pass (one product instead of q^2 per sample)
     weighted = Ev_out / f_out.reshape((N, 1))
     S = weighted.T @ Ev_out
