@@ -34,6 +34,7 @@ from ..errors import OptionError
 from ..io import G
 from .correlation import cross_correlation_table
 from .cycles import absorbable_bases, checked_series, cycle_harmonic, identified_runner, state_over_record
+from .effect_adapter import candidate, score_terms
 from .fit import fit_percent, rms
 from .free_simulation import path_sensitivity
 from .phase import phase_locked, phase_profile
@@ -450,7 +451,7 @@ class ModelCheck:
 
         Every registered effect not in the model (:mod:`smd_statespace.effects`,
         a user's included), as its class configures itself for this record
-        (:meth:`Effect.candidate <smd_statespace.model.Effect.candidate>`),
+        (:func:`~smd_statespace.diagnostics.effect_adapter.candidate`),
         contributes its own terms (:meth:`effect_terms`), named by the effect:
         ``harmonics`` (``g cos(j theta), g sin(j theta)`` for the two orders above
         the model's), ``cubic_stiffness`` (``-w_h^2 u^3``), ``floor_mode`` (with a
@@ -475,7 +476,7 @@ class ModelCheck:
         out = {}
         present = {effect.name for effect in self.model.effects}
         for name, cls in EFFECTS.items():
-            effect = None if name in present else cls.candidate(self)
+            effect = None if name in present else candidate(cls, self)
             terms = {} if effect is None else self.effect_terms(effect)
             if terms:
                 columns = np.column_stack(list(terms.values()))
@@ -493,7 +494,7 @@ class ModelCheck:
         The model extended by ``effect`` is evaluated on the free
         simulation's state (:meth:`simulated_state`; the effect's own slots
         at 0) cycle by cycle, with each cycle's inputs, and the effect gives
-        its :meth:`~smd_statespace.model.Effect.score_terms`. Samples outside
+        its :func:`~smd_statespace.diagnostics.effect_adapter.score_terms`. Samples outside
         the checked cycles are 0. An effect whose measured signals the record
         lacks gives none.
 
@@ -515,7 +516,7 @@ class ModelCheck:
             except OptionError:
                 return {}
             samples = np.arange(cycle.start, cycle.stop + 1)
-            for key, values in effect.score_terms(model, x[samples], data.t, data.inputs).items():
+            for key, values in score_terms(effect, model, x[samples], data.t, data.inputs).items():
                 out.setdefault(key, np.zeros(len(pre.time)))[samples] = values
         return out
 

@@ -9,8 +9,8 @@ rates of its own dynamic slots (optionally their Jacobians). Everything else
 is derived from those by the package that needs it, with defaults there:
 :mod:`smd_statespace.simulation.effect_adapter` (the truth of a simulation,
 random inputs, extra force harmonics, measured columns),
-:mod:`smd_statespace.diagnostics.effect_adapter` (per-cycle candidates and
-score terms) and :mod:`smd_statespace.person.effect_adapter` (record-level
+:mod:`smd_statespace.diagnostics.effect_adapter` (per-cycle candidates,
+score terms and notes) and :mod:`smd_statespace.person.effect_adapter` (record-level
 candidates, trial starts, search sizes). An effect that can say more than
 the default implements the method the adapter's ``Protocol`` names (the
 floor mode: its random ambient excitation, its measured column). Two
@@ -126,55 +126,6 @@ class Effect:
                 raise OptionError(f"effect {self.name!r}: value of {key!r} must be finite, got {value!r}")
         twin._values = merged
         return twin
-
-    @classmethod
-    def candidate(cls, check) -> "Effect | None":
-        """This effect configured as a candidate for a record, or None to leave it out.
-
-        ``check`` is the :class:`~smd_statespace.diagnostics.ModelCheck` of
-        the model without it. Default: the effect with its default options.
-        """
-        return cls()
-
-    @classmethod
-    def diagnosis_notes(cls, base, judged) -> list:
-        """Plain-word notes for :func:`~smd_statespace.diagnostics.missing.diagnose` when this effect is not found (default none).
-
-        ``base`` is the base model's :class:`~smd_statespace.diagnostics.ModelCheck`,
-        ``judged`` the candidates' refits.
-        """
-        return []
-
-    def score_terms(self, model: "SMDModel", x, t, inputs: CycleInputs) -> dict:
-        """The terms this effect would add to ``u''``, one per unknown coefficient (m/s^2 per unit).
-
-        The derivative of :meth:`acceleration` in each of the effect's
-        parameter slots at ``x`` (the score direction of the
-        missing-effect test), or, for an effect with no parameter slots
-        (a measured input), its acceleration itself. ``x`` has the
-        effect's parameters at their null values (usually 0); terms that
-        vanish everywhere (an effect whose term needs its own dynamic state)
-        are left out.
-
-        Returns
-        -------
-        dict of str to ndarray, each of shape ``x.shape[:-1]``
-        """
-        from .jacobians import expand_time, numeric_jacobian
-
-        x = np.asarray(x, dtype=float)
-        where = model.effect_slice(self)
-        names = [slot.name for slot in model.slots[where] if slot.kind == "parameter"]
-        if not names:
-            term = self.acceleration(model, x, t, inputs)
-            return {self.name: term} if np.any(term != 0) else {}
-        jac = numeric_jacobian(lambda z: self.acceleration(model, z, expand_time(t), inputs), x)
-        out = {}
-        for name in names:
-            term = jac[..., model.index(name)]
-            if np.any(term != 0):
-                out[f"{self.name}:{name}"] = term
-        return out
 
     @property
     def spec(self) -> str:
