@@ -100,3 +100,59 @@ def test_matplotlib_is_imported_only_in_plotting():
             outside += [f"{path.relative_to(PACKAGE.parent)}:{node.lineno}" for name in names
                         if name.split(".")[0] == "matplotlib"]
     assert outside == []
+
+
+LONGEST_MODULE = 600
+"""Lines of the longest module: a longer one holds more than one responsibility (issue 25)."""
+
+LONGEST_FUNCTION = 80
+"""Lines of code of the longest function or method, its docstring not counted (a public function's manual,
+``simulate_bouncing``'s 186 lines of parameters and generators, is not code to split)."""
+
+
+def code_lines(node) -> int:
+    """Lines of a function from its ``def`` to its end, less its docstring's."""
+    lines = node.end_lineno - node.lineno + 1
+    first = node.body[0]
+    if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
+        lines -= first.end_lineno - first.lineno + 1
+    return lines
+
+
+WHOLE = {"sensitivity_pass": "smd_statespace/person/sensitivity.py", "augmented_pass": "smd_statespace/person/kalman.py"}
+"""Compiled loops kept in one function: split into compiled steps (functions of their own, or inlined by numba's
+``inline="always"``) the same arithmetic ran 20-40 % (sensitivity_pass) and 5-13 % (augmented_pass) slower,
+measured side by side in one process on 2026-11-27; they are most of the record-level search's time. The
+particle filter's pass, split the same way, kept its speed (96-99 ns per particle-step either way) and is split."""
+
+
+def oversized(package_dir: Path) -> list:
+    """``file: N lines`` of every module over :data:`LONGEST_MODULE` and ``file:line name: N lines of code`` of every
+    function over :data:`LONGEST_FUNCTION`."""
+    found = []
+    for path in sorted(package_dir.rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        where = path.relative_to(package_dir.parent)
+        if text.count("\n") > LONGEST_MODULE:
+            found.append(f"{where}: {text.count(chr(10))} lines")
+        for node in ast.walk(ast.parse(text)):
+            if (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and code_lines(node) > LONGEST_FUNCTION
+                    and WHOLE.get(node.name) != where.as_posix()):
+                found.append(f"{where}:{node.lineno} {node.name}: {code_lines(node)} lines of code")
+    return found
+
+
+def test_no_module_over_600_lines_and_no_function_over_80_lines_of_code():
+    """One module, one responsibility; one function, one job (docs/index.md, "Layers")."""
+    assert oversized(PACKAGE) == []
+
+
+def test_the_size_check_finds_a_long_module_and_a_long_function(tmp_path):
+    package = tmp_path / "smd_statespace"
+    package.mkdir()
+    body = "\n".join(f"    x{i} = {i}" for i in range(LONGEST_FUNCTION))
+    documented = '    """' + "\n".join(["Docs."] * 200) + '"""\n'
+    (package / "long.py").write_text(f"def long():\n{body}\n\n\ndef manual():\n{documented}    return 1\n")
+    (package / "big.py").write_text("\n" * (LONGEST_MODULE + 1))
+    assert oversized(package) == ["smd_statespace/big.py: 601 lines",
+                                  f"smd_statespace/long.py:1 long: {LONGEST_FUNCTION + 1} lines of code"]

@@ -23,91 +23,14 @@ import pandas as pd
 
 from scipy import stats
 
-from ..io import G
 from .calibration import model_error_floor
+from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, VARIATION_AIC_CLOSE,  # noqa: F401
+                        VARIATION_DISAGREEMENT, WHITENESS_ALPHA, XI_H_RESONANCE_MIMIC, mimicked_harmonic,
+                        stands_in_for_force)
 from .model import RecordModel
+from .report import person_warnings, result_dict, summary_text, table_row
 
 __all__ = ["PersonResult", "DETERMINED_FRACTION", "MISFIT_SHARE", "PRIOR_SD"]
-
-PRIOR_SD = {"f_h": 3.0 / np.sqrt(12.0), "xi_h": 1.0 / np.sqrt(12.0)}
-"""Yardstick widths: the sd of the article's uniform initial ranges (``f_h`` 1-4 Hz, ``xi_h`` 0-1)."""
-
-DETERMINED_FRACTION = 0.25
-"""A parameter is 'determined' when its standard error is below this fraction of :data:`PRIOR_SD`
-(the same rule as the per-cycle table)."""
-
-WHITENESS_ALPHA = 0.01
-"""Level at which the Ljung-Box test's rejection is reported as a warning."""
-
-F_B_COINCIDENCE = 0.05
-"""With the smooth variation, an ``f_h`` within this fraction of the bouncing frequency is not determined.
-
-A person resonating at ``f_b`` with little damping turns white noise into a
-slow modulation of the force's first harmonic: the same signal as a smooth
-drift of that harmonic. On the smooth generator (docs/person-benchmark.md,
-seed 2024) 10 of 50 estimates ended within 5 % of ``f_b`` with a median error
-of 16 % (none of the true values was there; the other 40 records: 7 %); on
-records whose force jumps per cycle this did not happen (1 of 50, error 1 %).
-
-With any variation model, a lightly damped ``f_h`` there or at a multiple ``i f_b`` (``xi_h``
-below :data:`XI_H_RESONANCE_MIMIC`) is not determined either: an undamped resonance then
-stands in for the force's harmonic ``i`` (its BLF near 0). On a
-record from a generator outside this project (truth ``f_h`` 2.91 Hz = 1.19
-``f_b``, ``xi_h`` 0.44) both variation models ended at ``f_h`` 2.44-2.52 Hz,
-``xi_h`` 0.001-0.04, ``BLF1`` 0.002-0.007 g against 0.17 g
-(``../shared/findings/person-unseen-records.md``).
-"""
-
-MISFIT_SHARE = 0.003
-"""Size of what the model misses, as a share of the signal, above which ``f_h`` and ``xi_h`` are not determined.
-
-The share (:attr:`PersonResult.misfit_share`) is the RMS of the part of the one-step
-innovations that their own past predicts (a least-squares autoregression over one
-cycle's lags, its R² less the L/N an autoregression reaches on white noise), over
-the RMS of the measured acceleration. A model that misses part of the force or
-of the physics puts it into ``f_h`` and ``xi_h`` (a hidden cubic spring:
-``f_h`` +24 %, docs/tutorial-missing-physics.md), and its information-based
-interval does not know it; their intervals then take the yardstick's width
-until the missing effect is in the model.
-
-Why a size and not the Ljung-Box p-value: on a quiet clean record of the
-jumps generator (40 s, 0.2 % BW noise) Ljung-Box gives p 1e-23 with ``f_h``
-3.6 % off, and the share is 0; on pulse-train records (``f_h`` 22-52 % off)
-it was 1.3-3.1 %, with the tutorial's hidden cubic spring (``f_h`` +24 %)
-0.4 %, on clean records of 1 % BW noise 0 (R² at the chance level: at 1 % BW
-noise, a share at the chance correction's edge is about 0.2 %). Chosen on
-these few records; checked on 117 others (docs/person-benchmark-generators.md,
-24 per generator): pulse trains 24 of 24 above it (``f_h`` coverage 46 -> 92 %),
-jittered coefficients 6 of 24, the jumps, smooth and tempo generators none (largest
-0.30 %: the threshold sits at the top of what the model's own generators give).
-"""
-
-VARIATION_DISAGREEMENT = 0.10
-"""Relative difference of ``f_h`` between the variation models (at the final cycle starts) that is reported."""
-
-VARIATION_AIC_CLOSE = 10.0
-"""AIC difference below which a variation model is not ruled out by the record (Burnham & Anderson: above 10,
-essentially no support)."""
-
-XI_H_RESONANCE_MIMIC = 0.08
-"""Below this damping ratio an ``f_h`` within :data:`F_B_COINCIDENCE` of ``f_b`` is not determined, whatever
-the variation model (bouncing people show 0.1-0.6, the article's Table 2)."""
-
-
-def mimicked_harmonic(f_h, xi_h, f_b, n_harmonics) -> int:
-    """The force harmonic ``i`` (1 ... ``n_harmonics``) an undamped resonance at ``f_h`` stands in for, 0 when none:
-    ``f_h`` within :data:`F_B_COINCIDENCE` of ``i f_b`` with ``xi_h`` below :data:`XI_H_RESONANCE_MIMIC`."""
-    if xi_h >= XI_H_RESONANCE_MIMIC:
-        return 0
-    order = int(round(f_h / f_b))
-    return order if 1 <= order <= n_harmonics and abs(f_h / (order * f_b) - 1.0) < F_B_COINCIDENCE else 0
-
-
-def stands_in_for_force(f_h, xi_h, f_b, n_harmonics, variation) -> bool:
-    """True where a resonance cannot be told from the force: ``f_h`` within :data:`F_B_COINCIDENCE` of ``f_b``
-    with the smooth variation, or a mimicked harmonic (:func:`mimicked_harmonic`) with any."""
-    near = abs(f_h / f_b - 1.0) < F_B_COINCIDENCE
-    return (near and variation == "smooth") or mimicked_harmonic(f_h, xi_h, f_b, n_harmonics) > 0
 
 
 @dataclass
@@ -609,63 +532,9 @@ class PersonResult:
     # ------------------------------------------------------------------ words
     @property
     def warnings(self) -> list:
-        """Plain-word warnings: the record's checks, parameters at a bound or not determined, residual tests that reject."""
-        out = list(self.record_warnings)
-        for which, name in enumerate(("f_h", "xi_h")):
-            low, high = self.model.bounds[which]
-            value = self.params[which]
-            if self.model.at_bound(self.params, which):
-                out.append(f"{name} = {value:.3g} sits on its search bound ({low:g}-{high:g}): not an estimate; "
-                           "the model may not fit this record (run diagnose)")
-            elif name == "f_h" and self.mimicked_harmonic:
-                i = self.mimicked_harmonic
-                where = "the bouncing frequency" if i == 1 else f"{i} times the bouncing frequency"
-                out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of {where} with xi_h = "
-                           f"{self.xi_h:.2g}: an undamped resonance there stands in for the force's harmonic {i} "
-                           f"(BLF{i} near 0), so f_h, xi_h and BLF{i} are not determined; bouncing people show "
-                           "xi_h 0.1-0.6")
-            elif name == "f_h" and self.at_bouncing_frequency:
-                out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of the bouncing frequency: with a "
-                           "smoothly drifting force, a person resonating at f_b and the drift look alike, so f_h is "
-                           "not determined (on simulated records ending here the median error was 16 %)")
-            elif self.misfit:
-                continue  # said once, with the whiteness test below
-            elif not self.determined(name):
-                out.append(f"{name} is not determined by this record (sd {self.se[which]:.3g} against a yardstick "
-                           f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
-        blf = self.template_blf()
-        undetermined = [f"BLF{i}" for i in blf.index[~blf["determined"].astype(bool)]]
-        if undetermined:
-            out.append(f"{', '.join(undetermined)} not determined: the force is read through Eq. 2 at a person this "
-                       f"record does not settle (over the intervals of f_h and xi_h they span more than their own "
-                       f"value); read their intervals")
-        if self.xi_h > 1.0:
-            out.append(f"xi_h = {self.xi_h:.2f} > 1 (over-damped): outside what bouncing people show (0.1-0.6)")
-        disagreement = self.variation_disagreement()
-        if disagreement:
-            out.append(disagreement)
-        for name, row in self.effect_estimates().iterrows():
-            unit = _unit(row["unit"])
-            if row["on_bound"]:
-                out.append(f"{name} = {row['value']:.4g}{unit} sits on its search bound ({row['range_low']:g}-"
-                           f"{row['range_high']:g}): not an estimate; the record does not show this effect as "
-                           "modelled")
-            elif not np.isfinite(row["sd"]) or row["sd"] > 0.25 * (row["range_high"] - row["range_low"]):
-                out.append(f"{name} is not determined by this record (sd {row['sd']:.3g}{unit} against its "
-                           f"range {row['range_low']:g}-{row['range_high']:g})")
-        tests = self.test_pvalues()
-        command = f"`smd-statespace diagnose {self.record_arguments()}`"
-        if self.misfit or tests["ljung_box_p"] < WHITENESS_ALPHA:
-            if self.misfit:
-                out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}; their "
-                           f"predictable part is {100 * self.misfit_share:.1f} % of the signal, over "
-                           f"{100 * MISFIT_SHARE:g} %): the model misses something, which it puts into f_h and xi_h, "
-                           "so they are not determined (their intervals are as wide as the yardstick) until the "
-                           f"missing effect is in the model; run {command}")
-            else:
-                out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): the "
-                           f"model misses something, and f_h, xi_h and their intervals may be biased; run {command}")
-        return out
+        """Plain-word warnings: the record's checks, parameters at a bound or not determined, residual tests that
+        reject (:func:`~smd_statespace.person.report.person_warnings`)."""
+        return person_warnings(self)
 
     def variation_disagreement(self) -> str:
         """In words, when variation models fitted at the final cycle starts that the record cannot rule out (AIC
@@ -700,132 +569,19 @@ class PersonResult:
         return [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]
 
     def to_dict(self) -> dict:
-        """Flat JSON-able summary (the content of ``person.json``)."""
-        se = self.se
-        out = {"f_h": self.f_h, "f_h_sd": float(se[0]), "xi_h": self.xi_h, "xi_h_sd": float(se[1])}
-        for name in ("f_h", "xi_h"):
-            low, high = self.intervals[name]
-            out[f"{name}_low"], out[f"{name}_high"] = float(low), float(high)
-            out[f"{name}_determined"] = self.determined(name)
-        out["misfit"] = self.misfit
-        out["misfit_share"] = self.misfit_share
-        out["interval_level"] = self.level
-        out["interval_method"] = self.interval_method
-        out.update(self.derived())
-        extra = self.record.extra
-        out["sensor"] = extra.get("sensor", "force plate")
-        out["mass_known"] = self.mass_known
-        if out["sensor"] == "accelerometer":
-            out["accelerometer"] = {"format": extra.get("format"), "units_read": extra.get("units_read"),
-                                    **{f"clock_{k}": v for k, v in extra.get("clock", {}).items()},
-                                    **{f"geometry_{k}": v for k, v in extra.get("geometry", {}).items()}}
-        blf = self.template_blf()
-        for i, row in blf.iterrows():
-            out[f"blf_{i}"] = float(row["blf"])
-            out[f"blf_{i}_sd"] = float(row["sd"])
-            out[f"blf_{i}_low"], out[f"blf_{i}_high"] = float(row["low"]), float(row["high"])
-            out[f"blf_{i}_determined"] = bool(row["determined"])
-            out[f"blf_{i}_sd_given_person"] = float(row["sd_given_person"])
-            out[f"blf_{i}_spread"] = float(row["spread"])
-        walk = self.spread("e")
-        for i in range(1, self.model.n_harmonics + 1):
-            out[f"blf_{i}_walk"] = float(walk[i])
-        out["a0_spread"] = float(self.spread()[0])
-        out["noise_sd"] = self.sigma
-        out["noise_bw"] = self.sigma / G
-        for name, row in self.regressor_coefficients().iterrows():
-            out[name], out[f"{name}_sd"] = float(row["value"]), float(row["sd"])
-        out["variation"] = self.model.variation
-        out["timing"] = self.model.timing.method
-        out["f_b"] = float(np.median(self.model.timing.f_b))
-        out["n_harmonics"] = self.model.n_harmonics
-        out["log_likelihood"] = self.loglike
-        out["n_params"] = int(len(self.params))
-        out["n_cycles"] = self.n_cycles
-        out["n_samples"] = int(self.model.y.size)
-        out.update(self.test_pvalues())
-        out["fs"] = self.record.fs
-        if self.effects:
-            out["effects"] = [effect.spec for effect in self.effects]
-            for name, row in self.effect_estimates().iterrows():
-                out[name], out[f"{name}_sd"] = row["value"], row["sd"]
-                out[f"{name}_low"], out[f"{name}_high"] = row["low"], row["high"]
-                out[f"{name}_on_bound"] = bool(row["on_bound"])
-            out.update(self.effect_test())
-            out["likelihood"] = "approximate" if self.model.approximate else "exact"
-            out["linearisations"] = self.linearisations
-            out["settled"] = self.settled
-            before = self.before.to_dict()
-            out["before"] = {key: before[key] for key in ("f_h", "f_h_sd", "f_h_low", "f_h_high", "xi_h", "xi_h_sd",
-                                                          "xi_h_low", "xi_h_high", "log_likelihood", "noise_sd",
-                                                          "ljung_box_p")}
-        out["warnings"] = self.warnings
-        out["notes"] = list(self.notes)
-        out["variation_models"] = self.comparison
-        return out
+        """Flat JSON-able summary: the content of ``person.json``
+        (:func:`~smd_statespace.person.report.result_dict`)."""
+        return result_dict(self)
 
     def table_row(self) -> dict:
-        """One flat row for a table of people (a batch's ``results.csv``; what ``stats`` reads).
-
-        The scalars of :meth:`to_dict`, the warnings joined by ``" | "``, and
-        the flags ``stats`` uses: ``implausible`` (``f_h`` or ``xi_h`` on a
-        search bound: not an estimate) with ``implausible_reason``, and
-        ``model_adequate`` (the innovations pass the Ljung-Box test at
-        :data:`WHITENESS_ALPHA`).
-        """
-        row = {key: value for key, value in self.to_dict().items() if np.isscalar(value)}
-        row["warnings"] = " | ".join(self.warnings)
-        reasons = [f"{name} on search bound" for which, name in enumerate(("f_h", "xi_h"))
-                   if self.model.at_bound(self.params, which)]
-        row["implausible"] = bool(reasons)
-        row["implausible_reason"] = "; ".join(reasons)
-        row["model_adequate"] = bool(row["ljung_box_p"] >= WHITENESS_ALPHA)
-        return row
+        """One flat row for a table of people (a batch's ``results.csv``; what ``stats`` reads;
+        :func:`~smd_statespace.person.report.table_row`)."""
+        return table_row(self)
 
     def summary(self, verbose=False) -> str:
-        """The person in a few lines: the answer first, then noise, force, tests, warnings.
-
-        ``verbose`` adds how the intervals were made (also in ``person.json``, ``interval_method``).
-        """
-        d = self.to_dict()
-        pct = int(round(100 * self.level))
-        lines = [
-            f"person from {d['n_cycles']} cycles (f_b {d['f_b']:.2f} Hz, {self.model.variation} variation, "
-            f"{self.model.timing.method} timing):",
-            f"  f_h  = {d['f_h']:.3f} Hz  (sd {d['f_h_sd']:.3f}; {pct} % interval {d['f_h_low']:.2f}-{d['f_h_high']:.2f} "
-            f"Hz){'' if d['f_h_determined'] else '  NOT DETERMINED'}",
-            f"  xi_h = {d['xi_h']:.3f}     (sd {d['xi_h_sd']:.3f}; {pct} % interval {d['xi_h_low']:.2f}-"
-            f"{d['xi_h_high']:.2f}){'' if d['xi_h_determined'] else '  NOT DETERMINED'}",
-            (f"  K_h  = {d['k_h']:.0f} N/m (sd {d['k_h_sd']:.0f}), C_h = {d['c_h']:.0f} N s/m (sd {d['c_h_sd']:.0f})"
-             if self.mass_known else "  K_h, C_h: not computed without the body mass (give --mass KG); f_h, xi_h and "
-             "the BLFs do not need it"),
-            "  BLF (g): " + ", ".join(
-                (f"{i}: {d[f'blf_{i}']:.3f} ± {d[f'blf_{i}_sd']:.3f}" if not self.person_widened
-                 else f"{i}: {d[f'blf_{i}']:.3f} ({d[f'blf_{i}_low']:.3f}-{d[f'blf_{i}_high']:.3f}"
-                 + ("" if d[f"blf_{i}_determined"] else ", NOT DETERMINED") + ")")
-                + f" (cycle spread {d[f'blf_{i}_spread']:.3f})" for i in range(1, self.model.n_harmonics + 1)),
-            f"  noise sd {d['noise_sd']:.3f} m/s^2 ({100 * d['noise_bw']:.2f} % BW); log-likelihood "
-            f"{d['log_likelihood']:.1f}",
-            f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
-            f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
-        ]
-        if verbose:
-            lines.insert(3, f"  intervals: {self.interval_method}; BLF sds with the person's uncertainty "
-                            "(sd_given_person in person.json)")
-        if self.effects:
-            lines[0] = lines[0][:-1] + f" with {', '.join(e.spec for e in self.effects)}:"
-            for name, row in self.effect_estimates().iterrows():
-                lines.append(f"  {name} = {row['value']:.4g}{_unit(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
-                             f"interval {row['low']:.4g}-{row['high']:.4g})")
-            before, test = d["before"], self.effect_test()
-            p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
-            lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
-                         f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}; "
-                         f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})"
-                         + (" at its cycle starts" if self.tested_loglike not in (None, self.loglike) else ""))
-        lines += [f"note: {n}" for n in d["notes"]]
-        lines += [f"warning: {w}" for w in d["warnings"]]
-        return "\n".join(lines)
+        """The person in a few lines: the answer first, then noise, force, tests, warnings
+        (:func:`~smd_statespace.person.report.summary_text`; ``verbose`` adds how the intervals were made)."""
+        return summary_text(self, verbose)
 
     # ------------------------------------------------------------------ figures
     def plot_diagnostics(self, path=None, lags=None):
@@ -841,8 +597,3 @@ class PersonResult:
         from ..plotting.person import plot_person_fit  # the result's own figure: matplotlib when drawn
 
         return plot_person_fit(self, path, seconds, truth)
-
-
-def _unit(unit: str) -> str:
-    """A unit as printed after a value: `` Hz``, nothing for a dimensionless one (``"-"``)."""
-    return "" if unit in ("-", "") else f" {unit}"

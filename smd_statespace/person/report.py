@@ -1,0 +1,210 @@
+"""The record-level answer in words: warnings, the flat summary (``person.json``), a table row, the text.
+
+Functions of a :class:`~smd_statespace.person.results.PersonResult`; the
+result's ``warnings``, ``to_dict``, ``table_row`` and ``summary`` call them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..io import G
+from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
+
+__all__ = ["person_warnings", "result_dict", "summary_text", "table_row"]
+
+
+def person_warnings(result) -> list:
+    """Plain-word warnings: the record's checks, parameters at a bound or not determined, residual tests that reject."""
+    out = list(result.record_warnings)
+    for which, name in enumerate(("f_h", "xi_h")):
+        low, high = result.model.bounds[which]
+        value = result.params[which]
+        if result.model.at_bound(result.params, which):
+            out.append(f"{name} = {value:.3g} sits on its search bound ({low:g}-{high:g}): not an estimate; "
+                       "the model may not fit this record (run diagnose)")
+        elif name == "f_h" and result.mimicked_harmonic:
+            i = result.mimicked_harmonic
+            where = "the bouncing frequency" if i == 1 else f"{i} times the bouncing frequency"
+            out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of {where} with xi_h = "
+                       f"{result.xi_h:.2g}: an undamped resonance there stands in for the force's harmonic {i} "
+                       f"(BLF{i} near 0), so f_h, xi_h and BLF{i} are not determined; bouncing people show "
+                       "xi_h 0.1-0.6")
+        elif name == "f_h" and result.at_bouncing_frequency:
+            out.append(f"f_h = {value:.3g} Hz is within {F_B_COINCIDENCE:.0%} of the bouncing frequency: with a "
+                       "smoothly drifting force, a person resonating at f_b and the drift look alike, so f_h is "
+                       "not determined (on simulated records ending here the median error was 16 %)")
+        elif result.misfit:
+            continue  # said once, with the whiteness test below
+        elif not result.determined(name):
+            out.append(f"{name} is not determined by this record (sd {result.se[which]:.3g} against a yardstick "
+                       f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
+    blf = result.template_blf()
+    undetermined = [f"BLF{i}" for i in blf.index[~blf["determined"].astype(bool)]]
+    if undetermined:
+        out.append(f"{', '.join(undetermined)} not determined: the force is read through Eq. 2 at a person this "
+                   f"record does not settle (over the intervals of f_h and xi_h they span more than their own "
+                   f"value); read their intervals")
+    if result.xi_h > 1.0:
+        out.append(f"xi_h = {result.xi_h:.2f} > 1 (over-damped): outside what bouncing people show (0.1-0.6)")
+    disagreement = result.variation_disagreement()
+    if disagreement:
+        out.append(disagreement)
+    for name, row in result.effect_estimates().iterrows():
+        unit = _unit(row["unit"])
+        if row["on_bound"]:
+            out.append(f"{name} = {row['value']:.4g}{unit} sits on its search bound ({row['range_low']:g}-"
+                       f"{row['range_high']:g}): not an estimate; the record does not show this effect as "
+                       "modelled")
+        elif not np.isfinite(row["sd"]) or row["sd"] > 0.25 * (row["range_high"] - row["range_low"]):
+            out.append(f"{name} is not determined by this record (sd {row['sd']:.3g}{unit} against its "
+                       f"range {row['range_low']:g}-{row['range_high']:g})")
+    tests = result.test_pvalues()
+    command = f"`smd-statespace diagnose {result.record_arguments()}`"
+    if result.misfit or tests["ljung_box_p"] < WHITENESS_ALPHA:
+        if result.misfit:
+            out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}; their "
+                       f"predictable part is {100 * result.misfit_share:.1f} % of the signal, over "
+                       f"{100 * MISFIT_SHARE:g} %): the model misses something, which it puts into f_h and xi_h, "
+                       "so they are not determined (their intervals are as wide as the yardstick) until the "
+                       f"missing effect is in the model; run {command}")
+        else:
+            out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}): the "
+                       f"model misses something, and f_h, xi_h and their intervals may be biased; run {command}")
+    return out
+
+
+def result_dict(result) -> dict:
+    """Flat JSON-able summary (the content of ``person.json``)."""
+    se = result.se
+    out = {"f_h": result.f_h, "f_h_sd": float(se[0]), "xi_h": result.xi_h, "xi_h_sd": float(se[1])}
+    for name in ("f_h", "xi_h"):
+        low, high = result.intervals[name]
+        out[f"{name}_low"], out[f"{name}_high"] = float(low), float(high)
+        out[f"{name}_determined"] = result.determined(name)
+    out["misfit"] = result.misfit
+    out["misfit_share"] = result.misfit_share
+    out["interval_level"] = result.level
+    out["interval_method"] = result.interval_method
+    out.update(result.derived())
+    extra = result.record.extra
+    out["sensor"] = extra.get("sensor", "force plate")
+    out["mass_known"] = result.mass_known
+    if out["sensor"] == "accelerometer":
+        out["accelerometer"] = {"format": extra.get("format"), "units_read": extra.get("units_read"),
+                                **{f"clock_{k}": v for k, v in extra.get("clock", {}).items()},
+                                **{f"geometry_{k}": v for k, v in extra.get("geometry", {}).items()}}
+    blf = result.template_blf()
+    for i, row in blf.iterrows():
+        out[f"blf_{i}"] = float(row["blf"])
+        out[f"blf_{i}_sd"] = float(row["sd"])
+        out[f"blf_{i}_low"], out[f"blf_{i}_high"] = float(row["low"]), float(row["high"])
+        out[f"blf_{i}_determined"] = bool(row["determined"])
+        out[f"blf_{i}_sd_given_person"] = float(row["sd_given_person"])
+        out[f"blf_{i}_spread"] = float(row["spread"])
+    walk = result.spread("e")
+    for i in range(1, result.model.n_harmonics + 1):
+        out[f"blf_{i}_walk"] = float(walk[i])
+    out["a0_spread"] = float(result.spread()[0])
+    out["noise_sd"] = result.sigma
+    out["noise_bw"] = result.sigma / G
+    for name, row in result.regressor_coefficients().iterrows():
+        out[name], out[f"{name}_sd"] = float(row["value"]), float(row["sd"])
+    out["variation"] = result.model.variation
+    out["timing"] = result.model.timing.method
+    out["f_b"] = float(np.median(result.model.timing.f_b))
+    out["n_harmonics"] = result.model.n_harmonics
+    out["log_likelihood"] = result.loglike
+    out["n_params"] = int(len(result.params))
+    out["n_cycles"] = result.n_cycles
+    out["n_samples"] = int(result.model.y.size)
+    out.update(result.test_pvalues())
+    out["fs"] = result.record.fs
+    if result.effects:
+        out["effects"] = [effect.spec for effect in result.effects]
+        for name, row in result.effect_estimates().iterrows():
+            out[name], out[f"{name}_sd"] = row["value"], row["sd"]
+            out[f"{name}_low"], out[f"{name}_high"] = row["low"], row["high"]
+            out[f"{name}_on_bound"] = bool(row["on_bound"])
+        out.update(result.effect_test())
+        out["likelihood"] = "approximate" if result.model.approximate else "exact"
+        out["linearisations"] = result.linearisations
+        out["settled"] = result.settled
+        before = result.before.to_dict()
+        out["before"] = {key: before[key] for key in ("f_h", "f_h_sd", "f_h_low", "f_h_high", "xi_h", "xi_h_sd",
+                                                      "xi_h_low", "xi_h_high", "log_likelihood", "noise_sd",
+                                                      "ljung_box_p")}
+    out["warnings"] = result.warnings
+    out["notes"] = list(result.notes)
+    out["variation_models"] = result.comparison
+    return out
+
+
+def table_row(result) -> dict:
+    """One flat row for a table of people (a batch's ``results.csv``; what ``stats`` reads).
+
+    The scalars of :meth:`to_dict`, the warnings joined by ``" | "``, and
+    the flags ``stats`` uses: ``implausible`` (``f_h`` or ``xi_h`` on a
+    search bound: not an estimate) with ``implausible_reason``, and
+    ``model_adequate`` (the innovations pass the Ljung-Box test at
+    :data:`WHITENESS_ALPHA`).
+    """
+    row = {key: value for key, value in result.to_dict().items() if np.isscalar(value)}
+    row["warnings"] = " | ".join(result.warnings)
+    reasons = [f"{name} on search bound" for which, name in enumerate(("f_h", "xi_h"))
+               if result.model.at_bound(result.params, which)]
+    row["implausible"] = bool(reasons)
+    row["implausible_reason"] = "; ".join(reasons)
+    row["model_adequate"] = bool(row["ljung_box_p"] >= WHITENESS_ALPHA)
+    return row
+
+
+def summary_text(result, verbose=False) -> str:
+    """The person in a few lines: the answer first, then noise, force, tests, warnings.
+
+    ``verbose`` adds how the intervals were made (also in ``person.json``, ``interval_method``).
+    """
+    d = result.to_dict()
+    pct = int(round(100 * result.level))
+    lines = [
+        f"person from {d['n_cycles']} cycles (f_b {d['f_b']:.2f} Hz, {result.model.variation} variation, "
+        f"{result.model.timing.method} timing):",
+        f"  f_h  = {d['f_h']:.3f} Hz  (sd {d['f_h_sd']:.3f}; {pct} % interval {d['f_h_low']:.2f}-{d['f_h_high']:.2f} "
+        f"Hz){'' if d['f_h_determined'] else '  NOT DETERMINED'}",
+        f"  xi_h = {d['xi_h']:.3f}     (sd {d['xi_h_sd']:.3f}; {pct} % interval {d['xi_h_low']:.2f}-"
+        f"{d['xi_h_high']:.2f}){'' if d['xi_h_determined'] else '  NOT DETERMINED'}",
+        (f"  K_h  = {d['k_h']:.0f} N/m (sd {d['k_h_sd']:.0f}), C_h = {d['c_h']:.0f} N s/m (sd {d['c_h_sd']:.0f})"
+         if result.mass_known else "  K_h, C_h: not computed without the body mass (give --mass KG); f_h, xi_h and "
+         "the BLFs do not need it"),
+        "  BLF (g): " + ", ".join(
+            (f"{i}: {d[f'blf_{i}']:.3f} ± {d[f'blf_{i}_sd']:.3f}" if not result.person_widened
+             else f"{i}: {d[f'blf_{i}']:.3f} ({d[f'blf_{i}_low']:.3f}-{d[f'blf_{i}_high']:.3f}"
+             + ("" if d[f"blf_{i}_determined"] else ", NOT DETERMINED") + ")")
+            + f" (cycle spread {d[f'blf_{i}_spread']:.3f})" for i in range(1, result.model.n_harmonics + 1)),
+        f"  noise sd {d['noise_sd']:.3f} m/s^2 ({100 * d['noise_bw']:.2f} % BW); log-likelihood "
+        f"{d['log_likelihood']:.1f}",
+        f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
+        f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
+    ]
+    if verbose:
+        lines.insert(3, f"  intervals: {result.interval_method}; BLF sds with the person's uncertainty "
+                        "(sd_given_person in person.json)")
+    if result.effects:
+        lines[0] = lines[0][:-1] + f" with {', '.join(e.spec for e in result.effects)}:"
+        for name, row in result.effect_estimates().iterrows():
+            lines.append(f"  {name} = {row['value']:.4g}{_unit(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
+                         f"interval {row['low']:.4g}-{row['high']:.4g})")
+        before, test = d["before"], result.effect_test()
+        p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
+        lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
+                     f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}; "
+                     f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})"
+                     + (" at its cycle starts" if result.tested_loglike not in (None, result.loglike) else ""))
+    lines += [f"note: {n}" for n in d["notes"]]
+    lines += [f"warning: {w}" for w in d["warnings"]]
+    return "\n".join(lines)
+
+
+def _unit(unit: str) -> str:
+    """A unit as printed after a value: `` Hz``, nothing for a dimensionless one (``"-"``)."""
+    return "" if unit in ("-", "") else f" {unit}"
