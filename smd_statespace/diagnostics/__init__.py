@@ -10,6 +10,19 @@ module                  what it holds
                         and rank them (per-cycle identification)
 :mod:`.applicability`   :func:`check_bouncing`: is the record bouncing at all
                         (refusals and warnings in words)
+:mod:`.spectra`         Welch spectra, their degrees of freedom, peaks above
+                        a false-alarm threshold with harmonic labels
+:mod:`.correlation`     correlations of the residual with candidate terms,
+                        over lags
+:mod:`.phase`           phase-locked averages and the phase profile
+:mod:`.subspace`        what a cycle's free force and initial state absorb
+:mod:`.residual_tests`  Ljung-Box, Jarque-Bera, variance change, pooled ACF
+:mod:`.free_simulation` the model run free from a fitted initial state
+:mod:`.cycles`          the checked series, cycle by cycle
+:mod:`.fit`             fit % and RMS
+:mod:`.report`          the check's summary text
+:mod:`.effect_adapter`  what the diagnosis asks of an effect (candidate,
+                        score terms, notes), with defaults
 ======================= ======================================================
 
 The record-level diagnosis is :mod:`smd_statespace.person.diagnose`.

@@ -11,7 +11,7 @@ what the residual cannot say about a floor):
 ======================= ========================= ===============================================
 function                protocol                  default
 ======================= ========================= ===============================================
-:func:`candidate`       :class:`Candidate`        the effect with its default options
+:func:`candidate`       :class:`CandidateSetup`        the effect with its default options
 :func:`score_terms`     (none: derived)           derivative of the acceleration in each parameter
 :func:`diagnosis_notes` :class:`DiagnosisNotes`   none
 ======================= ========================= ===============================================
@@ -29,11 +29,11 @@ if TYPE_CHECKING:  # annotations only
     from ..model import CycleInputs, Effect, SMDModel
     from .check import ModelCheck
 
-__all__ = ["Candidate", "DiagnosisNotes", "candidate", "diagnosis_notes", "score_terms"]
+__all__ = ["CandidateSetup", "DiagnosisNotes", "candidate", "diagnosis_notes", "score_terms"]
 
 
 @runtime_checkable
-class Candidate(Protocol):
+class CandidateSetup(Protocol):
     """An effect class that configures itself as a candidate for a record (a floor mode at a residual's line)."""
 
     def candidate(self, check: "ModelCheck") -> "Effect | None":
@@ -54,7 +54,7 @@ def candidate(effect_class: type, check: "ModelCheck") -> "Effect | None":
     ``check`` is the :class:`~smd_statespace.diagnostics.ModelCheck` of the
     model without it. Default: the effect with its default options.
     """
-    return effect_class.candidate(check) if isinstance(effect_class, Candidate) else effect_class()
+    return effect_class.candidate(check) if isinstance(effect_class, CandidateSetup) else effect_class()
 
 
 def diagnosis_notes(effect_class: type, base: "ModelCheck", judged: list) -> list:
