@@ -528,7 +528,3 @@ class SMDModel:
         for i in range(1, self.n_harmonics + 1):
             out[f"blf_{i}"] = blf(x[..., self.index(f"a{i}")], x[..., self.index(f"b{i}")])
         return out
-
-
-def _width(where: slice) -> int:
-    return where.stop - where.start
