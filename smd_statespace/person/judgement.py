@@ -16,7 +16,7 @@ import numpy as np
 
 __all__ = ["DETERMINED_FRACTION", "F_B_COINCIDENCE", "MISFIT_SHARE", "PRIOR_SD", "VARIATION_AIC_CLOSE",
            "VARIATION_DISAGREEMENT", "WHITENESS_ALPHA", "XI_H_RESONANCE_MIMIC", "mimicked_harmonic",
-           "stands_in_for_force"]
+           "plausible_variations", "stands_in_for_force", "variation_disagreement"]
 
 PRIOR_SD = {"f_h": 3.0 / np.sqrt(12.0), "xi_h": 1.0 / np.sqrt(12.0)}
 """Yardstick widths: the sd of the article's uniform initial ranges (``f_h`` 1-4 Hz, ``xi_h`` 0-1)."""
@@ -97,3 +97,37 @@ def stands_in_for_force(f_h, xi_h, f_b, n_harmonics, variation) -> bool:
     with the smooth variation, or a mimicked harmonic (:func:`mimicked_harmonic`) with any."""
     near = abs(f_h / f_b - 1.0) < F_B_COINCIDENCE
     return (near and variation == "smooth") or mimicked_harmonic(f_h, xi_h, f_b, n_harmonics) > 0
+
+
+def variation_disagreement(result) -> str:
+    """In words, when variation models fitted at the final cycle starts that the record cannot rule out (AIC
+    within :data:`VARIATION_AIC_CLOSE` of the best) put ``f_h`` more than :data:`VARIATION_DISAGREEMENT` apart
+    (empty otherwise): the answer then depends on how the force is assumed to vary."""
+    rows = result.plausible_variations()
+    if len(rows) < 2:
+        return ""
+    values = [row["f_h"] for row in rows]
+    if max(values) <= (1.0 + VARIATION_DISAGREEMENT) * min(values):
+        return ""
+    best = min(row["aic"] for row in rows)
+    parts = ", ".join(f"{row['variation']} {row['f_h']:.3g} Hz (AIC {row['aic'] - best:+.1f})" for row in rows)
+    spans = " (the interval spans them)" if result.interval_method.startswith("calibrated") else ""
+    return (f"the variation models disagree on f_h: {parts}; f_h depends on how the force is assumed to vary "
+            f"between cycles, which the record does not settle{spans}: read the interval, not the value, or "
+            "fix the model with --variation")
+
+
+def plausible_variations(result) -> list:
+    """The variation models' fits at the final cycle starts (rows of the result's ``comparison``) the record cannot
+    rule out: converged, ``f_h`` and ``xi_h`` off their search bounds and not a resonance standing in for
+    the force (as the result's ``at_bouncing_frequency``), AIC within :data:`VARIATION_AIC_CLOSE` of the best of them.
+    For a fit with effects, the fits with the same effects only (none when its cycle starts were kept from
+    the person without them: :func:`~smd_statespace.person.extend.fit_effects` with ``timing=False``)."""
+    specs = [effect.spec for effect in result.effects]
+    f_b = float(np.median(result.model.timing.f_b))
+    rows = [row for row in result.comparison if row.get("timing") == "re-placed" and row["converged"]
+            and row.get("effects", []) == specs
+            and not row["on_bound"] and row["xi_h"] <= 1.0
+            and not stands_in_for_force(row["f_h"], row["xi_h"], f_b, result.model.n_harmonics, row["variation"])]
+    best = min((row["aic"] for row in rows), default=0.0)
+    return [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]

@@ -300,12 +300,24 @@ class RecordModel:
         nominal = {slot.name: abs(slot.nominal) or 1.0 for slot in self.dynamics.parameters}
         return np.array([nominal.get(name, 1.0) for name in self.param_names])
 
+    def position(self, name) -> int:
+        """Where the parameter ``name`` sits in a parameter vector (an :class:`OptionError` naming the valid ones)."""
+        if name not in self.param_names:
+            raise OptionError(f"no parameter {name!r}; the model has {', '.join(self.param_names)}")
+        return self.param_names.index(name)
+
+    def bound(self, name) -> tuple:
+        """Search range ``(low, high)`` of the parameter ``name``."""
+        return tuple(self.bounds[self.position(name)])
+
     def at_bound(self, params, which) -> bool:
-        """True when parameter ``which`` is within 0.1 % of its search range from a bound (not an estimate).
+        """True when parameter ``which`` (a name, or a position in ``params``) is within 0.1 % of its search range
+        from a bound (not an estimate).
 
         A lower end that is a physical limit (:attr:`Slot.limit <smd_statespace.model.Slot>`: a floor's
         damping ratio of 0) does not count: an estimate there is an upper limit of what the record tells.
         """
+        which = self.position(which) if isinstance(which, str) else which
         low, high = self.bounds[which]
         limit = self._limits.get(self.param_names[which], False)
         near_low = params[which] - low < 1e-3 * (high - low) and not limit
@@ -336,7 +348,7 @@ class RecordModel:
 
     def person_at_bound(self, params) -> bool:
         """True when ``f_h`` or ``xi_h`` sits on a search bound."""
-        return self.at_bound(params, 0) or self.at_bound(params, 1)
+        return self.at_bound(params, "f_h") or self.at_bound(params, "xi_h")
 
     def start_params(self, f_h=2.5, xi_h=0.3, log_var=-3.0) -> np.ndarray:
         """A starting point: the given ``f_h``, ``xi_h``, one log variance ratio for every group and,

@@ -17,10 +17,11 @@ __all__ = ["person_warnings", "result_dict", "summary_text", "table_row"]
 def person_warnings(result) -> list:
     """Plain-word warnings: the record's checks, parameters at a bound or not determined, residual tests that reject."""
     out = list(result.record_warnings)
-    for which, name in enumerate(("f_h", "xi_h")):
-        low, high = result.model.bounds[which]
-        value = result.params[which]
-        if result.model.at_bound(result.params, which):
+    named = result.model.unpack(result.params)
+    for name in ("f_h", "xi_h"):
+        low, high = result.model.bound(name)
+        value = named[name]
+        if result.model.at_bound(result.params, name):
             out.append(f"{name} = {value:.3g} sits on its search bound ({low:g}-{high:g}): not an estimate; "
                        "the model may not fit this record (run diagnose)")
         elif name == "f_h" and result.mimicked_harmonic:
@@ -37,7 +38,7 @@ def person_warnings(result) -> list:
         elif result.misfit:
             continue  # said once, with the whiteness test below
         elif not result.determined(name):
-            out.append(f"{name} is not determined by this record (sd {result.se[which]:.3g} against a yardstick "
+            out.append(f"{name} is not determined by this record (sd {result.sd(name):.3g} against a yardstick "
                        f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
     blf = result.template_blf()
     undetermined = [f"BLF{i}" for i in blf.index[~blf["determined"].astype(bool)]]
@@ -76,8 +77,7 @@ def person_warnings(result) -> list:
 
 def result_dict(result) -> dict:
     """Flat JSON-able summary (the content of ``person.json``)."""
-    se = result.se
-    out = {"f_h": result.f_h, "f_h_sd": float(se[0]), "xi_h": result.xi_h, "xi_h_sd": float(se[1])}
+    out = {"f_h": result.f_h, "f_h_sd": result.sd("f_h"), "xi_h": result.xi_h, "xi_h_sd": result.sd("xi_h")}
     for name in ("f_h", "xi_h"):
         low, high = result.intervals[name]
         out[f"{name}_low"], out[f"{name}_high"] = float(low), float(high)
@@ -151,8 +151,7 @@ def table_row(result) -> dict:
     """
     row = {key: value for key, value in result.to_dict().items() if np.isscalar(value)}
     row["warnings"] = " | ".join(result.warnings)
-    reasons = [f"{name} on search bound" for which, name in enumerate(("f_h", "xi_h"))
-               if result.model.at_bound(result.params, which)]
+    reasons = [f"{name} on search bound" for name in ("f_h", "xi_h") if result.model.at_bound(result.params, name)]
     row["implausible"] = bool(reasons)
     row["implausible_reason"] = "; ".join(reasons)
     row["model_adequate"] = bool(row["ljung_box_p"] >= WHITENESS_ALPHA)

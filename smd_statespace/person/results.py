@@ -26,7 +26,7 @@ from scipy import stats
 from .calibration import model_error_floor
 from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, VARIATION_AIC_CLOSE,  # noqa: F401
                         VARIATION_DISAGREEMENT, WHITENESS_ALPHA, XI_H_RESONANCE_MIMIC, mimicked_harmonic,
-                        stands_in_for_force)
+                        plausible_variations, stands_in_for_force, variation_disagreement)
 from .model import RecordModel
 from .report import person_warnings, result_dict, summary_text, table_row
 
@@ -126,6 +126,10 @@ class PersonResult:
         """Standard errors of :attr:`params`."""
         return np.sqrt(np.diag(self.cov))
 
+    def sd(self, name) -> float:
+        """Standard error of the parameter ``name`` (in its unit)."""
+        return float(self.se[self.model.position(name)])
+
     @property
     def sigma(self) -> float:
         """Estimated observation-noise sd of ``GRF / M_h`` (m/s^2)."""
@@ -186,7 +190,8 @@ class PersonResult:
         """:attr:`cov` with the model-error floor of ``f_h`` and ``xi_h`` added, as the intervals have it."""
         cov = np.array(self.cov, dtype=float)
         if self.interval_method.startswith("calibrated"):
-            for which, name in enumerate(("f_h", "xi_h")):
+            for name in ("f_h", "xi_h"):
+                which = self.model.position(name)
                 cov[which, which] += model_error_floor(name, self.f_h, self.model.variation) ** 2
         return cov
 
@@ -254,7 +259,7 @@ class PersonResult:
         if not self.person_widened:
             return None
         (f_low, f_high), (x_low, x_high) = self.intervals["f_h"], self.intervals["xi_h"]
-        f_bounds, x_bounds = (self.model.bounds[self.model.param_names.index(name)] for name in ("f_h", "xi_h"))
+        f_bounds, x_bounds = self.model.bound("f_h"), self.model.bound("xi_h")
         out = []
         for f_h in np.linspace(f_low, f_high, self.BLF_GRID[0]):
             for xi_h in np.unique(np.r_[np.linspace(x_low, x_high, self.BLF_GRID[1]), self.xi_h]):
@@ -289,13 +294,13 @@ class PersonResult:
         """The effects' parameters: value, sd, interval at :attr:`level`, search range, on a bound (SI units)."""
         slots = {slot.name: slot for slot in self.model.dynamics.parameters}
         rows = []
+        named = self.model.unpack(self.params)
         for name in self.model.effect_parameters:
-            which = self.model.param_names.index(name)
-            low, high = self.model.bounds[which]
-            rows.append({"parameter": name, "unit": slots[name].unit, "value": float(self.params[which]),
-                         "sd": float(self.se[which]), "low": float(self.intervals[name][0]),
+            low, high = self.model.bound(name)
+            rows.append({"parameter": name, "unit": slots[name].unit, "value": float(named[name]),
+                         "sd": self.sd(name), "low": float(self.intervals[name][0]),
                          "high": float(self.intervals[name][1]), "range_low": low, "range_high": high,
-                         "on_bound": self.model.at_bound(self.params, which)})
+                         "on_bound": self.model.at_bound(self.params, name)})
         columns = ["parameter", "unit", "value", "sd", "low", "high", "range_low", "range_high", "on_bound"]
         return pd.DataFrame(rows, columns=columns).set_index("parameter")
 
@@ -359,15 +364,15 @@ class PersonResult:
         the estimate is not at a search bound, ``xi_h`` is at most 1 (an over-damped fit has no resonance to
         determine), ``f_h`` is not where a resonance mimics the force (:attr:`at_bouncing_frequency`) and the
         model does not misfit the record (:attr:`misfit`)."""
-        which = {"f_h": 0, "xi_h": 1}[name]
         if name == "f_h" and self.at_bouncing_frequency:
             return False
         if self.misfit:
             return False
         if self.xi_h > 1.0:  # over-damped: no resonance to determine, outside what bouncing people show
             return False
-        return bool(np.isfinite(self.se[which]) and self.se[which] < DETERMINED_FRACTION * PRIOR_SD[name]
-                    and not self.model.at_bound(self.params, which))
+        sd = self.sd(name)
+        return bool(np.isfinite(sd) and sd < DETERMINED_FRACTION * PRIOR_SD[name]
+                    and not self.model.at_bound(self.params, name))
 
     @cached_property
     def misfit_share(self) -> float:
@@ -402,8 +407,7 @@ class PersonResult:
         """True when the estimate of ``f_h`` or ``xi_h`` is an artefact of the fit, not a value the record
         determines poorly: on a search bound, ``xi_h`` over-damped (> 1), or ``f_h`` where a resonance stands in
         for the force (:attr:`at_bouncing_frequency`; a mimicked harmonic takes ``xi_h`` with it)."""
-        which = {"f_h": 0, "xi_h": 1}[name]
-        if self.model.at_bound(self.params, which) or self.xi_h > 1.0:
+        if self.model.at_bound(self.params, name) or self.xi_h > 1.0:
             return True
         return self.at_bouncing_frequency if name == "f_h" else bool(self.mimicked_harmonic)
 
@@ -451,7 +455,8 @@ class PersonResult:
             return {}
 
         mass, f_h, xi_h = self.record.mass, self.f_h, self.xi_h
-        cov = self.cov[:2, :2]
+        person = [self.model.position("f_h"), self.model.position("xi_h")]
+        cov = self.cov[np.ix_(person, person)]
         k = float(k_h(f_h, mass))  # Eq. 17
         c = float(c_h(xi_h, f_h, mass))  # Eq. 18
         gk = np.array([2 * k / f_h, 0.0])
@@ -537,36 +542,14 @@ class PersonResult:
         return person_warnings(self)
 
     def variation_disagreement(self) -> str:
-        """In words, when variation models fitted at the final cycle starts that the record cannot rule out (AIC
-        within :data:`VARIATION_AIC_CLOSE` of the best) put ``f_h`` more than :data:`VARIATION_DISAGREEMENT` apart
-        (empty otherwise): the answer then depends on how the force is assumed to vary."""
-        rows = self.plausible_variations()
-        if len(rows) < 2:
-            return ""
-        values = [row["f_h"] for row in rows]
-        if max(values) <= (1.0 + VARIATION_DISAGREEMENT) * min(values):
-            return ""
-        best = min(row["aic"] for row in rows)
-        parts = ", ".join(f"{row['variation']} {row['f_h']:.3g} Hz (AIC {row['aic'] - best:+.1f})" for row in rows)
-        spans = " (the interval spans them)" if self.interval_method.startswith("calibrated") else ""
-        return (f"the variation models disagree on f_h: {parts}; f_h depends on how the force is assumed to vary "
-                f"between cycles, which the record does not settle{spans}: read the interval, not the value, or "
-                "fix the model with --variation")
+        """In words, when variation models the record cannot rule out disagree on ``f_h`` (empty otherwise;
+        :func:`~smd_statespace.person.judgement.variation_disagreement`)."""
+        return variation_disagreement(self)
 
     def plausible_variations(self) -> list:
-        """The variation models' fits at the final cycle starts (rows of :attr:`comparison`) the record cannot
-        rule out: converged, ``f_h`` and ``xi_h`` off their search bounds and not a resonance standing in for
-        the force (as :attr:`at_bouncing_frequency`), AIC within :data:`VARIATION_AIC_CLOSE` of the best of them.
-        For a fit with effects, the fits with the same effects only (none when its cycle starts were kept from
-        the person without them: :func:`~smd_statespace.person.extend.fit_effects` with ``timing=False``)."""
-        specs = [effect.spec for effect in self.effects]
-        f_b = float(np.median(self.model.timing.f_b))
-        rows = [row for row in self.comparison if row.get("timing") == "re-placed" and row["converged"]
-                and row.get("effects", []) == specs
-                and not row["on_bound"] and row["xi_h"] <= 1.0
-                and not stands_in_for_force(row["f_h"], row["xi_h"], f_b, self.model.n_harmonics, row["variation"])]
-        best = min((row["aic"] for row in rows), default=0.0)
-        return [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]
+        """The variation models' fits the record cannot rule out
+        (:func:`~smd_statespace.person.judgement.plausible_variations`)."""
+        return plausible_variations(self)
 
     def to_dict(self) -> dict:
         """Flat JSON-able summary: the content of ``person.json``
