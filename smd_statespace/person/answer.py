@@ -29,10 +29,9 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     params = fitted["params"]
     cov, free = information(model, params, cov_type)
     factors = CALIBRATION[model.variation]
-    where = {name: model.param_names.index(name) for name in model.param_names}
     if intervals == "calibrated":
         scale = np.ones(params.size)
-        scale[where["f_h"]], scale[where["xi_h"]] = factors["f_h"], factors["xi_h"]
+        scale[model.position("f_h")], scale[model.position("xi_h")] = factors["f_h"], factors["xi_h"]
         cov = cov * np.outer(scale, scale)
     se = dict(zip(model.param_names, np.sqrt(np.diag(cov))))
     named = model.unpack(params)
@@ -40,7 +39,8 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     interval = {}
     for name in ("f_h", "xi_h"):
         if intervals == "profile":
-            interval[name] = profile_interval(model, params, fitted["loglike"], where[name], se[name], level)
+            interval[name] = profile_interval(model, params, fitted["loglike"], model.position(name), se[name],
+                                              level)
         else:
             # the floor widens the interval, not the sd: the sd says what the record determines
             floor = 0.0 if intervals == "wald" else model_error_floor(name, named["f_h"], model.variation)
@@ -101,7 +101,7 @@ def undetermined_interval(result, name) -> tuple:
     flagged as not determined (3 smooth-drift records, 5 pulse trains).
     """
     low, high = result.intervals[name]
-    bounds = dict(zip(result.model.param_names, result.model.bounds))[name]
+    bounds = result.model.bound(name)
     if result.artefact(name):
         return float(bounds[0]), float(bounds[1])
     if result.determined(name):

@@ -76,9 +76,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from ..errors import OptionError
-from ..model import SMDModel
 from .dynamics import _cycle_states
-from .effect_adapter import draw_inputs, force_harmonics
+from .effect_adapter import draw_inputs
 from .force_shape import DEFAULT_BLF, GRF_PHASE_LAG, default_phases, steady_grf_shape  # noqa: F401 (from here too)
 from .generators import GENERATORS
 from .sample import SAMPLE_CSV, SAMPLE_SETTINGS, SAMPLE_TRUTH, sample_path, sample_truth_path  # noqa: F401
@@ -160,8 +159,10 @@ def _with_drawn_inputs(settings, rng):
     drawn = tuple(draw_inputs(effect, rng, settings.duration) for effect in settings.effects)
     if all(new is old for new, old in zip(drawn, settings.effects)):
         return settings
-    dynamic = [effect for effect in drawn if force_harmonics(effect, SMDModel(n_harmonics=1)) is None]
-    system = settings.system.with_drawn_inputs(dynamic) if dynamic else settings.system
+    drawn_for = {id(old): new for old, new in zip(settings.effects, drawn)}
+    system = settings.system  # its effects are the settings' own (those with terms of their own, not harmonics)
+    if system.effects:
+        system = system.with_drawn_inputs([drawn_for[id(effect)] for effect in system.effects])
     return SimpleNamespace(**{**vars(settings), "effects": drawn, "system": system})
 
 
