@@ -22,6 +22,9 @@ module                what it holds
 :mod:`.crowd_forces`  each person's force cycles and GRF, exact or with effects
 :mod:`.floor`         :class:`~.floor.FloorModel` and the exact coupled
                       person-floor response (several floor modes)
+:mod:`.lab`           :func:`~.lab.simulate_lab_record`: a lab's force-plate
+                      export of a whole trial (standing, ramps, a tiring
+                      bout, hum, drift); typical ones drawn over wide ranges
 ===================== ========================================================
 """
 
@@ -30,10 +33,12 @@ from .bouncing import (DEFAULT_BLF, GRF_PHASE_LAG, SAMPLE_SETTINGS, SyntheticRec
 from ..model import acceleration_frf
 from ..effects.excitation import ambient_floor_excitation, ambient_line_count
 from .dynamics import integrate_response
+from .lab import LAB_RANGES, LabRanges, draw_lab_settings, simulate_lab_record, simulate_typical_lab_record
 from .population import MASS_DISTRIBUTION, POPULATION_BOUNDS, sample_population
 
 __all__ = ["VARIATIONS", "SMOOTH_CORRELATION_CYCLES", "DEFAULT_BLF", "GRF_PHASE_LAG", "POPULATION_BOUNDS",
            "MASS_DISTRIBUTION", "SAMPLE_SETTINGS", "SyntheticRecord", "simulate_bouncing", "integrate_response",
            "default_phases", "acceleration_frf", "ambient_floor_excitation", "ambient_line_count", "sample_population",
-           "write_sample", "sample_path", "sample_truth_path"]
+           "write_sample", "sample_path", "sample_truth_path", "simulate_lab_record", "simulate_typical_lab_record",
+           "draw_lab_settings", "LabRanges", "LAB_RANGES"]
 from .variation import SMOOTH_CORRELATION_CYCLES, VARIATIONS
