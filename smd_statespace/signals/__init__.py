@@ -27,6 +27,10 @@ each step can be inspected, tabulated and plotted. A floor acceleration, when
 the record has one, is high-passed and integrated the same way (it drives the
 moving-floor model of Section 6).
 
+A lab's export (standing before and after, ramps, mains hum, a drifting zero) is made ready by
+:mod:`.frontend` (:func:`mains_hum`, :func:`remove_hum`, :func:`find_bouts`, :func:`trim_record`,
+:func:`front_end`).
+
 Modules: :mod:`.decimation` (:func:`decimate_record`, :data:`RECORD_RATE`), :mod:`.filters`
 (Eq. 3, :func:`highpass`, :func:`integrate`, :func:`motion`), :mod:`.cycles` (:func:`find_cycles`,
 :class:`Cycle`), :mod:`.pipeline` (:func:`preprocess`, :class:`Preprocessed`); every public name
@@ -51,7 +55,10 @@ Two numerical facts worth knowing, both measured on synthetic records:
 """
 
 from .cycles import MIN_FORCE_RANGE, PEAK_PROMINENCE, PEAK_SPACING, PERIOD_RATIO_LIMITS, SUPPORTED_FB, Cycle, find_cycles
-from .decimation import RECORD_RATE, check_rate, decimate_record, decimation_note
+from .decimation import GUARD_BAND, RECORD_RATE, check_rate, decimate_record, decimation_note
+from .frontend import (ACTIVE_LEVEL, CONTACT_LEVEL, HUM_HIGHPASS, HUM_WINDOW, LINE_RATIO, MAINS, MIN_BOUT_CYCLES,
+                       STEADY_SWING, Bout, Bouts, FrontEnd, Hum, Span, find_bouts, front_end, mains_hum, remove_hum,
+                       trim_record)
 from .filters import PADDINGS, com_acceleration, highpass, integrate, motion
 from .pipeline import OBSERVATION_CHANNELS, Preprocessed, preprocess
 
@@ -61,6 +68,25 @@ __all__ = [
     "check_rate",
     "decimate_record",
     "decimation_note",
+    "GUARD_BAND",
+    "Hum",
+    "Span",
+    "Bout",
+    "Bouts",
+    "FrontEnd",
+    "mains_hum",
+    "remove_hum",
+    "find_bouts",
+    "trim_record",
+    "front_end",
+    "MAINS",
+    "LINE_RATIO",
+    "HUM_WINDOW",
+    "HUM_HIGHPASS",
+    "ACTIVE_LEVEL",
+    "CONTACT_LEVEL",
+    "STEADY_SWING",
+    "MIN_BOUT_CYCLES",
     "OBSERVATION_CHANNELS",
     "PADDINGS",
     "Cycle",
