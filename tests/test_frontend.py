@@ -139,3 +139,17 @@ def test_front_end_gives_the_steady_part_hum_free_and_decimated():
     assert result.factor == 10 and steady.fs == pytest.approx(100.0)
     assert abs(steady.time[0] - start) < 1 / FB and abs(steady.time[-1] - end) < 1 / FB
     assert result.hum.found and "mains hum at 50.0" in result.hum.describe()
+
+
+def test_a_jump_is_movement_and_flight_not_bouncing():
+    # standing, a countermovement (down, push), 0.5 s of flight, landing, standing: as BMClab's jump1.txt
+    t = np.arange(0.0, 10.0, 1 / 450)
+    weight = MASS * G
+    force = weight * (1 - 0.6 * np.exp(-((t - 3.3) / 0.15) ** 2) + 1.2 * np.exp(-((t - 3.75) / 0.12) ** 2))
+    force[(t > 4.0) & (t < 4.5)] = 0.0
+    force += weight * 2.0 * np.exp(-((t - 4.6) / 0.06) ** 2) * (t >= 4.5)
+    force += np.random.default_rng(10).normal(0.0, 2.0, t.size)
+    bouts = find_bouts(make_record(t, force, MASS * 0.95))
+    kinds = [s.kind for s in bouts.segments]
+    assert not bouts.found and kinds == ["standing", "movement", "no_contact", "movement", "standing"]
+    assert bouts.segments[2].start == pytest.approx(4.0, abs=0.03) and bouts.segments[2].end == pytest.approx(4.5, abs=0.03)

@@ -396,9 +396,9 @@ def _period(x, fs):
         return float("nan"), 0.0
     acf = acf / acf[0]
     peaks, _ = _signal().find_peaks(acf[lo:hi + 1])
-    if peaks.size == 0:
-        return float("nan"), 0.0
     values = acf[lo + peaks]
+    if peaks.size == 0 or values.max() <= 0:  # no peak, or none positive (a single event)
+        return float("nan"), 0.0
     lag = lo + int(peaks[values >= 0.9 * values.max()][0])  # the shortest of the best (not a multiple)
     a, b, c = acf[lag - 1:lag + 2]
     shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
