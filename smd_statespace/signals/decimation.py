@@ -58,13 +58,13 @@ def decimate_record(record: Record, rate=RECORD_RATE, extra=()):
 
     The guard band keeps the new Nyquist frequency empty: 1000 Hz decimated to 100 Hz puts
     50 Hz mains hum on it, where an ideal filter at the Nyquist frequency itself
-    (:func:`scipy.signal.resample`, used before) let it through whole (an RMS of 0.50 per unit
-    amplitude, alternating in sign every sample, ringing at three times the amplitude near the
+    (:func:`scipy.signal.resample`, used before) let it through (an RMS of 0.25 per unit
+    amplitude 3 s in from the ends, alternating in sign every sample, ringing at three times the amplitude near the
     ends). Measured (``benchmarks/frontend_speed.py``, 400 white-noise records of 30 s): a
-guard of 0.1 Hz leaves 0.048 of an exact 50 Hz line and keeps the noise white (Ljung-Box,
-20 lags, rejected at 5 % on 5.0 % of records, 5.5 % without a guard; lag-1 0.001); wider
-guards colour it (0.5 Hz: 22 %, 1 Hz: 90 % rejected). It moves a smooth bouncing force by at
-most 0.09 N 0.3 s in from the ends (0.04 N without it). Hum is therefore removed before decimation
+    guard of 0.1 Hz leaves 0.048 of an exact 50 Hz line and keeps the noise white (Ljung-Box,
+    20 lags, rejected at 5 % on 5.0 % of records, 5.5 % without a guard; lag-1 0.001); wider
+    guards colour it (0.5 Hz: 22 %, 1 Hz: 90 % rejected). It moves a smooth bouncing force by at
+    most 0.09 N 0.3 s in from the ends (0.04 N without it). Hum is therefore removed before decimation
     (:func:`~smd_statespace.signals.remove_hum`); the guard only keeps what is left off the
     Nyquist frequency.
 
