@@ -113,6 +113,22 @@ def test_demo_on_a_simulated_record_shows_its_truth(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "f_h 2.5 Hz, xi_h 0.3" in text and "floor acceleration recorded" in text
     assert (tmp_path / "d" / "pipeline.png").exists()
+    # the record's length and the run time, each named: not "N force cycles, 58 s" for a 30 s record
+    duration = float(pd.read_csv(out)["time"].iloc[-1])
+    assert re.search(rf"force cycles in {duration:.0f} s, fitted in \d+ s", text), text
+
+
+@pytest.mark.slow
+def test_demo_says_when_the_truth_beside_a_record_is_unreadable(tmp_path, capsys):
+    status, out = simulate(tmp_path)
+    assert status == 0
+    beside = out.with_name(f"{out.stem}_truth.json")
+    beside.write_text('{"f_h": 2.5,')  # cut short
+    capsys.readouterr()
+    assert main(["demo", "--record", str(out), "--mass", "70", "--out", str(tmp_path / "d")]) == 0
+    captured = capsys.readouterr()
+    assert f"warning: {beside}: not valid JSON" in captured.err and "without its truth" in captured.err
+    assert "f_h 2.5 Hz, xi_h 0.3" not in captured.out
 
 
 def error_line(capsys):
@@ -249,6 +265,14 @@ def test_identify_writes_results_sidecar_and_figures(short_record, tmp_path, cap
     printed = capsys.readouterr().out
     ok = table[table.status == "ok"]
     assert f"{len(ok)} cycles identified" in printed and "truth" in printed
+
+
+def test_progress_bars_stay_out_of_logs(short_record, tmp_path, capsys):
+    """Without --quiet, a bar is drawn on a terminal only: stderr captured (a log, a pipe) gets no bar lines."""
+    assert main(["identify", str(short_record), "--mass", "66", "--estimator", "ekf", "--max-passes", "1",
+                 "--out", str(tmp_path / "id")]) == 0
+    err = capsys.readouterr().err
+    assert "\r" not in err and "it/s" not in err and "s/it" not in err, err
 
 
 def test_compare_runs_estimators_on_the_same_cycles(short_record, tmp_path, capsys):

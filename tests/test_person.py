@@ -303,8 +303,8 @@ def test_cli_writes_person_json_first_and_refuses_short_records(tmp_path, long_s
     printed = capsys.readouterr().out
     assert printed.splitlines()[1].startswith("person from")
     person = json.loads((tmp_path / "out" / "person.json").read_text())
-    assert 1.0 < person["f_h"] < 6.0
-    assert person["f_h_low"] < person["f_h"] < person["f_h_high"]
+    assert person["f_h"] == pytest.approx(2.8, rel=0.08)  # the truth of long_sim, inside the search bounds 0.5-6
+    assert person["f_h_low"] < 2.8 < person["f_h_high"] and person["f_h_high"] - person["f_h_low"] < 1.0
     assert (tmp_path / "out" / "person_fit.png").stat().st_size > 10_000
     short = simulate_bouncing(mass=70, f_b=2.0, f_h=2.5, xi_h=0.3, duration=3, seed=2)
     short.write(tmp_path / "short.csv")
@@ -639,3 +639,22 @@ def test_parameters_by_name_round_trip_and_refuse_in_words(short_sim):
         model.pack({k: v for k, v in named.items() if k != "xi_h"})
     with pytest.raises(OptionError, match=f"{len(params)} values expected"):
         model.unpack(params[:-1])
+
+
+def test_the_coverage_compare_prints_is_the_one_measured_with_the_shipped_calibration():
+    """``compare`` shows the record-level model's coverage as measured: it must be the share of the benchmark's rows
+    (fresh records fitted with the shipped calibration) whose interval held the truth, not an older run's."""
+    from pathlib import Path
+
+    from smd_statespace.cli.compare import MEASURED_COVERAGE
+    from smd_statespace.person.calibration import CALIBRATION
+
+    rows = pd.concat([pd.read_csv(path) for path in
+                      sorted((Path(__file__).parents[1] / "benchmarks" / "results").glob("person_accuracy_seed2029*.csv"))])
+    fitted = rows[rows["error"].isna()]
+    assert len(fitted) == 154
+    assert MEASURED_COVERAGE["record"] == round(100 * fitted["f_h_covered"].mean())
+    # the rows were fitted with today's factors: their sd of f_h is the raw one times the shipped factor
+    for variation, group in fitted.groupby("variation"):
+        factor = (group["f_h_se"] / group["f_h_raw_se"]).median()
+        assert factor == pytest.approx(CALIBRATION[variation]["f_h"], rel=1e-6)

@@ -7,6 +7,7 @@ first on a record simulated with it and the error falls when it is added.
 """
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -114,7 +115,70 @@ def test_the_crowd_knows_the_effect(quadratic_damping):
     people = exact.forces.columns[1:-1]
     assert np.abs(zero.forces[people] - exact.forces[people]).to_numpy().max() < 1e-5  # N, ODE vs exact solution
     assert np.abs(damped.forces[people] - exact.forces[people]).to_numpy().max() > 5.0
-    assert damped.settings["effects"] == ["quadratic_damping"]
+    assert damped.settings["effects"] == ["quadratic_damping:c_q=8"]  # the truth every person had, as a spec
+    assert make_effect(damped.settings["effects"][0]).values == {"c_q": 8.0}
+
+
+@pytest.mark.parametrize("spec", [
+    "harmonics", "harmonics:count=3", "harmonics:count=2,blf=0.04/0.03,phases=0.1/2.5,a5=0.012",
+    "cubic_stiffness", "cubic_stiffness:beta_range=-500/750.25,beta_3=412.123456789",
+    "floor_mode", "floor_mode:source=modal,f_f=3.2", "floor_mode:frequency=3.48,damping=0.02,modal_mass=8583",
+    "floor_mode:frequency_range=2/9,noise=0.1,ambient=0.01",
+    "quadratic_damping", "quadratic_damping:c_q_max=10", "quadratic_damping:c_q_max=12.5,c_q=0.1",
+])
+def test_an_effect_round_trips_through_its_spec(quadratic_damping, spec):
+    """make_effect(e.spec) builds the same effect: the same options, the same known values; a user's effect written
+    as docs/effects.md shows (no spec of its own) too."""
+    effect = make_effect(spec)
+    again = make_effect(effect.spec)
+    assert type(again) is type(effect) and again.spec == effect.spec and again.values == effect.values
+    same = {key: value for key, value in vars(effect).items() if not key.startswith("_")}
+    assert {key: value for key, value in vars(again).items() if not key.startswith("_")}.keys() == same.keys()
+    for key, value in same.items():
+        assert np.array_equal(np.asarray(getattr(again, key), dtype=object), np.asarray(value, dtype=object)), key
+    twin = effect.with_values(**{name: 0.3125 for name in list(effect.values)[:1]})
+    assert make_effect(twin.spec).values == twin.values
+
+
+def test_an_option_a_spec_cannot_carry_is_refused_in_words():
+    from smd_statespace.model import Effect
+
+    class Labelled(Effect):
+        name = "labelled"
+
+        def __init__(self, label="knee", stiff=False):
+            self.label, self.stiff = label, stiff
+
+    assert Labelled("hip", stiff=True).spec == "labelled:label=hip,stiff=true" and Labelled().spec == "labelled"
+    with pytest.raises(Exception, match=r"option label='a,b' cannot be written in a spec"):
+        Labelled(label="a,b").spec  # noqa: B018 - the property raises
+
+
+def test_effects_file_is_accepted_after_the_command_too(tmp_path, capsys):
+    source = tmp_path / "my_effects.py"
+    source.write_text(EFFECT_SOURCE)
+    try:
+        assert main(["simulate", "--effects", str(source), "--out", str(tmp_path / "rec.csv"), "--mass", "70",
+                     "--fb", "2", "--fh", "2.5", "--xi", "0.3", "--duration", "8", "--seed", "1",
+                     "--effect", "quadratic_damping:c_q=7"]) == 0, capsys.readouterr().err
+        assert json.loads((tmp_path / "rec_truth.json").read_text())["effects"] == {"quadratic_damping": {"c_q": 7.0}}
+    finally:
+        EFFECTS.pop("quadratic_damping", None)
+
+
+def test_an_effect_of_the_wrong_shape_is_told_which_shape(tmp_path, capsys):
+    source = tmp_path / "bad_effects.py"
+    source.write_text(EFFECT_SOURCE.replace('name = "quadratic_damping"', 'name = "flat_damping"').replace(
+        "return -model.value(x, \"c_q\") * rate * np.abs(rate)",
+        "return (-model.value(x, \"c_q\") * rate * np.abs(rate))[..., None]"))
+    try:
+        assert main(["--effects", str(source), "simulate", "--out", str(tmp_path / "rec.csv"), "--mass", "70",
+                     "--fb", "2", "--fh", "2.5", "--xi", "0.3", "--duration", "4", "--effect", "flat_damping"]) == 2
+    finally:
+        EFFECTS.pop("flat_damping", None)
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert re.search(r"effect 'flat_damping': acceleration returned shape \(\d*,? ?1\), expected \(\d*,?\)", err), err
 
 
 @pytest.mark.slow
@@ -135,3 +199,37 @@ def test_diagnose_ranks_the_users_effect_first_and_the_error_falls(quadratic_dam
     assert abs(row["f_h"] / 2.5 - 1) <= abs(row["f_h_before"] / 2.5 - 1) + 0.01  # the person's error does not grow
     c_q = result.fits["quadratic_damping"].effect_estimates().loc["c_q"]
     assert c_q["value"] > 2 * c_q["sd"] and c_q["low"] <= 8.0 <= c_q["high"]  # the truth: c_q 8 1/m
+
+
+@pytest.mark.slow
+def test_the_loop_carries_the_users_effect_with_its_options(tmp_path, capsys):
+    """diagnose (--effects after the command) proposes the candidate with the options it was fitted with; the next:
+    command it prints runs as printed, person.json keeps the spec, and the printed likelihood ratio is the one of
+    the two printed log-likelihoods, on the unknowns the effect added (c_q: one)."""
+    import shlex
+
+    source = tmp_path / "my_effects.py"
+    source.write_text(EFFECT_SOURCE)
+    record = tmp_path / "rec.csv"
+    try:
+        assert main(["simulate", "--effects", str(source), "--out", str(record), "--mass", "70", "--fb", "2",
+                     "--fh", "2.5", "--xi", "0.3", "--duration", "20", "--seed", "3",
+                     "--effect", "quadratic_damping:c_q=8"]) == 0
+        assert main(["diagnose", str(record), "--mass", "70", "--effects", str(source), "--quiet",
+                     "--candidate", "quadratic_damping:c_q_max=15", "--out", str(tmp_path / "d")]) == 0
+        printed = capsys.readouterr().out
+        command = next(line for line in printed.splitlines() if line.startswith("next: "))
+        assert "--effect quadratic_damping:c_q_max=15" in command and f"--effects {source}" in command
+        argv = shlex.split(command[len("next: smd-statespace "):]) + ["--quiet", "--out", str(tmp_path / "id")]
+        assert main(argv) == 0
+    finally:
+        EFFECTS.pop("quadratic_damping", None)
+    printed = capsys.readouterr().out
+    person = json.loads((tmp_path / "id" / "person.json").read_text())
+    assert person["effects"] == ["quadratic_damping:c_q_max=15"]
+    line = next(line for line in printed.splitlines() if "without the effect(s)" in line)
+    before = float(re.search(r"without the effect\(s\):.*?log-likelihood (-?[\d.]+)", line).group(1))
+    tested = float(re.search(r"with them at its cycle starts and variation model: log-likelihood (-?[\d.]+)",
+                             line).group(1)) if "with them at" in line else person["log_likelihood"]
+    lr, df = re.search(r"likelihood ratio (-?[\d.]+) on (\d+) parameter", line).groups()
+    assert float(lr) == pytest.approx(2 * (tested - before), abs=0.2) and int(df) == person["lr_df"] == 1

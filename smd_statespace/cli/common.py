@@ -107,10 +107,18 @@ def load_record(path, mass):
         raise OptionError(f"--record {path}: give the body mass with --mass KG")
     record = read_record(path, mass)
     beside = Path(path).with_name(f"{Path(path).stem}_truth.json")
+    if not beside.is_file():
+        return record, None
     try:
         truth = json.loads(beside.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        truth = None
+    except (OSError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) else f"not valid JSON ({exc})"
+        print(f"warning: {beside}: {reason}; the record is shown without its truth", file=sys.stderr)
+        return record, None
+    if not isinstance(truth, dict):
+        print(f"warning: {beside}: not a truth file (a JSON object as simulate writes); the record is shown without "
+              "its truth", file=sys.stderr)
+        return record, None
     return record, truth
 
 

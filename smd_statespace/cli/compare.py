@@ -17,14 +17,17 @@ DEFAULT_ESTIMATORS = "record,ekf,grid"
 filter (the UKF costs 7 times more for the same accuracy) and the exact grid, the only per-cycle
 estimator whose intervals cover; the article's pf on request (its intervals cover 3 %)."""
 
-RECORD_COVERAGE = 88
-"""Coverage (%) of the record-level model's calibrated 90 % interval of ``f_h`` on fresh seeds
-(docs/person-benchmark.md: seed 99, 25 + 25 records of the two generators; 84 % and 92 %)."""
+RECORD_COVERAGE = 96
+"""Coverage (%) of the record-level model's calibrated 90 % interval of ``f_h`` on fresh records, with the
+shipped calibration (:data:`~smd_statespace.person.calibration.CALIBRATION`): 148 of 154 records of seed 2029,
+16 people per generator of force variation (five) and noise level (0.3 and 1 % BW), 6 failed fits left out
+(docs/person-calibration.md, "On fresh records"; rows in ``benchmarks/results/person_accuracy_seed2029*.csv``,
+which ``tests/test_person.py`` recomputes it from)."""
 
 MEASURED_COVERAGE = {"pf": 3, "rbpf": 33, "ukf": 72, "ekf": 67, "grid": 97, "record": RECORD_COVERAGE}
 """Coverage (%) of the nominal 90 % interval of ``f_h`` measured on simulated records: per-cycle
 estimators in docs/benchmarks.md (60 cycles, seed 2019), the record-level model in
-docs/person-benchmark.md (:data:`RECORD_COVERAGE`)."""
+docs/person-calibration.md (:data:`RECORD_COVERAGE`)."""
 
 COVERAGE_OK = 85
 """Below this measured coverage (%) of a 90 % interval, a row is marked over-confident."""

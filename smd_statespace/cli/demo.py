@@ -191,8 +191,8 @@ def demo_person_section(record, out_dir, truth):
     directory = Path(out_dir) / "person"
     directory.mkdir(parents=True, exist_ok=True)
     written = write_person(directory, result, {"variation": "auto", "timing": "model"}, truth=known or None)
-    lines = [f"  identify_person(record): one f_h and xi_h for the whole record, {result.n_cycles} force cycles, "
-             f"{seconds:.0f} s", _rows(rows)]
+    lines = [f"  identify_person(record): one f_h and xi_h from the whole record, {result.n_cycles} force cycles in "
+             f"{result.record.duration:.0f} s, fitted in {seconds:.0f} s", _rows(rows)]
     lines += [f"  warning: {text}" for text in d["warnings"]]
     lines += [f"  wrote {directory / 'person.json'} and {len(written) - 1} more files (person_fit.png, ...)"]
     return _heading("The person, from the whole record (identify's default)") + "\n" + "\n".join(lines)

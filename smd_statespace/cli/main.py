@@ -84,6 +84,10 @@ COMMANDS = [
 """``(add, run)`` pairs, one per subcommand, in the order ``--help`` lists them."""
 
 
+EFFECTS_HELP = ("a Python file that registers physical effects (@register_effect), repeatable, before or after the "
+                "command; the command then knows them by name")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every subcommand of :data:`COMMANDS`."""
     parser = _Parser(
@@ -92,12 +96,15 @@ def build_parser() -> argparse.ArgumentParser:
                     "(Wang, Chen & Nagayama, J. Sound Vib. 456, 2019).",
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    parser.add_argument("--effects", action="append", default=[], metavar="FILE.py",
-                        help="a Python file that registers physical effects (@register_effect), repeatable; "
-                             "every command then knows them by name")
+    parser.add_argument("--effects", action="append", default=[], metavar="FILE.py", help=EFFECTS_HELP)
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for add, run in COMMANDS:
-        add(subparsers).set_defaults(run=run)
+        command = add(subparsers)
+        # the same option after the command (its own destination: a subcommand's default would overwrite the
+        # value given before the command); main joins the two lists
+        command.add_argument("--effects", action="append", default=[], dest="command_effects", metavar="FILE.py",
+                             help=EFFECTS_HELP)
+        command.set_defaults(run=run)
     return parser
 
 
@@ -114,6 +121,7 @@ def main(argv=None) -> int:
     if args.command is None:
         names = ", ".join(choice for choice in parser._subparsers._group_actions[0].choices)
         return _fail(f"choose a command: {names} (see '{PROG} --help')")
+    args.effects = [*args.effects, *getattr(args, "command_effects", [])]
     try:
         load_installed_effects()
         for path in args.effects:

@@ -7,7 +7,6 @@ import numpy as np
 from ..errors import check_range
 from ..model.core import F_H, TWO_PI, U, Slot
 from ..model.effect import Effect
-from .options import spec_value, with_values_spec
 
 __all__ = ["CubicStiffness"]
 
@@ -71,10 +70,6 @@ class CubicStiffness(Effect):
         rms = float(np.sqrt(np.mean(displacement**2)))
         bound = 1000.0 if rms <= 0 else max(1000.0, 100.0 * np.ceil(cls.STIFFNESS_CHANGE / (3 * rms**2) / 100.0))
         return cls(beta_range=(-bound, bound))
-
-    @property
-    def spec(self) -> str:
-        return with_values_spec(f"{self.name}:beta_range={spec_value(self.beta_range)}", self)
 
     def __repr__(self):
         return f"CubicStiffness(beta_range={self.beta_range})"

@@ -9,9 +9,9 @@ import numpy as np
 from .. import article
 from ..errors import OptionError, check_range
 from ..model.core import F_H, TWO_PI, XI_H, Slot
-from ..model.effect import Effect, slot_count
+from ..model.effect import Effect, slot_count, spec_value
 from .excitation import ambient_floor_excitation, ambient_line_count
-from .options import nonnegative, positive, spec_value
+from .options import nonnegative, positive
 
 __all__ = ["FloorMode"]
 
@@ -561,10 +561,13 @@ class FloorMode(Effect):
 
     @property
     def spec(self) -> str:
+        """The floor's source, the options given and the known values they do not imply (``make_effect`` reads it)."""
         given = {**self.given, **self.simulation_given}
+        implied = type(self)(source=self.source, **given).values
+        given.update({key: value for key, value in self.values.items() if implied.get(key) != value})
         if not given:
             return self.name if not self.modal else f"{self.name}:source=modal"
-        options = ",".join(f"{key}={spec_value(value)}" for key, value in given.items())
+        options = ",".join(f"{key}={spec_value(value, self.name, key)}" for key, value in given.items())
         return f"{self.name}:source={self.source},{options}"
 
     def __repr__(self):

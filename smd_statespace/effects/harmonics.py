@@ -8,7 +8,7 @@ from ..errors import OptionError
 from ..io import G
 from ..model.core import Slot
 from ..model.effect import Effect
-from .options import numbers, spec_value, with_values_spec
+from .options import numbers
 
 __all__ = ["Harmonics"]
 
@@ -100,14 +100,6 @@ class Harmonics(Effect):
         """The simulated extra harmonics' amplitudes (g) and phases (rad, None for the simulator's default)."""
         return {"blf": list(self.blf or self.DEFAULT_BLF[:self.count]),
                 "phases": None if self.phases is None else list(self.phases)}
-
-    @property
-    def spec(self) -> str:
-        options = f"count={self.count}"
-        for key in ("blf", "phases"):
-            if getattr(self, key) is not None:
-                options += f",{key}={spec_value(getattr(self, key))}"
-        return with_values_spec(f"{self.name}:{options}", self)
 
     def __repr__(self):
         return f"Harmonics(count={self.count})"

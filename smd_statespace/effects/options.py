@@ -1,19 +1,10 @@
-"""Option checks and spec text shared by the built-in effects (numbers, ranges, ``key=value`` values)."""
+"""Option checks shared by the built-in effects (numbers, ranges, non-negative and positive values)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import OptionError
-
-
-def with_values_spec(spec: str, effect) -> str:
-    """``spec`` with the effect's known values appended (``key=value`` in the same spec)."""
-    values = effect.values
-    if not values:
-        return spec
-    glue = "," if ":" in spec else ":"
-    return spec + glue + ",".join(f"{key}={spec_value(value)}" for key, value in values.items())
 
 
 def numbers(value, label, where):
@@ -36,13 +27,6 @@ def nonnegative(value, label, where):
     if not (np.isfinite(number) and number >= 0):
         raise OptionError(f"{where}: {label} must be a number >= 0, got {value!r}")
     return number
-
-
-def spec_value(value) -> str:
-    """An option value as ``make_effect`` reads it (pairs as ``low/high``)."""
-    if isinstance(value, (tuple, list)):
-        return "/".join(spec_value(v) for v in value)
-    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def positive(value, label, where):

@@ -114,6 +114,9 @@ def _parse_value(text):
     if "/" in text or ";" in text:
         parts = [p for p in text.replace(";", "/").split("/") if p]
         return tuple(_parse_value(p) for p in parts)
+    words = {"true": True, "false": False, "none": None}
+    if text.lower() in words:
+        return words[text.lower()]
     try:
         number = float(text)
     except ValueError:
@@ -124,8 +127,10 @@ def _parse_value(text):
 def parse_spec(spec, option="--effect") -> tuple:
     """Parse ``NAME[:key=value,key=value]`` into ``(name, {key: value})``: the one parser of effect specs.
 
-    Values are numbers (integers stay integers), tuples written ``a/b``, or
-    words. The effect's own code checks names, keys and kinds of values.
+    Values are numbers (integers stay integers), tuples written ``a/b``,
+    ``true``/``false``/``none``, or words: what :attr:`Effect.spec
+    <smd_statespace.model.Effect.spec>` writes. The effect's own code checks
+    names, keys and kinds of values.
 
     Examples
     --------

@@ -43,11 +43,11 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
 from .. import __version__
 from ..errors import OptionError, RecordError, SMDInputError
 from ..io import check_mass
+from ..progress import tqdm
 from .plausibility import implausible_ok
 from .runner import DEFAULT_ESTIMATOR
 

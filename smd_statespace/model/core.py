@@ -156,6 +156,18 @@ class SMDModel:
         self.channels = OBSERVATIONS[observation]
         self.n_obs = len(self.channels)
         self.requires = tuple(sorted({name for effect in self.effects for name in effect.requires}))
+        if self.effects:
+            self._probe_effects()
+
+    def _probe_effects(self):
+        """Run the effects' terms once, on two states at the slots' nominal magnitudes: an effect whose arrays have
+        the wrong shape is refused here, naming the effect, the method and both shapes, before any command runs."""
+        magnitudes = np.array([0.01 if slot.nominal is None else slot.nominal for slot in self.slots])
+        x = np.stack([magnitudes, 0.5 * magnitudes])
+        inputs = CycleInputs(f_b=2.0, time=np.array([0.0, 1.0]),
+                             signals={name: np.zeros(2) for name in self.requires})
+        self.rate(x, 0.0, inputs)
+        self.rate_jacobian(x, 0.0, inputs)
 
     @staticmethod
     def _check_options(n_harmonics, discretisation, observation, substeps, process_noise, observation_noise):
@@ -346,7 +358,7 @@ class SMDModel:
         u, v = x[..., U], x[..., U_DOT]
         acc = smd_acceleration(u, v, x[..., F_H], x[..., XI_H], self.force(x, t, inputs))  # Eq. 2, Eq. 10
         for effect in self.effects:
-            acc = acc + effect.acceleration(self, x, t, inputs)
+            acc = acc + _checked_shape(effect.acceleration(self, x, t, inputs), acc.shape, effect, "acceleration")
         return acc
 
     def acceleration_jacobian(self, x, t, inputs: CycleInputs):
@@ -363,7 +375,8 @@ class SMDModel:
         start = self._index["a0"]
         jac[..., start:start + 1 + 2 * self.n_harmonics] = G * self.fourier_basis(t, inputs)
         for effect in self.effects:
-            jac = jac + effect.acceleration_jacobian(self, x, t, inputs)
+            jac = jac + _checked_shape(effect.acceleration_jacobian(self, x, t, inputs), jac.shape, effect,
+                                       "acceleration_jacobian")
         return jac
 
     def rate(self, x, t, inputs: CycleInputs):
@@ -379,7 +392,8 @@ class SMDModel:
         rate[..., U_DOT] = acc
         for effect, where in zip(self.effects, self._effect_slices):
             if where.stop > where.start:
-                rate[..., where] = effect.slot_rates(self, x, t, inputs, acc)
+                rate[..., where] = _checked_shape(effect.slot_rates(self, x, t, inputs, acc), rate[..., where].shape,
+                                                  effect, "slot_rates")
         return rate
 
     def rate_jacobian(self, x, t, inputs: CycleInputs):
@@ -528,3 +542,23 @@ class SMDModel:
         for i in range(1, self.n_harmonics + 1):
             out[f"blf_{i}"] = blf(x[..., self.index(f"a{i}")], x[..., self.index(f"b{i}")])
         return out
+
+
+_SHAPE_RULES = {"acceleration": "x.shape[:-1], one value per state",
+                "acceleration_jacobian": "x.shape, one row of derivatives per state",
+                "slot_rates": "x.shape[:-1] + (the effect's slot count,)"}
+
+
+def _checked_shape(term, expected, effect, method):
+    """``term`` as an array that broadcasts to ``expected`` without changing it, or an :class:`OptionError` naming the
+    effect, the method and both shapes (a wrong shape would broadcast into a wrong model, or fail far from its cause).
+    """
+    term = np.asarray(term, dtype=float)
+    try:
+        fits = np.broadcast_shapes(term.shape, tuple(expected)) == tuple(expected)  # a known constant's scalar fits
+    except ValueError:
+        fits = False
+    if not fits:
+        raise OptionError(f"effect {effect.name!r}: {method} returned shape {term.shape}, expected {tuple(expected)} "
+                          f"({_SHAPE_RULES[method]})")
+    return term

@@ -24,6 +24,7 @@ An effect is immutable: its methods return new objects (:meth:`Effect.with_value
 from __future__ import annotations
 
 import copy
+import inspect
 from typing import TYPE_CHECKING, Mapping, Protocol, runtime_checkable
 
 import numpy as np
@@ -33,7 +34,7 @@ from ..errors import OptionError
 if TYPE_CHECKING:  # annotations only
     from .core import CycleInputs, SMDModel, Slot
 
-__all__ = ["Effect", "FloorMotion", "HarmonicOrders", "slot_count"]
+__all__ = ["Effect", "FloorMotion", "HarmonicOrders", "slot_count", "spec_value"]
 
 
 class Effect:
@@ -91,6 +92,17 @@ class Effect:
     simulation_defaults: Mapping[str, float] = {}
     """Typical true values of the effect's parameter slots (by slot name), used by the simulator when not given."""
 
+    def __new__(cls, *args, **kwargs):
+        # the options the effect was built with, so that spec can write them and make_effect read them back
+        effect = super().__new__(cls)
+        effect._options = _given_options(cls, args, kwargs)
+        return effect
+
+    @property
+    def options(self) -> dict:
+        """The options this effect was built with (its constructor's arguments that differ from their defaults)."""
+        return dict(self.__dict__.get("_options", {}))
+
     @property
     def values(self) -> dict:
         """Known values of the effect's parameter slots (slot name to value, SI units); default none."""
@@ -129,8 +141,23 @@ class Effect:
 
     @property
     def spec(self) -> str:
-        """The ``--effect`` text that builds this effect again (``NAME[:key=value,...]``)."""
-        return self.name
+        """The ``--effect`` text that builds this effect again (``NAME[:key=value,...]``).
+
+        Its :attr:`options` and its known :attr:`values`, so that
+        ``make_effect(effect.spec)`` builds the same effect: what ``person.json``,
+        ``run.json`` and the commands ``diagnose`` prints carry. A subclass
+        need not write its own.
+
+        Examples
+        --------
+        >>> from smd_statespace.effects import CubicStiffness
+        >>> CubicStiffness(beta_range=(-500, 500)).with_values(beta_3=412.5).spec
+        'cubic_stiffness:beta_range=-500/500,beta_3=412.5'
+        """
+        given = {**self.options, **self.values}
+        if not given:
+            return self.name
+        return f"{self.name}:" + ",".join(f"{key}={spec_value(value, self.name, key)}" for key, value in given.items())
 
     def slots(self, model: "SMDModel") -> tuple[Slot, ...]:
         """State slots the effect adds (default: none).
@@ -189,7 +216,7 @@ class Effect:
         return in_x + in_acc[..., :, None] * np.asarray(acc_jacobian)[..., None, :]
 
     def __repr__(self):
-        return f"{type(self).__name__}()"
+        return f"{type(self).__name__}({', '.join(f'{key}={value!r}' for key, value in self.options.items())})"
 
 
 @runtime_checkable
@@ -217,3 +244,63 @@ def slot_count(model, effect) -> int:
     """Number of state slots ``effect`` has in ``model`` (its known parameters left out)."""
     where = model.effect_slice(effect)
     return where.stop - where.start
+
+
+def _given_options(cls, args, kwargs) -> dict:
+    """The constructor arguments of ``cls`` in ``args``/``kwargs`` that differ from their defaults, by name.
+
+    Empty when they do not bind (the constructor itself then raises its ``TypeError``).
+    """
+    try:
+        bound = inspect.signature(cls.__init__).bind(None, *args, **kwargs)
+    except TypeError:
+        return {}
+    parameters = inspect.signature(cls.__init__).parameters
+    given = {}
+    for key, value in list(bound.arguments.items())[1:]:
+        kind = parameters[key].kind
+        if kind == inspect.Parameter.VAR_KEYWORD:
+            given.update(value)
+        elif kind != inspect.Parameter.VAR_POSITIONAL and not _same(value, parameters[key].default):
+            given[key] = value
+    return given
+
+
+def _same(value, default) -> bool:
+    """Whether an option's value is its default (numbers and sequences compared by value)."""
+    if default is inspect.Parameter.empty:
+        return False
+    try:
+        return bool(np.array_equal(np.asarray(value, dtype=object), np.asarray(default, dtype=object)))
+    except (TypeError, ValueError):
+        return value is default
+
+
+def spec_value(value, name="effect", key="option") -> str:
+    """An option's value as ``make_effect`` reads it back: numbers exactly, pairs as ``low/high``, words.
+
+    Floats are written as short as reading them back allows (``3.48``, not ``3.4800000000000004``).
+
+    Examples
+    --------
+    >>> spec_value((-500.0, 500.0)), spec_value(0.1 + 0.2), spec_value(True)
+    ('-500/500', '0.30000000000000004', 'true')
+    """
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, (tuple, list)):
+        return "/".join(spec_value(v, name, key) for v in value)
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if value is None:
+        return "none"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        short = f"{float(value):g}"
+        return short if float(short) == float(value) else repr(float(value))
+    text = str(value)
+    if not text or any(mark in text for mark in ",:=/;") or text != text.strip():
+        raise OptionError(f"effect {name!r}: option {key}={value!r} cannot be written in a spec (NAME:key=value): "
+                          "use numbers, number pairs or single words")
+    return text

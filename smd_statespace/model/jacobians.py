@@ -65,6 +65,8 @@ def numeric_jacobian(func, x):
     plus = np.asarray(func(x[..., None, :] + shift), dtype=float)
     minus = np.asarray(func(x[..., None, :] - shift), dtype=float)
     difference = plus - minus
+    if difference.ndim < x.ndim:  # a scalar function that returned one value for every state (a known constant's)
+        difference = np.broadcast_to(difference, x.shape)
     if difference.ndim == x.ndim:  # scalar function: (..., n)
         return difference / (2.0 * step)
     return np.swapaxes(difference, -1, -2) / (2.0 * step[..., None, :])  # (..., k, n)

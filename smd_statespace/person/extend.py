@@ -273,7 +273,9 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     fitted = max((fit_model(model, start, quick=model.approximate) for start in _starts(model, result, root, added)),
                  key=lambda fit: fit["loglike"])
     model, fitted, linearisations, settled = _settle_path(model, fitted, progress)
-    comparison, tested = result.comparison, fitted["loglike"]  # the test is made at result's starts
+    # the test is made here, at result's starts and variation model: its statistic and its count of added unknowns
+    comparison, tested = result.comparison, fitted["loglike"]
+    tested_df = (len(fitted["params"]) - len(result.params)) + (len(model.delta_names) - len(result.model.delta_names))
     if timing and any(row.get("timing") == "re-placed" for row in result.comparison):
         model, fitted, comparison = _with_own_timing(model, fitted, result, effects, progress)
         if model.approximate:  # the starts moved: the path is predicted again about them
@@ -293,7 +295,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
                          comparison=comparison, record_warnings=warnings, notes=notes,
                          before=result, effects=tuple(effects), linearisations=linearisations,
-                         settled=settled, tested_loglike=tested)
+                         settled=settled, tested_loglike=tested, tested_df=tested_df)
 
 
 def _settle_path(model: RecordModel, fitted, progress=False) -> tuple:

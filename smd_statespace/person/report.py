@@ -195,10 +195,12 @@ def summary_text(result, verbose=False) -> str:
                          f"interval {row['low']:.4g}-{row['high']:.4g})")
         before, test = d["before"], result.effect_test()
         p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
+        moved = result.tested_loglike not in (None, result.loglike)
         lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
                      f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}; "
-                     f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})"
-                     + (" at its cycle starts" if result.tested_loglike not in (None, result.loglike) else ""))
+                     + (f"with them at its cycle starts and variation model: log-likelihood "
+                        f"{test['loglike_tested']:.1f}; " if moved else "")
+                     + f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})")
     lines += [f"note: {n}" for n in d["notes"]]
     lines += [f"warning: {w}" for w in d["warnings"]]
     return "\n".join(lines)

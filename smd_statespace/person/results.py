@@ -79,6 +79,10 @@ class PersonResult:
     tested_loglike : float or None
         With effects: the log-likelihood with them at :attr:`before`'s cycle starts and variation
         model, where :meth:`effect_test` compares the two (None: :attr:`loglike`, the starts kept).
+    tested_df : int or None
+        The unknowns that fit added to :attr:`before` (None: those of this fit): the likelihood ratio's
+        degrees of freedom. The fit kept after re-placing the starts may have chosen another variation
+        model, with another count.
     narrow_intervals : dict
         The calibrated intervals of ``f_h`` and ``xi_h`` as the record's information gives them,
         before :func:`~smd_statespace.person.answer.honest_intervals` widened them (empty for other
@@ -103,6 +107,7 @@ class PersonResult:
     linearisations: int = 0
     settled: bool = True
     tested_loglike: float | None = None
+    tested_df: int | None = None
     narrow_intervals: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------------ estimates
@@ -328,9 +333,10 @@ class PersonResult:
             return {}
         tested = self.loglike if self.tested_loglike is None else self.tested_loglike
         lr = 2.0 * (tested - self.before.loglike)
-        df = self.added_unknowns(self.before)
+        df = self.added_unknowns(self.before) if self.tested_df is None else self.tested_df
         p = float(stats.chi2.sf(max(lr, 0.0), df)) if df > 0 else float("nan")
-        return {"lr": float(lr), "lr_df": int(df), "lr_p": p}
+        return {"lr": float(lr), "lr_df": int(df), "lr_p": p, "loglike_tested": float(tested),
+                "loglike_before": float(self.before.loglike)}
 
     def predicted_path(self) -> np.ndarray:
         """One-step predicted dynamic states (``u`` in m, ``u'`` in m/s, then any effect's), shape (N, n_x).

@@ -487,7 +487,7 @@ def simulate_crowd(n, f_b, duration=DEFAULT_DURATION, fs=None, seed=None, table=
     settings.update(n=n, f_b=f_b, duration=duration, fs=fs, fb_variation=fb_variation,
                     coef_variation=coef_variation, phase_spread=phase_spread, seed=root.entropy, table=table_label,
                     redrawn=int(np.count_nonzero(draw)), rejected_steady=int(rejected["steady"].sum()),
-                    rejected_cycles=int(rejected["cycles"].sum()), effects=[effect.name for effect in checked])
+                    rejected_cycles=int(rejected["cycles"].sum()), effects=[effect.spec for effect in checked])
     return Crowd(people=people, forces=frame, settings=settings, cycles=cycles,
                  seconds=_time.perf_counter() - started)
 
