@@ -1,49 +1,29 @@
 """Force-plate records as a lab exports them: a person standing, bouncing and standing again, with known truth.
 
-:func:`simulate_lab_record` makes the whole export of one trial, not just the
-bout: the person stands still for a few seconds (swaying a little), starts
-bouncing over a few cycles, bounces, tires, stops over a few cycles and stands
-again, on a plate whose signal carries mains hum, a slowly drifting zero and
-white noise. :func:`simulate_typical_lab_record` draws all of it over wide
-ranges declared in one place (:class:`LabRanges`), so a benchmark can make
-many records per row and hold out combinations.
+:func:`simulate_lab_record` makes the export of a whole trial: the person stands (swaying a little), ramps
+up, bounces and tires, ramps down and stands again, on a plate with mains hum, a drifting zero and white
+noise; :func:`simulate_typical_lab_record` draws all of it over wide ranges declared in one place
+(:class:`LabRanges`). The force (N) is Eq. 3 plus the plate's extras, ``GRF = M_h (g + u'') + sway + hum +
+drift + e``, with ``u''`` of Eq. 2 under the enveloped, tiring force,
+``u'' + 2 xi_h(t) w_h(t) u' + w_h(t)^2 u = g S(t) F(tau(t))``, ``w_h = 2 pi f_h(t)``, integrated with
+:func:`scipy.integrate.solve_ivp` (DOP853, ``rtol`` :data:`~.dynamics.RTOL`), restarted at every jump of the
+force and every kink of the schedule:
 
-The measured force (N) is
+- ``F(tau)`` (g, Eq. 4) is a force of :func:`simulate_bouncing`'s ``"jumps"`` or ``"smooth"`` variation
+  (:data:`LAB_VARIATIONS`), made by the same code (:mod:`.variation`) in the person's own time ``tau``;
+- ``S(t) = E(t) (1 - tire p(t))``: the envelope ``E`` is 0 while standing, a raised cosine up to 1 over
+  ``ramp_up`` cycles, 1 through the bout, a raised cosine back to 0 over ``ramp_down`` cycles; ``p(t)``, the
+  progress through the full bout (0 to 1, held outside it), makes every BLF fall by the fraction ``tire``;
+- ``tau(t) = int (1 - slow p) dt``: the person's clock slows, ``f_b`` falls to ``f_b (1 - slow)``;
+- ``f_h(t)``, ``xi_h(t)``: constant, or changed by the fractions ``f_h_change``, ``xi_h_change`` linearly
+  over the bout (``change="drift"``) or at once at ``change_time`` (``"step"``);
+- while standing ``S = 0`` and the person is at rest (``u = u' = u'' = 0``): the force is ``M_h g`` plus
+  the extras. ``sway``: sinusoids in :data:`SWAY_BAND` (N RMS), faded out as the person bounces; ``hum``:
+  the mains frequency and its harmonics, optionally slowly modulated; ``drift``: a random cubic (Legendre)
+  polynomial of time, 0 at ``t = 0``, reaching ``+-drift`` N; ``e``: white noise of sd ``noise`` N.
 
-``GRF(t) = M_h (g + u''(t)) + sway(t) + hum(t) + drift(t) + e(t)``  (Eq. 3 plus the plate's extras)
-
-with the COM acceleration ``u''`` of Eq. 2 under the enveloped, tiring force
-
-``u'' + 2 xi_h(t) w_h(t) u' + w_h(t)^2 u = g S(t) F(tau(t))``,  ``w_h = 2 pi f_h(t)``  (Eq. 2)
-
-integrated with :func:`scipy.integrate.solve_ivp` (DOP853, ``rtol``
-:data:`~.dynamics.RTOL`), restarted at every jump of the force and every kink
-of the schedule. The parts:
-
-- ``F(tau)`` (g, Eq. 4) is a force of :func:`simulate_bouncing`'s ``"jumps"``
-  or ``"smooth"`` variation (:data:`LAB_VARIATIONS`), made by the same code
-  (:mod:`.variation`) in the person's own time ``tau``;
-- ``S(t) = E(t) (1 - tire p(t))``: the envelope ``E`` is 0 while standing, a
-  raised cosine over ``ramp_up`` cycles up to 1, 1 through the bout and a
-  raised cosine over ``ramp_down`` cycles back to 0; ``p(t)`` is the progress
-  through the full bout (0 at its start, 1 at its end, held outside), so every
-  BLF declines by the fraction ``tire`` over the bout;
-- ``tau(t) = int (1 - slow p) dt``: the person's clock slows by ``slow`` over
-  the bout, so ``f_b`` falls from ``f_b`` to ``f_b (1 - slow)``;
-- ``f_h(t)``, ``xi_h(t)``: constant, or changed by the fractions
-  ``f_h_change``, ``xi_h_change`` over the bout, linearly (``change="drift"``)
-  or at once at ``change_time`` (``"step"``);
-- while standing ``S = 0`` and the person is at rest (``u = u' = u'' = 0``):
-  the force is ``M_h g`` plus the extras. ``sway`` is a sum of sinusoids below
-  :data:`SWAY_BAND` (N RMS), faded out as the person bounces; ``hum`` the
-  mains frequency and its harmonics, optionally modulated slowly; ``drift`` a
-  random cubic (Legendre) polynomial of time that is 0 at ``t = 0`` and
-  reaches ``+-drift`` N; ``e`` white noise of sd ``noise`` N.
-
-Randomness comes from one :class:`numpy.random.SeedSequence`, spawned into
-independent streams for the force, the sway, the hum, the drift and the
-noise: the same seed gives the same record, and changing the hum leaves the
-person's force unchanged.
+One :class:`numpy.random.SeedSequence` spawns independent streams (:data:`STREAMS`): the same seed gives the
+same record; other hum leaves the person unchanged.
 """
 
 from __future__ import annotations
@@ -59,6 +39,7 @@ from ..model import acceleration_frf, c_h, k_h, smd_acceleration
 from .dynamics import ATOL, RTOL, _CycleForce, _number, _vector
 from .force_shape import DEFAULT_BLF, default_phases
 from .generators import _normals
+from .settings import _resolve_seed
 from .synthetic import SyntheticRecord
 from .variation import (TRUNCATION_SD, _cycles_frame, _draw_cycles, _smooth_cycles, _smooth_force,
                         _smooth_geometry)
@@ -134,15 +115,14 @@ class _Schedule:
 
     def t_of_tau(self, tau):
         """Times ``t`` (s) at which the person's clock reads ``tau`` (Newton's method; ``tau(t)`` is concave)."""
-        target = np.asarray(tau, dtype=float)
-        t = target.copy()
+        target = t = np.asarray(tau, dtype=float)
         for _ in range(60):
-            step = (self.arrays(t)[1] - target) / (1.0 - self.slow * np.clip((t - self.t_full)
-                                                                              / (self.t_down - self.t_full), 0, 1))
+            rate = 1.0 - self.slow * np.clip((t - self.t_full) / (self.t_down - self.t_full), 0.0, 1.0)
+            step = (self.arrays(t)[1] - target) / rate
             t = t - step
             if np.all(np.abs(step) < 1e-12):
-                break
-        return t
+                return t
+        return t  # pragma: no cover
 
     def breaks(self):
         """Times (s) where the schedule has a kink or a jump: the integration restarts there."""
@@ -153,21 +133,12 @@ class _Schedule:
 
     def means(self):
         """``(f_h, xi_h)`` averaged over the full bout (``t_full`` to ``t_down``)."""
-        if self.change == "drift":
-            weight = 0.5
-        else:
-            weight = (self.t_down - min(max(self.t_change, self.t_full), self.t_down)) / (self.t_down - self.t_full)
+        weight = 0.5 if self.change == "drift" else (self.t_down - self.t_change) / (self.t_down - self.t_full)
         return tuple(float(p[0] + weight * (p[1] - p[0])) for p in (self.f_h, self.xi_h))
 
 
-class _NoForce:
-    """The force after the bout (the envelope is 0 there): zero, in the shape of :class:`_CycleForce`."""
-
-    def scalar(self, tau):
-        return 0.0
-
-    def __call__(self, tau):
-        return np.zeros_like(np.asarray(tau, dtype=float))
+_NO_FORCE = _CycleForce(0.0, 1.0, 0.0, [0.0], [0.0])
+"""The force after the bout (the envelope is 0 there)."""
 
 
 # ---------------------------------------------------------------------------
@@ -175,13 +146,11 @@ class _NoForce:
 
 
 def _bout_force(rng, variation, span, f_b, blf, phases, fb_variation, coef_variation):
-    """The force of Eq. 4 over ``tau`` in ``[0, span]`` s: ``(cycles, pieces)``.
+    """The force of Eq. 4 over ``tau`` in ``[0, span]`` s: ``(cycles, pieces)``; ``a0`` 0 (weight carried).
 
-    ``cycles`` is ``(t_start, t_end, f_b, a, b)`` of the cycles in the
-    person's time (the ``"smooth"`` ones' coefficients cycle averages);
-    ``pieces`` lists ``(tau_start, tau_end, force)``: one per cycle with
-    ``"jumps"`` (the force jumps at its boundaries), one for the whole span
-    with ``"smooth"``. ``a0`` is 0: the person carries their weight.
+    ``cycles`` is ``(t_start, t_end, f_b, a, b)`` in the person's time (``"smooth"``: cycle averages);
+    ``pieces`` lists ``(tau_start, tau_end, force)``: one per cycle with ``"jumps"`` (the force jumps at its
+    boundaries), one for the whole span with ``"smooth"``.
     """
     m = blf.size
     if variation == "jumps":
@@ -214,7 +183,7 @@ def _pieces_in_time(schedule, pieces, t_end):
         if hi - lo < 1e-12:
             continue
         if lo >= schedule.t_off:
-            out.append((lo, hi, _NoForce()))
+            out.append((lo, hi, _NO_FORCE))
             continue
         index = min(max(int(np.searchsorted(times, 0.5 * (lo + hi), side="right")) - 1, 0), len(pieces) - 1)
         out.append((lo, hi, pieces[index][2]))
@@ -222,7 +191,7 @@ def _pieces_in_time(schedule, pieces, t_end):
 
 
 def _integrate(schedule, pieces, time):
-    """``(u, u_dot, u_ddot, force_bio)`` at ``time`` (m, m/s, m/s^2, m/s^2): Eq. 2 from rest at ``t_on``."""
+    """``(u, u_dot, u_ddot, force_bio, f_h, xi_h)`` at ``time`` (m, m/s, m/s^2, m/s^2, Hz, -): Eq. 2 from rest."""
     from scipy.integrate import solve_ivp  # imported here: with scipy.optimize, 0.3 s (not needed to start)
 
     def rhs(t, x, force):
@@ -302,8 +271,7 @@ def _check_lab(s):
     for name in ("f_h_change", "xi_h_change"):
         s[name] = _number(s[name], name, where=where)
     s["blf"] = _vector(s["blf"], "blf (g)", nonnegative=True, where=where)
-    s["hum"] = np.zeros(0) if len(np.atleast_1d(s["hum"])) == 0 else _vector(s["hum"], "hum (N)", nonnegative=True,
-                                                                             where=where)
+    s["hum"] = _vector(s["hum"], "hum (N)", nonnegative=True, where=where) if np.size(s["hum"]) else np.zeros(0)
     limits = (("fb_variation", 0.2), ("coef_variation", 1.0), ("hum_variation", 1.0), ("tire", 0.9),
               ("slow", 0.5), ("ramp_up", 10.0), ("ramp_down", 10.0), ("f_h_change", 1.0), ("xi_h_change", 2.0))
     for name, top in limits:
@@ -349,16 +317,9 @@ def _schedule(s):
 
 
 def _seed_sequence(seed):
-    """``(SeedSequence, JSON-able record)`` of ``seed`` (None: fresh entropy, kept in the record)."""
-    if isinstance(seed, np.random.SeedSequence):
-        record = {"entropy": seed.entropy, "spawn_key": list(seed.spawn_key)} if seed.spawn_key else seed.entropy
-        return seed, record
-    if seed is not None and (isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer))
-                             or seed < 0):
-        raise OptionError(f"simulate_lab_record: seed must be None, a non-negative int or a SeedSequence, "
-                          f"got {seed!r}")
-    sequence = np.random.SeedSequence(None if seed is None else int(seed))
-    return sequence, sequence.entropy
+    """``(SeedSequence, JSON-able record)`` of ``seed``, by :func:`simulate_bouncing`'s policy (:mod:`.settings`)."""
+    rng, record = _resolve_seed(seed)
+    return rng.bit_generator.seed_seq, record
 
 
 def _lab_truth(s, schedule, duration, seed_record, extras, n_cycles):
@@ -399,9 +360,8 @@ def _lab_truth(s, schedule, duration, seed_record, extras, n_cycles):
 def _cycles_in_time(schedule, cycles):
     """The force cycles that act in lab time (a :func:`_cycles_frame` table plus ``scale, f_h, xi_h``).
 
-    Their boundaries are mapped from the person's time; ``f_b = 1 / (t_end -
-    t_start)``; the coefficients are the generator's times ``S`` at the
-    cycle's middle, ``scale`` that ``S`` and ``f_h``, ``xi_h`` their values there.
+    Boundaries mapped from the person's time, ``f_b = 1 / (t_end - t_start)``; coefficients the generator's
+    times ``scale`` (``S`` at the cycle's middle); ``f_h``, ``xi_h`` their values there.
     """
     t_start, t_end, _, a, b = cycles
     starts, ends = schedule.t_of_tau(t_start), schedule.t_of_tau(t_end)
@@ -420,26 +380,21 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
                         xi_h_change=0.0, change="drift", change_time=None, seed=None) -> SyntheticRecord:
     """Simulate a lab's force-plate export of one trial: standing, bouncing, standing, with the plate's artefacts.
 
-    The person is the SMD of Eq. 2 (see the module docstring for every term);
-    the GRF is Eq. 3 plus sway, hum, drift and noise. Times are in s, forces
-    in N, BLFs in g.
+    The person is the SMD of Eq. 2 (the module docstring gives every term); the GRF is Eq. 3 plus sway, hum,
+    drift and noise. Times in s, forces in N, BLFs in g.
 
     Parameters
     ----------
-    mass : float
-        Body mass ``M_h`` (kg).
-    f_b : float
-        Bouncing frequency at the start of the bout (Hz).
-    f_h, xi_h : float
-        SMD natural frequency (Hz) and damping ratio (-) at the start of the bout.
+    mass, f_b, f_h, xi_h : float
+        Body mass ``M_h`` (kg); at the start of the bout, bouncing and SMD
+        natural frequencies (Hz) and damping ratio (-).
     blf : sequence of float
         ``BLF_1..BLF_n`` at the start of the bout (g, Eq. 5).
     phases : sequence of float, optional
         Harmonic phases (rad); default :func:`default_phases` (a realistic GRF shape).
     variation : {"jumps", "smooth"}
-        Cycle-to-cycle variation of the force, as in :func:`simulate_bouncing`
-        (:data:`LAB_VARIATIONS`), with ``fb_variation`` (0-0.2) and
-        ``coef_variation`` (0-1).
+        Cycle-to-cycle variation of the force, as in :func:`simulate_bouncing` (:data:`LAB_VARIATIONS`), with
+        ``fb_variation`` (0-0.2) and ``coef_variation`` (0-1).
     fs : float
         Sampling rate (Hz), :data:`FS_RANGE`.
     stand_before, stand_after : float
@@ -450,52 +405,38 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
         Length of the ramps of the force's amplitude, in cycles (up to 10).
     sway : float
         RMS of the standing sway force (N), below :data:`SWAY_BAND` Hz.
-    hum_frequency : {50, 60}
-        Mains frequency (Hz).
-    hum : sequence of float
-        Hum amplitudes of the mains frequency and its harmonics 2, 3, ... (N); empty for none.
-    hum_variation : float
-        Relative slow modulation of the hum's amplitude, 0-1 (:data:`HUM_MODULATION_BAND`).
-    drift : float
-        Largest excursion of the plate's drifting zero over the record (N).
-    noise : float
-        White measurement noise sd (N).
-    tire : float
-        Fraction of every BLF lost linearly over the bout, 0-0.9.
-    slow : float
-        Fraction of ``f_b`` lost linearly over the bout, 0-0.5.
-    f_h_change, xi_h_change : float
-        Relative change of ``f_h`` and ``xi_h`` over the bout (e.g. 0.14), above -0.9.
-    change : {"drift", "step"}
-        The change is linear over the bout, or a step at ``change_time``.
-    change_time : float, optional
-        Time of the step (s), within the bout; default its middle.
+    hum_frequency, hum, hum_variation : {50, 60}, sequence of float, float
+        Mains frequency (Hz); hum amplitudes at it and its harmonics 2, 3,
+        ... (N; empty for none); their relative slow modulation, 0-1.
+    drift, noise : float
+        Largest excursion of the plate's drifting zero (N); white noise sd (N).
+    tire, slow : float
+        Fractions of every BLF (0-0.9) and of ``f_b`` (0-0.5) lost linearly over the bout.
+    f_h_change, xi_h_change, change, change_time : float, float, {"drift", "step"}, float
+        Relative changes of ``f_h``, ``xi_h`` over the bout (e.g. 0.14;
+        above -0.9), linear over it or a step at ``change_time`` (s, within
+        the bout; default its middle).
     seed : None, int or numpy.random.SeedSequence
-        Root of the record's random streams (:data:`STREAMS`); None draws fresh
-        entropy, kept in the truth.
+        Root of the record's random streams (:data:`STREAMS`); None draws fresh entropy, kept in the truth.
 
     Returns
     -------
     SyntheticRecord
-        ``record`` (the plate's export), ``states`` (per sample: ``time, cycle,
-        u, u_dot, u_ddot, force_bio`` as :func:`simulate_bouncing`'s, plus
-        ``scale`` ``S(t)``, ``f_h``, ``xi_h``, ``sway``, ``hum``, ``drift`` in
-        N; ``cycle`` -1 outside the force's cycles), ``cycles`` (the force
-        cycles in lab time, see :func:`_cycles_in_time`) and ``truth``: the
-        person (``f_h``, ``xi_h``, ``f_b``, ``blf`` as means over the bout
-        with their ``_start`` and ``_end`` values; ``K_h``, ``C_h`` of the
-        means, Eq. 17-18), ``change``, ``span`` (the bout's times), ``hum``,
-        ``drift`` (its path: start, end, at the bouncing's start and end),
-        ``sway``, ``noise`` (body weights, as :func:`simulate_bouncing`) and
-        ``noise_n`` (N), ``fs``, ``duration``, ``seed``, ``variations``.
+        ``record`` (the plate's export); ``states`` per sample (``time, cycle, u, u_dot, u_ddot, force_bio``
+        as :func:`simulate_bouncing`'s, plus ``scale`` ``S(t)``, ``f_h``, ``xi_h``, ``sway``, ``hum``,
+        ``drift`` in N; ``cycle`` -1 outside the force's cycles); ``cycles``, the force cycles in lab time
+        (:func:`_cycles_in_time`); ``truth``: the person (``f_h``, ``xi_h``, ``f_b``, ``blf`` as means over
+        the bout with their ``_start`` and ``_end`` values; ``K_h``, ``C_h`` of the means, Eq. 17-18),
+        ``change``, ``span`` (the bout's times), ``hum``, ``drift`` (its path: start, end, at the bouncing's
+        start and end), ``sway``, ``noise`` (body weights, as :func:`simulate_bouncing`) and ``noise_n`` (N),
+        ``fs``, ``duration``, ``seed``, ``variations``.
 
     Raises
     ------
     MassError
         Implausible body mass.
     OptionError
-        Any other invalid argument (the message names it), or a GRF that falls
-        below zero (the person would leave the plate).
+        Any other invalid argument (the message names it), or a GRF below zero (the person would leave the plate).
     """
     import pandas as pd  # imported here: the command line imports this module to start
 
@@ -539,16 +480,12 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
 class LabRanges:
     """What :func:`draw_lab_settings` draws, and from where: one place, so a benchmark can hold out combinations.
 
-    A pair ``(lo, hi)`` is drawn uniformly; the fields ``variation``, ``fs``,
-    ``hum_frequency`` and ``change`` are choices drawn with equal
-    probability. ``blf`` and ``hum`` hold one pair per harmonic (g, N). The
-    changes ``f_h_change``, ``xi_h_change`` are magnitudes with a random
-    sign; ``change`` ``"none"`` sets both to 0, ``"step"`` puts the step at a
-    fraction ``step_at`` of the bout. ``stand`` and ``ramp`` are drawn
-    separately for before and after. A draw whose steady GRF could fall
-    below ``(1 - max_peak_g)`` body weights (the BLFs through Eq. 2's
-    response at the extremes of ``f_h`` and ``xi_h``, grown by two
-    ``coef_variation``) is drawn again.
+    A pair ``(lo, hi)`` is drawn uniformly (units of :func:`simulate_lab_record`); ``variation``, ``fs``,
+    ``hum_frequency``, ``change`` are equally likely choices; ``blf``, ``hum`` hold a pair per harmonic.
+    ``f_h_change``, ``xi_h_change`` are magnitudes with a random sign (0 when ``change`` is ``"none"``); a step
+    comes at the fraction ``step_at`` of the bout; ``stand``, ``ramp`` are drawn for before and after apart. A
+    draw whose steady dynamic GRF (the BLFs through Eq. 2 at the extremes of ``f_h``, ``xi_h``, grown by two
+    ``coef_variation``) could exceed ``max_peak_g`` body weights is drawn again.
     """
 
     mass: tuple = (45.0, 120.0)
@@ -627,9 +564,8 @@ def draw_lab_settings(seed=None, ranges=LAB_RANGES, **fixed) -> dict:
     ranges : LabRanges
         Where each setting is drawn from.
     **fixed
-        Settings given instead of drawn (the same random numbers are drawn
-        regardless, so the others do not move); the step's time and the
-        check on the GRF use them.
+        Settings given instead of drawn (the same random numbers are drawn regardless, so the others do not
+        move); the step's time and the check on the GRF use them.
 
     Returns
     -------
@@ -654,9 +590,8 @@ def draw_lab_settings(seed=None, ranges=LAB_RANGES, **fixed) -> dict:
 def simulate_typical_lab_record(seed=None, ranges=LAB_RANGES, **fixed) -> SyntheticRecord:
     """A lab record of settings drawn by :func:`draw_lab_settings` (``fixed`` ones given), seeded as a whole.
 
-    The seed's :class:`~numpy.random.SeedSequence` spawns two streams: one
-    for the draw of the settings, one for the record; the truth's
-    ``"typical"`` holds the seed and the names of the fixed settings.
+    The seed's :class:`~numpy.random.SeedSequence` spawns two streams, the draw's and the record's; the truth's
+    ``"typical"`` holds the seed, the names of the fixed settings and the ranges.
     """
     sequence, record = _seed_sequence(seed)
     draw, own = sequence.spawn(2)
