@@ -26,18 +26,29 @@ from dataclasses import replace
 import numpy as np
 
 from ..applicability import check_bouncing
-from ..errors import CycleError, OptionError
+from ..errors import CycleError, OptionError, RecordError
 from ..io import G, Record
 from ..progress import tqdm
-from ..signals import RECORD_RATE, decimate_record, decimation_note
+from ..signals import RECORD_RATE, prepare_record
 # the steps below identify_person (the names of __all__ were defined here up to 2026-11-27, and stay importable)
 from .answer import honest_intervals, person_result, undetermined_interval
 from .model import VARIATIONS, Regressor, RecordModel
 from .search import TIMING_ITERATIONS, FitError, choose_with_own_timing, comparison_row, fit_model, profile_interval
 from .timing import TIMING_METHODS, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "identify_person", "fit_model", "person_result", "profile_interval",
+__all__ = ["FitError", "MIN_CYCLES", "ZERO_DRIFT_DEGREE", "zero_drift", "identify_person", "fit_model", "person_result", "profile_interval",
            "honest_intervals", "undetermined_interval"]
+
+ZERO_DRIFT_DEGREE = 2
+"""Degree of the polynomial drift of the measurement's zero fitted with a lab-shaped record's person.
+
+A plate's zero that drifts slowly over the record (a few to tens of N) is a slow term of the
+measured ``GRF / M_h - g`` that the person does not feel: Legendre polynomials of degree 1 to
+this over the fitted span, each with an unknown coefficient concentrated out with the template
+(no search dimension), beside the constant offset. Added when the front end left standing parts
+out (:attr:`~smd_statespace.signals.PreparedRecord.trimmed`); a record bouncing end to end is
+fitted as before.
+"""
 
 MIN_CYCLES = 8
 """Fewest force cycles for the record-level model (the cycle-to-cycle spread needs several)."""
@@ -51,7 +62,7 @@ INTERVAL_METHODS = ("calibrated", "wald", "profile")
 
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type="oim", drift=False, check=True,
-                    rate=RECORD_RATE, progress=False, effects=(), measured_floor=True):
+                    rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto"):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -114,6 +125,15 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         measured at), with the regressors; ``result.notes`` says so. None keeps every sample
         (slower: the likelihood's cost grows with the samples, and the calibrated intervals
         were not measured there).
+    span : "auto", (float, float) or None
+        The part of the record the person is identified from
+        (:func:`~smd_statespace.signals.prepare_record`). ``"auto"`` (default): a record as labs
+        export it (standing before and after, ramps, mains hum, a drifting zero) is fitted on the
+        steady part of its longest bout of bouncing, the hum subtracted and the fitting rate kept
+        clear of it, the standing parts read for the body weight and the plate's zero, and a
+        slow drift of the measurement's zero (:data:`ZERO_DRIFT_DEGREE`) estimated with the person;
+        a record bouncing from end to end is fitted whole, as before. ``(start, end)`` (s): that
+        part. None: the whole record as it is (decimated only). ``result.notes`` says what was done.
     progress : bool
         Show a progress bar (tqdm) over the likelihood searches (one per variation model,
         ``TIMING_ITERATIONS + 1`` more for ``timing="model"`` and the winner's final fit, then the
@@ -164,11 +184,13 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
-    record_warnings = check_bouncing(record).raise_if_refused(override=not check)
-    measured_rate = record.fs
-    record, factor, values = decimate_record(record, rate, [r.values for r in regressors])
-    regressors = [replace(r, values=v) for r, v in zip(regressors, values)]
-    notes = decimation_note(measured_rate, record, factor, rate)
+    prepared = _prepared(record, rate, span, regressors, check)
+    record = prepared.record
+    record_warnings = prepared.warnings + check_bouncing(record).raise_if_refused(override=not check)
+    regressors = [replace(r, values=v) for r, v in zip(regressors, prepared.extra)]
+    if prepared.trimmed:
+        regressors += zero_drift(record.time)
+    notes = list(prepared.notes)
     y = record.force / record.mass - G  # Eq. 3
     if timing not in ("model",) + TIMING_METHODS:
         raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
@@ -221,3 +243,36 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
                                 f"the floor, no unknown added; likelihood ratio against the person without it "
                                 f"{result.effect_test()['lr']:.1f}); --no-floor (measured_floor=False) leaves it out")
     return result
+
+
+def zero_drift(time, degree=ZERO_DRIFT_DEGREE) -> list:
+    """Regressors of a slowly drifting zero of the measurement: Legendre polynomials of degree 1 to ``degree`` in time.
+
+    Measurement-only (``dynamic=False``): the plate's zero moves the measured acceleration, not the person.
+
+    Examples
+    --------
+    >>> [r.name for r in zero_drift(np.linspace(4.0, 34.0, 7))]
+    ['zero_drift_1', 'zero_drift_2']
+    """
+    time = np.asarray(time, dtype=float)
+    scaled = 2.0 * (time - time[0]) / max(time[-1] - time[0], 1e-12) - 1.0
+    return [Regressor(f"zero_drift_{k}", np.polynomial.legendre.Legendre.basis(k)(scaled), "m/s^2", dynamic=False)
+            for k in range(1, degree + 1)]
+
+
+def _prepared(record, rate, span, regressors, check):
+    """The record the fit takes (:func:`~smd_statespace.signals.prepare_record`); a record with no bouncing part is
+    refused with the applicability check's words when it has them, the front end's otherwise (with ``check`` False:
+    the whole record, with a warning)."""
+    extra = [r.values for r in regressors]
+    try:
+        return prepare_record(record, rate, span, extra)
+    except RecordError as exc:
+        if not (isinstance(span, str) and span == "auto"):
+            raise
+        found = check_bouncing(record).raise_if_refused(override=not check)  # its own words first: jumping, walking
+        if check:
+            raise
+        prepared = prepare_record(record, rate, None, extra)
+        return replace(prepared, warnings=found + [f"{exc}; fitted whole as asked (check=False)"])

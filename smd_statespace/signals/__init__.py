@@ -29,7 +29,7 @@ moving-floor model of Section 6).
 
 A lab's export (standing before and after, ramps, mains hum, a drifting zero) is made ready by
 :mod:`.frontend` (:func:`mains_hum`, :func:`remove_hum`, :func:`find_bouts`, :func:`trim_record`,
-:func:`front_end`).
+:func:`front_end`); :mod:`.preparation` (:func:`prepare_record`) is what the record-level fit does with it.
 
 Modules: :mod:`.decimation` (:func:`decimate_record`, :data:`RECORD_RATE`), :mod:`.filters`
 (Eq. 3, :func:`highpass`, :func:`integrate`, :func:`motion`), :mod:`.cycles` (:func:`find_cycles`,
@@ -61,6 +61,7 @@ from .frontend import (ACTIVE_LEVEL, CONTACT_LEVEL, HUM_HIGHPASS, HUM_WINDOW, LI
                        trim_record)
 from .filters import PADDINGS, com_acceleration, highpass, integrate, motion
 from .pipeline import OBSERVATION_CHANNELS, Preprocessed, preprocess
+from .preparation import HUM_MARGIN, MASS_TOLERANCE, PreparedRecord, parse_span, prepare_record, safe_factor
 
 __all__ = [
     "SUPPORTED_FB",
@@ -78,6 +79,12 @@ __all__ = [
     "remove_hum",
     "find_bouts",
     "trim_record",
+    "HUM_MARGIN",
+    "MASS_TOLERANCE",
+    "PreparedRecord",
+    "parse_span",
+    "prepare_record",
+    "safe_factor",
     "front_end",
     "MAINS",
     "LINE_RATIO",

@@ -1,0 +1,248 @@
+"""A record made ready for the record-level fit: the bouncing part only, without mains hum, at a safe rate.
+
+:func:`prepare_record` is what ``identify_person`` (and ``identify REC``) does to a record
+before the fit. A record that is bouncing from its first sample to its last (a simulator's,
+or one trimmed by hand) is only decimated, as before. A record as labs export it — the person
+stands, starts bouncing over a few cycles, bounces, stops and stands again; mains hum; a
+plate zero that drifts; 500-2000 Hz — goes through the front end
+(:mod:`~smd_statespace.signals.frontend`):
+
+1. mains hum (50 or 60 Hz and harmonics) found and subtracted at the record's own rate;
+2. the record split into standing, ramps, bouncing, other movement and no contact; the
+   steady part of the longest bout of bouncing is fitted (two bouts: the other is named, with
+   the ``span`` that fits it); the standing parts give the body weight before and after
+   (the plate's zero and its drift, said against the given mass) and the noise level;
+3. decimated whole to about :data:`~smd_statespace.signals.RECORD_RATE` (:func:`safe_factor`:
+   with hum, to a rate whose Nyquist frequency lies :data:`HUM_MARGIN` below the hum, so the
+   decimation's low-pass removes what the subtraction left instead of leaving it at the new
+   Nyquist frequency), then trimmed to the bout.
+
+Every step is said in words in :attr:`PreparedRecord.notes`, e.g. ``bouncing 4.1-33.9 s
+fitted (62 cycles); standing 0.0-3.4 s and 34.6-38.0 s used for the body weight and the
+plate's zero``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import OptionError, RecordError
+from ..io import G, Record
+from .decimation import RECORD_RATE, check_rate, decimate_record, decimation_note
+from .frontend import Bouts, Hum, find_bouts, mains_hum, remove_hum, trim_record
+
+__all__ = ["HUM_MARGIN", "MASS_TOLERANCE", "PreparedRecord", "safe_factor", "prepare_record", "parse_span"]
+
+HUM_MARGIN = 3.0
+"""Least distance (Hz) between the fitting rate's Nyquist frequency and the mains hum below which the rate is lowered."""
+
+MASS_TOLERANCE = 0.02
+"""A standing weight that differs from ``M_h g`` by more than this fraction is said in a warning."""
+
+_OTHER_PARTS = ("standing", "movement", "no_contact")
+
+
+@dataclass(frozen=True)
+class PreparedRecord:
+    """A record ready for the fit, and what was done to it.
+
+    Attributes
+    ----------
+    record : Record
+        What the fit takes: hum removed, decimated, trimmed to the bouncing span.
+    original : Record
+        The record as read.
+    span : (float, float) or None
+        The fitted span (s, on the record's own time axis); None: the whole record.
+    factor : int
+        Decimation factor (1: every sample kept).
+    hum : Hum or None
+        The mains hum found (None: not looked for, ``span=None``).
+    bouts : Bouts or None
+        The record's parts (None: not looked for).
+    trimmed : bool
+        True when parts that are not bouncing (standing, other movement, no contact) were left
+        out: a slowly drifting plate zero is then worth modelling (``identify_person`` adds a
+        drift of the measurement's zero).
+    notes, warnings : list of str
+        What was done, and what the user should know, in words.
+    extra : list of ndarray
+        Signals given with the record (regressors), decimated and trimmed alike.
+    """
+
+    record: Record
+    original: Record
+    span: tuple | None
+    factor: int
+    hum: Hum | None = None
+    bouts: Bouts | None = None
+    trimmed: bool = False
+    notes: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    extra: list = field(default_factory=list)
+
+
+def safe_factor(fs: float, rate, hum: Hum | None) -> int:
+    """The decimation factor for a record at ``fs`` Hz: ``floor(fs / rate)``, raised when hum is near the new Nyquist.
+
+    With hum at ``f`` Hz, the fitting rate's Nyquist frequency ``fs / (2 q)`` must lie at least
+    :data:`HUM_MARGIN` below ``f``: the decimation's low-pass then removes the hum and what its
+    subtraction left, where at ``fs / q = 2 f`` (1000 Hz to 100 Hz with 50 Hz hum) both sit on
+    the new Nyquist frequency (innovations alternating in sign at every lag).
+
+    Examples
+    --------
+    >>> hum = Hum(True, 50.0, np.array([50.0]), np.array([1.0]), np.array([True]), np.zeros(1))
+    >>> safe_factor(1000.0, 100.0, None), safe_factor(1000.0, 100.0, hum), safe_factor(500.0, 100.0, hum)
+    (10, 11, 6)
+    """
+    if check_rate(rate) is None:
+        return 1
+    factor = int(math.floor(fs / rate + 1e-9))
+    if factor < 2 or hum is None or not hum.found:
+        return max(factor, 1)
+    if fs / (2.0 * factor) > hum.frequency - HUM_MARGIN:
+        factor = int(math.ceil(fs / (2.0 * (hum.frequency - HUM_MARGIN))))
+    return factor
+
+
+def parse_span(text: str, option: str = "--span"):
+    """``"START:END"`` (s) as a pair of floats, ``"all"`` as None (the whole record), ``"auto"`` as itself.
+
+    Examples
+    --------
+    >>> parse_span("4.5:33"), parse_span("all"), parse_span("auto")
+    ((4.5, 33.0), None, 'auto')
+    """
+    text = str(text).strip()
+    if text.lower() in ("auto", "all"):
+        return "auto" if text.lower() == "auto" else None
+    start, colon, end = text.partition(":")
+    try:
+        if not colon:
+            raise ValueError
+        span = (float(start), float(end))
+    except ValueError:
+        raise OptionError(f"{option} {text!r}: give START:END in s (e.g. 4.5:33), auto (find the bouncing part) or "
+                          "all (the whole record)") from None
+    if not (all(math.isfinite(v) for v in span) and span[0] < span[1]):
+        raise OptionError(f"{option} {text!r}: START must be below END (s)")
+    return span
+
+
+def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> PreparedRecord:
+    """The record the fit takes: its bouncing part, hum removed, decimated at a rate safe from the hum.
+
+    Parameters
+    ----------
+    record : Record
+    rate : float or None
+        Lowest fitting rate (Hz; :func:`~smd_statespace.signals.decimate_record`); None keeps
+        every sample.
+    span : "auto", (float, float) or None
+        ``"auto"`` (default): the front end finds the bouncing part (the record is kept whole
+        when it is bouncing from end to end); ``(start, end)`` (s, on the record's time axis):
+        that part, hum removed; None: the whole record, only decimated (what the library did
+        before the front end).
+    extra : sequence of ndarray
+        Signals sampled with the record (the same length), decimated and trimmed alike.
+
+    Returns
+    -------
+    PreparedRecord
+
+    Raises
+    ------
+    RecordError
+        ``span="auto"`` and no bouncing part (the message says what the record holds), or a
+        ``span`` outside the record.
+    OptionError
+        A malformed ``span`` or ``rate``.
+    """
+    check_rate(rate)
+    extra = [np.asarray(values, dtype=float) for values in extra]
+    if span is None:
+        decimated, factor, moved = decimate_record(record, rate, extra)
+        return PreparedRecord(decimated, record, None, factor, notes=_rate_notes(record, decimated, factor, rate),
+                              extra=moved)
+    if not (isinstance(span, str) and span == "auto"):
+        span = parse_span(f"{span[0]}:{span[1]}", "span") if not isinstance(span, str) else parse_span(span, "span")
+        if span is None:
+            return prepare_record(record, rate, None, extra)
+    hum = mains_hum(record)
+    clean = remove_hum(record, hum)
+    bouts = find_bouts(clean) if span == "auto" else None
+    notes, warnings = ([hum.describe() + ", subtracted"] if hum.found else []), []
+    trimmed = True
+    if span == "auto":
+        span, trimmed, said = _bouncing_span(clean, bouts)
+        notes += said
+        warnings += _weight_warnings(bouts, record)
+    else:
+        trim_record(record, span)  # a span outside the record: one line before any work
+        notes.append(f"span {span[0]:g}-{span[1]:g} s fitted, as given")
+    factor = safe_factor(record.fs, rate, hum)
+    decimated, factor, moved = decimate_record(clean, None if factor < 2 else record.fs / factor, extra)
+    notes += _rate_notes(record, decimated, factor, rate, hum)
+    if span is None:
+        return PreparedRecord(decimated, record, None, factor, hum, bouts, False, notes, warnings, moved)
+    fitted = trim_record(decimated, span)
+    keep = np.isin(decimated.time, fitted.time)
+    return PreparedRecord(fitted, record, span, factor, hum, bouts, trimmed, notes, warnings,
+                          [values[keep] for values in moved])
+
+
+def _bouncing_span(record: Record, bouts: Bouts) -> tuple:
+    """``(span, trimmed, notes)``: the steady part of the longest bout, or None when the record bounces end to end."""
+    bouts.require()
+    others = [s for s in bouts.segments if s.kind in _OTHER_PARTS]
+    if not others and len(bouts.bouts) == 1:  # bouncing from end to end (ramps of a cycle or less at the ends)
+        return None, False, []
+    chosen = max(bouts.bouts, key=lambda bout: bout.cycles)
+    notes = [f"bouncing {chosen.start:.1f}-{chosen.end:.1f} s fitted ({chosen.cycles} cycles)" + _left_out(bouts)]
+    if len(bouts.bouts) > 1:
+        rest = [b for b in bouts.bouts if b is not chosen]
+        notes.append(f"{len(bouts.bouts)} bouts of bouncing: the longest is fitted; "
+                     + "; ".join(f"{b.start:.1f}-{b.end:.1f} s ({b.cycles} cycles): span=({b.start:.2f}, {b.end:.2f})"
+                                 f" or --span {b.start:.2f}:{b.end:.2f}" for b in rest))
+    return chosen.span, True, notes
+
+
+def _left_out(bouts: Bouts) -> str:
+    """``; standing 0.0-3.4 s and 34.6-38.0 s used for ...; ramps ... left out`` for the note of the fitted span."""
+    words = []
+    for kind, use in (("standing", "used for the body weight and the plate's zero"), ("ramp", "left out"),
+                      ("movement", "left out (not bouncing)"), ("no_contact", "left out (no contact with the plate)")):
+        spans = [s for s in bouts.segments if s.kind == kind]
+        if spans:
+            listed = " and ".join(f"{s.start:.1f}-{s.end:.1f} s" for s in spans[:3]) + (" ..." if len(spans) > 3
+                                                                                          else "")
+            label = {"ramp": "starting and stopping", "no_contact": "off the plate"}.get(kind, kind)
+            words.append(f"{label} {listed} {use}")
+    return "; " + "; ".join(words) if words else ""
+
+
+def _weight_warnings(bouts: Bouts, record: Record) -> list:
+    """What the standing parts say against the given mass, and the plate zero's drift, as warnings (or none)."""
+    out = []
+    weight = record.mass * G
+    for label, level in (("before", bouts.level_before), ("after", bouts.level_after)):
+        if np.isfinite(level) and abs(level / weight - 1.0) > MASS_TOLERANCE:
+            out.append(f"standing {label} bouncing the plate reads {level:.0f} N = {level / G:.1f} kg at g, the given "
+                       f"mass is {record.mass:g} kg ({100 * (level / weight - 1):+.1f} %): check --mass; the fit "
+                       "takes the difference as the plate's zero (its offset)")
+            break
+    return out
+
+
+def _rate_notes(record: Record, decimated: Record, factor: int, rate, hum: Hum | None = None) -> list:
+    """The decimation in words, and why the rate is below ``rate`` when hum lowered it."""
+    notes = decimation_note(record.fs, decimated, factor, rate)
+    if factor > 1 and hum is not None and hum.found and rate is not None and decimated.fs < rate:
+        notes.append(f"fitted at {decimated.fs:.4g} Hz rather than {rate:g}: its Nyquist frequency lies below the "
+                     f"{hum.frequency:.0f} Hz hum, which the decimation's low-pass then removes with what its "
+                     "subtraction left")
+    return notes
