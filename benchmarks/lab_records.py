@@ -1,0 +1,484 @@
+"""Benchmark of ``identify_person`` on lab-shaped force-plate records (issue 43).
+
+Each record is a whole trial as a lab exports it (:func:`smd_statespace.simulation.lab.simulate_lab_record`:
+standing, ramps, bouncing that tires and slows, mains hum, a drifting plate zero, sway, 500-2000 Hz), identified
+as a user does it, ``identify REC --mass M``: :func:`~smd_statespace.person.identify_person` with every default
+(``span="auto"``: the front end finds the steady bouncing part, subtracts the hum, fits a drift of the zero)::
+
+    python benchmarks/lab_records.py --records 40 --jobs 2 --rows lab,twin     # the documented run
+    python benchmarks/lab_records.py --records 40 --jobs 2 --resume            # go on after a kill
+    python benchmarks/lab_records.py --quick                                    # 2 records per row, temporary CSV
+
+Rows
+----
+``lab``
+    Typical lab records (:func:`~smd_statespace.simulation.lab.draw_lab_settings` over
+    :data:`~smd_statespace.simulation.lab.LAB_RANGES`) of a stationary person: ``f_h_change`` and
+    ``xi_h_change`` fixed at 0 (the truth's change kind is then ``"none"``; ``change="none"`` itself is not an
+    argument ``simulate_lab_record`` takes, and fixing the sizes keeps every other draw as LAB_RANGES makes
+    it). Tiring, slowing and every plate artefact drawn.
+``twin``
+    For the same seeds, the clean twin: the same settings and the same record seed with the lab's extras off
+    (:data:`TWIN`): no standing (``stand_before = stand_after = 0``), no hum, drift or sway, 200 Hz (the lowest
+    rate ``simulate_lab_record`` allows; fitted at 100 Hz), no tiring or slowing. The ramps must be positive:
+    :data:`TWIN_RAMP` cycles, a smooth half-cycle onset (a force switched on at once would start the person
+    from rest with a jolt); the front end then fits the record whole, as a record bouncing end to end. The
+    noise, the person and the force's cycle-to-cycle variation are the lab record's.
+``change``
+    The person changes: ``change`` fixed to ``"drift"`` (even records) and ``"step"`` (odd records),
+    ``|f_h_change|`` drawn 0.08-0.2 with a random sign (:data:`CHANGE_RANGES`; ``xi_h_change`` as LAB_RANGES
+    draws it). Measured: whether ``result.warnings`` names the change, a warning that starts with
+    :data:`CHANGE_WARNING` (False on every row until the library says it).
+``held_out``
+    Combinations not used for tuning (:data:`HELD_OUT_RANGES`, marked held out in the output): 500 Hz with
+    60 Hz hum at the top of LAB_RANGES' amplitudes, the ``"smooth"`` variation with ``tire`` 0.2-0.35,
+    standing 0-1 s (none after on odd records), sway 6-10 N, drift 30-60 N; a stationary person.
+
+Seeds
+-----
+Record ``k`` of a row is seeded from ``numpy.random.SeedSequence(seed).spawn(3)[group].spawn(k + 1)[k]``
+(:func:`record_seed`; group 0: ``lab`` and ``twin``, 1: ``change``, 2: ``held_out``), spawned in two as
+``simulate_typical_lab_record`` does (the settings' draw, the record's streams). A record is the same whatever
+``--records`` and ``--jobs``. The default seed (4343) was never used for tuning the front end (its tests and
+measurements used seeds 0-39).
+
+Output
+------
+``--csv`` (default ``benchmarks/results/lab_records_seed<S>.csv``): one row per record (:data:`COLUMNS`),
+each appended in one ``write`` as it finishes, so a killed run loses at most the records in flight and
+``--resume`` fits only the missing ones. A record that fails (simulation or fit) is a row with ``error`` set;
+the run goes on. Then the tables (:func:`summary_lines`) are printed from every row of the CSV that the
+options ask for.
+"""
+
+from __future__ import annotations
+
+import os
+
+# Timings are per core: keep BLAS single-threaded unless the caller says otherwise.
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+import argparse  # noqa: E402
+import csv  # noqa: E402
+import dataclasses  # noqa: E402
+import io  # noqa: E402
+import math  # noqa: E402
+import shlex  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from concurrent.futures import ProcessPoolExecutor, as_completed  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from scipy import stats  # noqa: E402
+
+REPO = Path(__file__).resolve().parents[1]
+
+ROWS = ("lab", "twin", "change", "held_out")
+"""The benchmark's rows, in the order of the tables."""
+
+GROUP = {"lab": 0, "twin": 0, "change": 1, "held_out": 2}
+"""Seed group of each row: ``lab`` and ``twin`` share their seeds (record ``k`` of both is one person)."""
+
+HELD_OUT = {"held_out"}
+"""Rows of combinations not used for tuning the front end."""
+
+DEFAULT_SEED = 4343
+"""A seed never used for tuning (the front end's tests and measurements used 0-39)."""
+
+TWIN_RAMP = 0.5
+"""Ramp up and down of a clean twin (cycles): the least that avoids a jolt at the start (ramps must be positive)."""
+
+TWIN = dict(stand_before=0.0, stand_after=0.0, hum=(), hum_variation=0.0, drift=0.0, sway=0.0, fs=200.0, tire=0.0,
+            slow=0.0, ramp_up=TWIN_RAMP, ramp_down=TWIN_RAMP)
+"""Settings that make a lab record's clean twin (``fs`` 200 Hz: the least ``simulate_lab_record`` takes)."""
+
+STATIONARY = dict(f_h_change=0.0, xi_h_change=0.0)
+"""Fixed settings of a stationary person (the truth's change kind is ``"none"``)."""
+
+CHANGE_KINDS = ("drift", "step")
+"""``change`` of the ``change`` row's records, alternately (record ``k`` gets ``CHANGE_KINDS[k % 2]``)."""
+
+CHANGE_WARNING = "the person changes during the record"
+"""The start of the warning that names a change of the person (``result.warnings``)."""
+
+def _default_level() -> float:
+    import inspect
+
+    from smd_statespace.person import identify_person
+
+    return float(inspect.signature(identify_person).parameters["level"].default)
+
+
+LEVEL = _default_level()
+"""Level of ``identify_person``'s default intervals (read from its signature)."""
+
+
+def _ranges():
+    """``(LAB_RANGES, CHANGE_RANGES, HELD_OUT_RANGES)``."""
+    from smd_statespace.simulation.lab import LAB_RANGES
+
+    change = dataclasses.replace(LAB_RANGES, change=CHANGE_KINDS, f_h_change=(0.08, 0.2))
+    held_out = dataclasses.replace(LAB_RANGES, fs=(500.0,), hum_frequency=(60,), hum=((15.0, 20.0), (4.0, 5.0),
+                                                                                      (8.0, 10.0)),
+                                   variation=("smooth",), tire=(0.2, 0.35), stand=(0.0, 1.0), sway=(6.0, 10.0),
+                                   drift=(30.0, 60.0))
+    return LAB_RANGES, change, held_out
+
+
+LAB_RANGES, CHANGE_RANGES, HELD_OUT_RANGES = _ranges()
+"""``CHANGE_RANGES``: LAB_RANGES with a change always (``drift`` or ``step``) and ``|f_h_change|`` 0.08-0.2.
+``HELD_OUT_RANGES``: 500 Hz, 60 Hz hum at 15-20, 4-5, 8-10 N, ``smooth``, tire 0.2-0.35, standing 0-1 s, sway
+6-10 N, drift 30-60 N."""
+
+COLUMNS = (
+    "seed", "row", "record", "spawn_key", "held_out",
+    # settings
+    "fs", "variation", "hum_frequency", "hum_n", "hum_variation", "drift_n", "sway_n", "noise_n", "tire", "slow",
+    "stand_before", "stand_after", "bout", "ramp_up", "ramp_down", "mass", "f_b", "fb_variation", "coef_variation",
+    "change_kind", "f_h_change", "xi_h_change", "change_time",
+    # truth
+    "f_h_true", "f_h_start", "f_h_end", "xi_h_true", "bouncing_start", "full_start", "full_end", "bouncing_end",
+    # the fit
+    "f_h_est", "f_h_err_pct", "f_h_low", "f_h_high", "covered", "determined", "xi_h_est", "xi_h_err",
+    "xi_h_determined", "ljung_box_p", "variation_model", "n_cycles", "fit_start", "fit_end", "span_ok",
+    "span_note", "n_warnings", "change_named", "change_warning", "sim_seconds", "seconds", "error",
+)
+"""One CSV row per record."""
+
+
+# ---------------------------------------------------------------------------
+# records
+
+
+def record_seed(seed: int, row: str, k: int) -> np.random.SeedSequence:
+    """Record ``k`` of ``row``: ``SeedSequence(seed).spawn(3)[GROUP[row]].spawn(k + 1)[k]``, made directly."""
+    return np.random.SeedSequence(seed, spawn_key=(GROUP[row], k))
+
+
+def settings_of(row: str, seed: int, k: int):
+    """``(settings, record seed)``: the keyword arguments of ``simulate_lab_record`` and its ``seed``."""
+    from smd_statespace.simulation.lab import draw_lab_settings
+
+    draw, own = record_seed(seed, row, k).spawn(2)  # as simulate_typical_lab_record spawns
+    if row in ("lab", "twin"):
+        settings = draw_lab_settings(draw, LAB_RANGES, **STATIONARY)
+        if row == "twin":
+            settings.update(TWIN)
+    elif row == "change":
+        settings = draw_lab_settings(draw, CHANGE_RANGES, change=CHANGE_KINDS[k % 2])
+    elif row == "held_out":
+        fixed = dict(STATIONARY, **({"stand_after": 0.0} if k % 2 else {}))
+        settings = draw_lab_settings(draw, HELD_OUT_RANGES, **fixed)
+    else:
+        raise ValueError(f"unknown row {row!r}")
+    return settings, own
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0][:200] if text else ''}"
+
+
+def _settings_columns(s: dict) -> dict:
+    hum = tuple(s["hum"]) if np.size(s["hum"]) else ()
+    changed = s["f_h_change"] != 0 or s["xi_h_change"] != 0
+    return {
+        "fs": s["fs"], "variation": s["variation"], "hum_frequency": s["hum_frequency"] if hum else "",
+        "hum_n": "/".join(f"{a:.2f}" for a in hum), "hum_variation": s["hum_variation"], "drift_n": s["drift"],
+        "sway_n": s["sway"], "noise_n": s["noise"], "tire": s["tire"], "slow": s["slow"],
+        "stand_before": s["stand_before"], "stand_after": s["stand_after"], "bout": s["bout"],
+        "ramp_up": s["ramp_up"], "ramp_down": s["ramp_down"], "mass": s["mass"], "f_b": s["f_b"],
+        "fb_variation": s["fb_variation"], "coef_variation": s["coef_variation"],
+        "change_kind": s["change"] if changed else "none", "f_h_change": s["f_h_change"],
+        "xi_h_change": s["xi_h_change"],
+    }
+
+
+def span_ok(fit_start, fit_end, span: dict, f_b: float) -> bool:
+    """The fitted span lies in the bouncing (half a cycle's slack) and holds at least 80 % of the full bout."""
+    slack = 0.5 / f_b
+    inside = fit_start >= span["bouncing_start_s"] - slack and fit_end <= span["bouncing_end_s"] + slack
+    overlap = min(fit_end, span["full_end_s"]) - max(fit_start, span["full_start_s"])
+    return bool(inside and overlap >= 0.8 * (span["full_end_s"] - span["full_start_s"]))
+
+
+def run_record(task) -> dict:
+    """Simulate and identify one record; never raises (a failure is the row's ``error``)."""
+    seed, row, k = task
+    out = {c: "" for c in COLUMNS}
+    out.update(seed=seed, row=row, record=k, spawn_key=f"{GROUP[row]}.{k}", held_out=row in HELD_OUT)
+    try:
+        from smd_statespace.simulation.lab import simulate_lab_record
+
+        settings, own = settings_of(row, seed, k)
+        out.update(_settings_columns(settings))
+        start = time.perf_counter()
+        synthetic = simulate_lab_record(**settings, seed=own)
+        out["sim_seconds"] = round(time.perf_counter() - start, 3)
+    except Exception as exc:  # noqa: BLE001 - one record must never stop the run
+        out["error"] = "simulate: " + _first_line(exc)
+        return out
+    truth = synthetic.truth
+    span = truth["span"]
+    out.update(change_time=truth["change"]["time_s"] if truth["change"]["time_s"] is not None else "",
+               f_h_true=truth["f_h"], f_h_start=truth["f_h_start"], f_h_end=truth["f_h_end"], xi_h_true=truth["xi_h"],
+               bouncing_start=span["bouncing_start_s"], full_start=span["full_start_s"], full_end=span["full_end_s"],
+               bouncing_end=span["bouncing_end_s"])
+    start = time.perf_counter()
+    try:
+        from smd_statespace.person import identify_person
+
+        result = identify_person(synthetic.record)  # identify REC --mass M: every default
+        out["seconds"] = round(time.perf_counter() - start, 3)
+        d = result.to_dict()
+        low, high = (float(v) for v in result.intervals["f_h"])
+        warnings = list(result.warnings)
+        named = [w for w in warnings if w.startswith(CHANGE_WARNING)]
+        notes = [n for n in result.notes if "fitted (" in n or n.startswith("bouncing")]
+        fit_start, fit_end = float(result.record.time[0]), float(result.record.time[-1])
+        out.update(
+            f_h_est=result.f_h, f_h_err_pct=100.0 * (result.f_h - truth["f_h"]) / truth["f_h"], f_h_low=low,
+            f_h_high=high, covered=bool(low <= truth["f_h"] <= high), determined=bool(d["f_h_determined"]),
+            xi_h_est=result.xi_h, xi_h_err=result.xi_h - truth["xi_h"], xi_h_determined=bool(d["xi_h_determined"]),
+            ljung_box_p=d["ljung_box_p"], variation_model=result.model.variation, n_cycles=d["n_cycles"],
+            fit_start=fit_start, fit_end=fit_end, span_ok=span_ok(fit_start, fit_end, span, settings["f_b"]),
+            span_note=(notes[0] if notes else "whole record fitted")[:160], n_warnings=len(warnings),
+            change_named=bool(named), change_warning=named[0][:200] if named else "", error="")
+    except Exception as exc:  # noqa: BLE001 - one record must never stop the run
+        out["seconds"] = round(time.perf_counter() - start, 3)
+        out["error"] = _first_line(exc)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# the CSV: one line per record, each in one write
+
+
+def _line(values: dict) -> bytes:
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerow([values[c] for c in COLUMNS])
+    return buffer.getvalue().encode("utf-8")
+
+
+def append_row(path: Path, values: dict):
+    """Append one record's row in a single ``write`` (O_APPEND), then fsync."""
+    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    try:
+        os.write(fd, _line(values))
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def open_csv(path: Path, resume: bool) -> set:
+    """Make the CSV ready; the ``(seed, row, record)`` already in it (``resume``)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.exists() and path.stat().st_size > 0:
+        if not resume:
+            raise SystemExit(f"{path} exists: give --resume to go on with it, or another --csv")
+        data = path.read_bytes()
+        if not data.endswith(b"\n"):  # a line cut by a kill: drop it
+            with open(path, "r+b") as handle:
+                handle.truncate(data.rfind(b"\n") + 1)
+        header = data.split(b"\n", 1)[0].decode("utf-8").split(",")
+        if tuple(header) != COLUMNS:
+            raise SystemExit(f"{path}: its columns are not this script's; give another --csv")
+        done = pd.read_csv(path, usecols=["seed", "row", "record"])
+        return {(int(s), str(r), int(k)) for s, r, k in done.itertuples(index=False)}
+    path.write_bytes(_line({c: c for c in COLUMNS}))
+    return set()
+
+
+def load_rows(path: Path, seed: int, rows, n: int) -> pd.DataFrame:
+    """The CSV's rows of this run (seed, rows, records below ``n``), the last of any duplicate."""
+    frame = pd.read_csv(path, keep_default_na=True, dtype={"error": str, "span_note": str, "change_warning": str})
+    frame = frame[(frame["seed"] == seed) & frame["row"].isin(rows) & (frame["record"] < n)]
+    frame = frame.drop_duplicates(["row", "record"], keep="last")
+    frame["error"] = frame["error"].fillna("").astype(str)
+    for name in ("covered", "determined", "change_named", "span_ok", "held_out", "xi_h_determined"):
+        frame[name] = frame[name].map({True: True, False: False, "True": True, "False": False})
+    return frame.sort_values(["row", "record"])
+
+
+# ---------------------------------------------------------------------------
+# tables
+
+
+def wilson(k: int, n: int, z: float = 1.959964) -> tuple:
+    """95 % Wilson interval (%) of ``k`` successes in ``n``."""
+    if n == 0:
+        return (math.nan, math.nan)
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (100 * max(centre - half, 0.0), 100 * min(centre + half, 1.0))
+
+
+def _share(k: int, n: int) -> str:
+    return f"{k}/{n} ({100 * k / n:.0f} %)" if n else "—"
+
+
+def _pct(values) -> str:
+    return f"{np.median(values):.1f}" if len(values) else "—"
+
+
+def _worst(values) -> str:
+    return f"{np.max(values):.1f}" if len(values) else "—"
+
+
+def row_summary(frame: pd.DataFrame, row: str) -> list:
+    """One markdown table row of the summary."""
+    rows = frame[frame["row"] == row]
+    ok = rows[rows["error"] == ""]
+    n, failed = len(rows), int((rows["error"] != "").sum())
+    err = ok["f_h_err_pct"].abs().to_numpy(dtype=float)
+    det = ok["determined"].astype(bool).to_numpy()
+    covered = ok["covered"].astype(bool).to_numpy()
+    low, high = wilson(int(covered.sum()), len(ok))
+    coverage = f"{100 * covered.mean():.0f} % ({low:.0f}-{high:.0f})" if len(ok) else "—"
+    misses = int((det & ~covered).sum())
+    if row == "lab":
+        twin = frame[(frame["row"] == "twin") & (frame["error"] == "")]
+        twin_det = set(twin.loc[twin["determined"].astype(bool), "record"])
+        paired = rows[rows["record"].isin(twin_det)]
+        paired_ok = paired[(paired["error"] == "")]
+        among = _share(int(paired_ok["determined"].astype(bool).sum()), len(paired)) if len(twin) else "—"
+    else:
+        among = "—"
+    named = _share(int(ok["change_named"].astype(bool).sum()), len(ok))
+    wrong_span = int((~ok["span_ok"].astype(bool)).sum())
+    seconds = f"{ok['seconds'].astype(float).median():.1f}" if len(ok) else "—"
+    return [row + (" (held out)" if row in HELD_OUT else ""), f"{n} ({failed})",
+            f"{_pct(err)} / {_pct(err[det])}", f"{_worst(err)} / {_worst(err[det])}", coverage, str(misses),
+            _share(int(det.sum()), len(ok)), among, named, str(wrong_span), seconds]
+
+
+HEADER = ("row", "records (failed)", "f_h median abs error %: all / determined", "worst: all / determined",
+          f"f_h {100 * LEVEL:g} % interval coverage (95 % Wilson)", "confident misses", "f_h determined",
+          "determined where the twin is", f"says \"{CHANGE_WARNING}\"", "span outside the bout", "median s")
+
+
+def _table(header, body) -> list:
+    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)] + ["| " + " | ".join(r) + " |" for r in body]
+
+
+def paired_lines(frame: pd.DataFrame) -> list:
+    """Lab records against their clean twins, record by record."""
+    lab = frame[(frame["row"] == "lab") & (frame["error"] == "")].set_index("record")
+    twin = frame[(frame["row"] == "twin") & (frame["error"] == "")].set_index("record")
+    both = lab.index.intersection(twin.index)
+    if not len(both):
+        return []
+    lab, twin = lab.loc[both], twin.loc[both]
+    ld, td = lab["determined"].astype(bool), twin["determined"].astype(bool)
+    cells = [("both determined", ld & td), ("twin only", ~ld & td), ("lab only", ld & ~td),
+             ("neither", ~ld & ~td)]
+    body = []
+    for name, mask in cells:
+        e_lab, e_twin = lab.loc[mask, "f_h_err_pct"].abs(), twin.loc[mask, "f_h_err_pct"].abs()
+        body.append([name, str(int(mask.sum())), _pct(e_lab), _pct(e_twin), _worst(e_lab), _worst(e_twin),
+                     _share(int(lab.loc[mask, "covered"].astype(bool).sum()), int(mask.sum())),
+                     _share(int(twin.loc[mask, "covered"].astype(bool).sum()), int(mask.sum()))])
+    header = ("f_h determined", "records", "median abs error % lab", "twin", "worst lab", "twin",
+              "covered lab", "twin")
+    return ["", f"Lab records against their clean twins ({len(both)} pairs fitted on both):", "",
+            *_table(header, body)]
+
+
+def failure_lines(frame: pd.DataFrame) -> list:
+    bad = frame[frame["error"] != ""]
+    return ["", "Failures:", ""] + [f"- {r.row} record {r.record}: {r.error}" for r in bad.itertuples()] \
+        if len(bad) else ["", "Failures: none."]
+
+
+def span_lines(frame: pd.DataFrame) -> list:
+    """Records whose fitted span is not the bout, with what the notes said."""
+    ok = frame[(frame["error"] == "") & ~frame["span_ok"].astype(bool)]
+    if not len(ok):
+        return ["", "Every fitted span lies in the bouncing and holds at least 80 % of the full bout."]
+    lines = ["", "Fitted spans outside the bouncing or holding less than 80 % of the full bout:", ""]
+    for r in ok.itertuples():
+        lines.append(f"- {r.row} record {r.record} (spawn key {r.spawn_key}): fitted {r.fit_start:.1f}-{r.fit_end:.1f} "
+                     f"s, bouncing {r.bouncing_start:.1f}-{r.bouncing_end:.1f} s (full {r.full_start:.1f}-"
+                     f"{r.full_end:.1f} s); notes: \"{r.span_note}\"")
+    return lines
+
+
+def summary_lines(frame: pd.DataFrame, rows) -> list:
+    body = [row_summary(frame, row) for row in rows if (frame["row"] == row).any()]
+    lines = _table(HEADER, body)
+    if {"lab", "twin"} <= set(rows):
+        lines += paired_lines(frame)
+    return lines + span_lines(frame) + failure_lines(frame)
+
+
+# ---------------------------------------------------------------------------
+# command line
+
+
+def parse_args(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--records", type=int, default=None, help="records per row (default 40; 2 with --quick)")
+    parser.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"root seed (default {DEFAULT_SEED})")
+    parser.add_argument("--jobs", type=int, default=1, help="processes (default 1); the rows do not depend on it")
+    parser.add_argument("--rows", default=",".join(ROWS), help=f"comma-separated rows (default {','.join(ROWS)})")
+    parser.add_argument("--csv", type=Path, default=None,
+                        help="CSV of the records (default benchmarks/results/lab_records_seed<S>.csv; with --quick "
+                             "a temporary file)")
+    parser.add_argument("--resume", action="store_true", help="go on with an existing --csv (fit the missing records)")
+    parser.add_argument("--quick", action="store_true", help="2 records per row, a temporary CSV: a smoke run")
+    args = parser.parse_args(argv)
+    if args.records is None:
+        args.records = 2 if args.quick else 40
+    if args.records < 1 or args.jobs < 1:
+        parser.error("--records and --jobs must be at least 1")
+    args.rows = tuple(r.strip() for r in args.rows.split(",") if r.strip())
+    unknown = [r for r in args.rows if r not in ROWS]
+    if unknown or not args.rows:
+        parser.error(f"unknown row(s) {unknown}; choose from {', '.join(ROWS)}")
+    if args.csv is None:
+        args.csv = (Path(tempfile.mkdtemp(prefix="lab-records-")) / "lab_records.csv" if args.quick
+                    else REPO / "benchmarks" / "results" / f"lab_records_seed{args.seed}.csv")
+    return args
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    command = "python benchmarks/lab_records.py " + shlex.join(sys.argv[1:] if argv is None else argv)
+    done = open_csv(args.csv, args.resume)
+    # lab and twin of one person next to each other: a partial run has whole pairs
+    tasks = [(args.seed, row, k) for k in range(args.records) for row in args.rows
+             if (args.seed, row, k) not in done]
+    print(f"{len(tasks)} records to fit ({len(done)} in {args.csv}), {args.jobs} process(es)", file=sys.stderr)
+    started = time.perf_counter()
+
+    def report(i, out):
+        append_row(args.csv, out)
+        est = f"{out['f_h_est']:.3f}" if out["f_h_est"] != "" else "-"
+        print(f"[{i}/{len(tasks)} {time.perf_counter() - started:.0f} s] {out['row']} {out['record']}: f_h "
+              f"{out['f_h_true']:.3f} -> {est} det={out['determined']} {out['seconds']} s {out['error']}"
+              if out["f_h_true"] != "" else f"[{i}/{len(tasks)}] {out['row']} {out['record']}: {out['error']}",
+              file=sys.stderr, flush=True)
+
+    if args.jobs == 1:
+        for i, task in enumerate(tasks, start=1):
+            report(i, run_record(task))
+    else:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            futures = [pool.submit(run_record, task) for task in tasks]
+            for i, future in enumerate(as_completed(futures), start=1):
+                report(i, future.result())
+    frame = load_rows(args.csv, args.seed, args.rows, args.records)
+    print(f"`{command}` — seed {args.seed}, {args.records} records per row; rows from {args.csv.name}; "
+          f"identify_person's defaults (intervals at {100 * LEVEL:g} %); {(time.perf_counter() - started) / 60:.1f} min "
+          "wall time this call\n")
+    print("\n".join(summary_lines(frame, args.rows)))
+
+
+if __name__ == "__main__":
+    main()
