@@ -138,6 +138,25 @@ def add_rate_argument(parser):
                              "were set; 0 keeps every sample, slower)")
 
 
+def add_span_argument(parser):
+    """``--span START:END|auto|all``: the part of the record the person is identified from."""
+    parser.add_argument("--span", type=_span, default="auto", metavar="START:END",
+                        help="record estimator: the part of the record to identify the person from, in s on the "
+                             "record's time axis (e.g. 4.5:33); auto (default) finds the steady bouncing of a lab's "
+                             "export (standing before and after, ramps, mains hum) and says what it kept; all: the "
+                             "whole record as it is")
+
+
+def _span(text):
+    """argparse type of ``--span`` (:func:`~smd_statespace.signals.parse_span`)."""
+    from ..signals import parse_span
+
+    try:
+        return parse_span(text)
+    except OptionError as exc:
+        raise argparse.ArgumentTypeError(str(exc).replace("--span ", "", 1)) from None
+
+
 def rate_of(args):
     """``--rate`` as :func:`~smd_statespace.person.identify_person` takes it: None for 0."""
     return args.rate or None

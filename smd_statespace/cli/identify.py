@@ -14,8 +14,8 @@ from ..estimators import ESTIMATORS
 from ..errors import OptionError
 from ..identify.runner import DEFAULT_ESTIMATOR
 from .common import (PROG, _count, add_accelerometer_arguments, add_model_arguments, add_rate_argument,
-                     add_run_arguments, build_model, check_record_level_options, estimator_options, load_truth,
-                     out_dir, prepare_record, rate_of, read_person_record, truth_values)
+                     add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
+                     load_truth, out_dir, prepare_record, rate_of, read_person_record, truth_values)
 
 
 SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
@@ -71,6 +71,7 @@ def add_identify(subparsers):
                              "person's model; by default the person rides it (Eq. 2 relative to the floor, a known "
                              "input, no unknown added)")
     add_rate_argument(parser)
+    add_span_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--jobs", type=_count, default=1, metavar="N", help="parallel processes (default 1)")
@@ -248,12 +249,14 @@ def run_person(args) -> int:
     started = time.perf_counter()
     result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
                              intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args),
-                             progress=not args.quiet, effects=effects, measured_floor=not args.no_floor)
+                             progress=not args.quiet, effects=effects, measured_floor=not args.no_floor,
+                             span=args.span)
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary(verbose=args.verbose))
     options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
-               "harmonics": args.harmonics, "rate": rate_of(args), "effects": [e.spec for e in result.effects]}
+               "harmonics": args.harmonics, "rate": rate_of(args), "span": args.span,
+               "effects": [e.spec for e in result.effects]}
     written = write_person(directory, result, options, truth=truth)
     print("wrote " + ", ".join(str(path) for path in written))
     return 0

@@ -50,7 +50,8 @@ def write_person(directory, result, options: dict, truth=None) -> list:
         ``person_spectrum.png`` (innovations' spectrum), ``person_compare.png``
         (free-run simulation against the measurement, with the fit without the
         effects when there is one) and, with a ``floor_acc`` column,
-        ``person_floor.png`` (innovations against the floor acceleration).
+        ``person_floor.png`` (innovations against the floor acceleration), and ``person_record.png``
+        (the record as read: its parts, the fitted span, its spectrum with the mains hum).
     """
     directory = Path(directory)
     person = result.to_dict()
@@ -78,6 +79,11 @@ def write_person(directory, result, options: dict, truth=None) -> list:
     if getattr(result.record, "floor_acc", None) is not None:
         figures.append(directory / "person_floor.png")
         plot_floor_correlation(result, figures[-1])
+    if result.prepared is not None:
+        from ..plotting.record import plot_record_parts
+
+        figures.append(directory / "person_record.png")
+        plot_record_parts(result.prepared, figures[-1])
     path = directory / "person.json"
     atomic_write_text(path, json.dumps(_plain(person), indent=2))
     return [path, cycles, run, *figures]

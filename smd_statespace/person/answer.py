@@ -67,6 +67,8 @@ def honest_intervals(result) -> dict:
     - A parameter the record does not determine (a model that misfits the record
       included: :attr:`PersonResult.misfit <smd_statespace.person.results.PersonResult.misfit>`),
       or whose estimate is an artefact: :func:`undetermined_interval`.
+    - ``f_h`` or ``xi_h`` when the record's halves differ (a person who changes,
+      :attr:`~smd_statespace.person.results.PersonResult.change`): the interval spans both halves'.
     - ``f_h`` when the variation models the record cannot rule out
       (:meth:`~smd_statespace.person.results.PersonResult.plausible_variations`) disagree
       by more than ``VARIATION_DISAGREEMENT``: the interval spans their estimates too (the
@@ -76,6 +78,10 @@ def honest_intervals(result) -> dict:
       (``../shared/findings/person-unseen-records.md``).
     """
     out = {name: undetermined_interval(result, name) for name in ("f_h", "xi_h")}
+    for name in (result.change or {}).get("changed", ()):  # a person who changes: every half's interval inside
+        halves = result.change["halves"]
+        out[name] = (float(min(out[name][0], *(h[f"{name}_low"] for h in halves))),
+                     float(max(out[name][1], *(h[f"{name}_high"] for h in halves))))
     values = [row["f_h"] for row in result.plausible_variations()]
     if values and max(values) > (1.0 + VARIATION_DISAGREEMENT) * min(values):
         low, high = out["f_h"]

@@ -295,7 +295,8 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
                          comparison=comparison, record_warnings=warnings, notes=notes,
                          before=result, effects=tuple(effects), linearisations=linearisations,
-                         settled=settled, tested_loglike=tested, tested_df=tested_df)
+                         settled=settled, tested_loglike=tested, tested_df=tested_df, change=root.change,
+                         prepared=root.prepared)
 
 
 def _settle_path(model: RecordModel, fitted, progress=False) -> tuple:

@@ -32,6 +32,7 @@ from ..progress import tqdm
 from ..signals import RECORD_RATE, prepare_record
 # the steps below identify_person (the names of __all__ were defined here up to 2026-11-27, and stay importable)
 from .answer import honest_intervals, person_result, undetermined_interval
+from .change import change_test
 from .model import VARIATIONS, Regressor, RecordModel
 from .search import TIMING_ITERATIONS, FitError, choose_with_own_timing, comparison_row, fit_model, profile_interval
 from .timing import TIMING_METHODS, estimate_timing
@@ -62,7 +63,8 @@ INTERVAL_METHODS = ("calibrated", "wald", "profile")
 
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type="oim", drift=False, check=True,
-                    rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto"):
+                    rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto",
+                    check_change=True):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -134,6 +136,11 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         slow drift of the measurement's zero (:data:`ZERO_DRIFT_DEGREE`) estimated with the person;
         a record bouncing from end to end is fitted whole, as before. ``(start, end)`` (s): that
         part. None: the whole record as it is (decimated only). ``result.notes`` says what was done.
+    check_change : bool
+        True (default): the person is fitted again on each half of the record and the halves
+        compared (:func:`~smd_statespace.person.change.change_test`, ``result.change``): a person
+        whose ``f_h`` or ``xi_h`` differs between them is said in words, and that parameter is
+        not called determined. False skips the two fits.
     progress : bool
         Show a progress bar (tqdm) over the likelihood searches (one per variation model,
         ``TIMING_ITERATIONS + 1`` more for ``timing="model"`` and the winner's final fit, then the
@@ -233,8 +240,10 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                            "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
+        change = change_test(model, fitted["params"], level) if check_change else None
         result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
-                               comparison=comparison, record_warnings=record_warnings, notes=notes)
+                               comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
+                               prepared=prepared)
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress)

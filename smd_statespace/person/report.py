@@ -11,12 +11,14 @@ import numpy as np
 from ..io import G
 from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
 
-__all__ = ["person_warnings", "result_dict", "summary_text", "table_row"]
+__all__ = ["change_words", "person_warnings", "result_dict", "summary_text", "table_row"]
 
 
 def person_warnings(result) -> list:
     """Plain-word warnings: the record's checks, parameters at a bound or not determined, residual tests that reject."""
     out = list(result.record_warnings)
+    if change_words(result.change):
+        out.append(change_words(result.change))
     named = result.model.unpack(result.params)
     for name in ("f_h", "xi_h"):
         low, high = result.model.bound(name)
@@ -120,6 +122,8 @@ def result_dict(result) -> dict:
     out["n_samples"] = int(result.model.y.size)
     out.update(result.test_pvalues())
     out["fs"] = result.record.fs
+    if result.change is not None:  # the halves of the record and whether the person changed between them
+        out["change"] = result.change
     if result.effects:
         out["effects"] = [effect.spec for effect in result.effects]
         for name, row in result.effect_estimates().iterrows():
@@ -209,3 +213,21 @@ def summary_text(result, verbose=False) -> str:
 def _unit(unit: str) -> str:
     """A unit as printed after a value: `` Hz``, nothing for a dimensionless one (``"-"``)."""
     return "" if unit in ("-", "") else f" {unit}"
+
+
+def change_words(change) -> str:
+    """The warning that names a person who changes, with both halves' numbers ("" when none changed)."""
+    if not change or not change["changed"]:
+        return ""
+    first, second = change["halves"]
+    parts = []
+    for name in change["changed"]:
+        unit = " Hz" if name == "f_h" else ""
+        parts.append(f"{name} {first[name]:.3g}{unit} ({first[f'{name}_low']:.3g}-{first[f'{name}_high']:.3g}) in "
+                     f"{first['start']:.1f}-{first['end']:.1f} s, {second[name]:.3g}{unit} "
+                     f"({second[f'{name}_low']:.3g}-{second[f'{name}_high']:.3g}) in {second['start']:.1f}-"
+                     f"{second['end']:.1f} s ({abs(change['z'][name]):.1f} sd apart)")
+    return ("the person changes during the record: " + "; ".join(parts) + ". One SMD model does not describe the "
+            "whole record: read the halves, not one value; a parameter that varies in time (tiring, warming up) is "
+            "the likely missing piece, which no candidate effect of diagnose takes; identify parts separately with "
+            "--span START:END")

@@ -83,6 +83,13 @@ class PersonResult:
         The unknowns that fit added to :attr:`before` (None: those of this fit): the likelihood ratio's
         degrees of freedom. The fit kept after re-placing the starts may have chosen another variation
         model, with another count.
+    change : dict or None
+        The person fitted on each half of the record and the test of equality
+        (:func:`~smd_statespace.person.change.change_test`; None: not tested). A parameter in its
+        ``changed`` list is not determined, and its interval spans both halves'.
+    prepared : PreparedRecord or None
+        What was done to the record before the fit (:func:`~smd_statespace.signals.prepare_record`: the
+        record as read, its parts, the mains hum, the fitted span); :attr:`record` is what was fitted.
     narrow_intervals : dict
         The calibrated intervals of ``f_h`` and ``xi_h`` as the record's information gives them,
         before :func:`~smd_statespace.person.answer.honest_intervals` widened them (empty for other
@@ -108,6 +115,8 @@ class PersonResult:
     settled: bool = True
     tested_loglike: float | None = None
     tested_df: int | None = None
+    change: dict | None = None
+    prepared: object = None
     narrow_intervals: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------------ estimates
@@ -368,9 +377,11 @@ class PersonResult:
     def determined(self, name) -> bool:
         """True when the standard error of ``f_h`` or ``xi_h`` is below :data:`DETERMINED_FRACTION` of its yardstick,
         the estimate is not at a search bound, ``xi_h`` is at most 1 (an over-damped fit has no resonance to
-        determine), ``f_h`` is not where a resonance mimics the force (:attr:`at_bouncing_frequency`) and the
-        model does not misfit the record (:attr:`misfit`)."""
+        determine), ``f_h`` is not where a resonance mimics the force (:attr:`at_bouncing_frequency`), the
+        record's halves agree on it (:attr:`change`) and the model does not misfit the record (:attr:`misfit`)."""
         if name == "f_h" and self.at_bouncing_frequency:
+            return False
+        if self.change and name in self.change["changed"]:  # two people in one record: no one value
             return False
         if self.misfit:
             return False

@@ -1,0 +1,111 @@
+"""Does one person explain the whole record? The person fitted on each half, and a test of equality.
+
+A person who tires, warms up or changes the way they bounce during a record is not one SMD
+model: fitted whole, the record gives an ``f_h`` between the two and innovations that are not
+white, and no candidate effect of ``diagnose`` takes what is missing (a parameter that varies
+in time). :func:`change_test` fits the record-level model again on each half of the record (at
+the cycle boundary nearest the middle), starting from the whole record's estimate with its
+variation model and cycle timing, and compares the halves' ``f_h`` and ``xi_h`` by a z-test on
+their calibrated standard errors (:data:`~smd_statespace.person.calibration.CALIBRATION`): a
+difference of :data:`CHANGE_Z` standard errors or more, and at least :data:`CHANGE_MIN` of the
+value, is a person who changes. The result then says so in words with both halves' values
+(:func:`~smd_statespace.person.report.change_words`, first among the warnings), does not call ``f_h``
+determined, and widens its interval over both halves'.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .calibration import CALIBRATION, wald_interval
+from .search import fit_model, information
+from .timing import CycleTiming
+
+__all__ = ["CHANGE_MIN", "CHANGE_Z", "MIN_HALF_CYCLES", "change_test"]
+
+CHANGE_Z = 2.58
+"""Difference of the halves' estimates, in standard errors of the difference, from which the person changes
+(two-sided 1 % for a normal z)."""
+
+CHANGE_MIN = {"f_h": 0.04, "xi_h": 0.06}
+"""Smallest difference that is called a change: 4 % of ``f_h``, 0.06 of ``xi_h`` (absolute)."""
+
+MIN_HALF_CYCLES = 8
+"""Fewest whole force cycles in each half for the test (the record-level model needs as many)."""
+
+
+def change_test(model, params, level=0.9) -> dict | None:
+    """The person fitted on each half of the record, and whether ``f_h`` or ``xi_h`` differ between them.
+
+    Parameters
+    ----------
+    model : RecordModel
+        The whole record's fitted model (without effects: a model with effects is not split).
+    params : ndarray
+        Its estimate (the halves' searches start there).
+    level : float
+        Confidence level of the halves' intervals.
+
+    Returns
+    -------
+    dict or None
+        ``halves``: per half its ``start``, ``end`` (s), ``f_h``, ``xi_h``, their calibrated sds
+        and intervals; ``z`` (per parameter, the difference over its sd); ``changed``: the
+        parameters that differ (empty: one person explains the record). None when the record
+        is too short to split (fewer than :data:`MIN_HALF_CYCLES` cycles a half), the model
+        has effects, or a half's fit fails.
+    """
+    if model.dynamics.model.effects:
+        return None
+    boundaries = np.asarray(model.timing.boundaries, dtype=float)
+    time = model.time
+    inside = boundaries[(boundaries > time[0]) & (boundaries < time[-1])]
+    if inside.size < 2 * MIN_HALF_CYCLES + 1:
+        return None
+    cut = inside[inside.size // 2]
+    halves = []
+    for keep, kept in ((time < cut, boundaries <= cut), (time >= cut, boundaries >= cut)):
+        half = _half(model, keep, kept)
+        fitted = fit_model(half, params, quick=True)
+        if not fitted["converged"] or half.person_at_bound(fitted["params"]):
+            return None
+        halves.append(_summary(half, fitted["params"], level))
+    return _compared(halves)
+
+
+def _half(model, keep, kept):
+    """The record-level model on the samples ``keep`` with the cycle boundaries ``kept`` (the same options)."""
+    timing = CycleTiming(model.timing.boundaries[kept], model.timing.method)
+    regressors = tuple(replace(r, values=np.asarray(r.values)[keep]) for r in model.regressors)
+    return replace(model, time=model.time[keep], y=model.y[keep], timing=timing, regressors=regressors,
+                   dynamics=None, nominal=None)
+
+
+def _summary(model, params, level) -> dict:
+    """A half's ``f_h``, ``xi_h``, calibrated sds and intervals."""
+    cov, _ = information(model, params, "oim")
+    named = model.unpack(params)
+    out = {"start": float(model.time[0]), "end": float(model.time[-1])}
+    for name in ("f_h", "xi_h"):
+        position = model.position(name)
+        sd = float(np.sqrt(cov[position, position])) * CALIBRATION[model.variation][name]
+        out[name], out[f"{name}_sd"] = float(named[name]), sd
+        out[f"{name}_low"], out[f"{name}_high"] = wald_interval(named[name], sd, level, model.bound(name))
+    return out
+
+
+def _compared(halves) -> dict:
+    """``z`` and the parameters that changed between the two halves."""
+    first, second = halves
+    z, changed = {}, []
+    for name in ("f_h", "xi_h"):
+        difference = second[name] - first[name]
+        sd = float(np.hypot(first[f"{name}_sd"], second[f"{name}_sd"]))
+        z[name] = float(difference / sd) if np.isfinite(sd) and sd > 0 else 0.0
+        size = abs(difference) / first[name] if name == "f_h" else abs(difference)
+        if abs(z[name]) >= CHANGE_Z and size >= CHANGE_MIN[name]:
+            changed.append(name)
+    return {"halves": halves, "z": z, "changed": changed}
+

@@ -1,0 +1,124 @@
+"""The person from a record as labs export it: the front end's choices in identify, the halves' test, the CLI.
+
+The records come from :func:`~smd_statespace.simulation.simulate_lab_record` (standing, ramps, mains hum, a
+drifting zero, 1000 Hz) with the truth known.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from smd_statespace.cli import main
+from smd_statespace.errors import RecordError
+from smd_statespace.io import G, make_record
+from smd_statespace.person import identify_person
+from smd_statespace.signals import decimate_record, prepare_record, safe_factor
+from smd_statespace.simulation import simulate_bouncing, simulate_lab_record
+
+PERSON = dict(mass=70.0, f_b=2.0, f_h=2.6, xi_h=0.3)
+
+
+@pytest.fixture(scope="module")
+def lab():
+    """16 s of bouncing between 4 s of standing, 50 Hz hum (5 N, 2 N at 150 Hz), a 10 N drifting zero, 1000 Hz."""
+    return simulate_lab_record(**PERSON, bout=16.0, hum=(5.0, 0.0, 2.0), drift=10.0, seed=5)
+
+
+def test_a_lab_record_is_fitted_on_its_steady_bouncing_at_a_rate_clear_of_the_hum(lab):
+    prepared = prepare_record(lab.record)
+    span = lab.truth["span"]
+    start, end = prepared.span
+    period = 1.0 / PERSON["f_b"]
+    assert span["full_start_s"] - period <= start <= span["full_start_s"] + 1.5 * period
+    assert span["full_end_s"] - 1.5 * period <= end <= span["full_end_s"] + period
+    assert prepared.trimmed and prepared.record.time[0] >= start - 0.02 and prepared.record.time[-1] <= end + 0.02
+    # 1000 Hz with 50 Hz hum: every 11th sample (90.9 Hz), so that 50 Hz lies above the new Nyquist frequency
+    assert prepared.factor == 11 and prepared.record.fs == pytest.approx(1000.0 / 11)
+    assert prepared.hum.found and prepared.hum.frequency == pytest.approx(50.0, abs=0.05)
+    said = " ".join(prepared.notes)
+    assert f"bouncing {start:.1f}-{end:.1f} s fitted" in said and "standing 0.0-" in said
+    assert "mains hum at 50" in said and "fitted at 90.91 Hz rather than 100" in said
+
+
+def test_a_record_bouncing_end_to_end_is_prepared_as_before():
+    """A simulator's record (bouncing from its first sample) is decimated only: the same arrays as before."""
+    sim = simulate_bouncing(**PERSON, duration=12, fs=500, seed=2)
+    prepared = prepare_record(sim.record)
+    before, factor, _ = decimate_record(sim.record)
+    assert not prepared.trimmed and prepared.span is None and prepared.factor == factor == 5
+    assert np.array_equal(prepared.record.force, before.force) and np.array_equal(prepared.record.time, before.time)
+
+
+def test_safe_factor_moves_the_nyquist_frequency_off_the_hum(lab):
+    hum = prepare_record(lab.record).hum
+    for fs, expected in ((1000.0, 11), (2000.0, 22), (500.0, 6), (1200.0, 13)):
+        factor = safe_factor(fs, 100.0, hum)
+        assert factor == expected and fs / (2 * factor) <= 47.0  # 3 Hz below 50 Hz
+
+
+def test_standing_that_weighs_other_than_the_mass_is_said(lab):
+    heavier = lab.record.__class__(**{**lab.record.__dict__, "mass": 66.0})
+    warnings = prepare_record(heavier).warnings
+    assert any("given mass is 66 kg" in w and "check --mass" in w for w in warnings), warnings
+
+
+def test_no_bouncing_part_is_refused_in_words():
+    t = np.arange(0.0, 20.0, 0.001)
+    rng = np.random.default_rng(1)
+    standing = make_record(t, 70 * G + 2.0 * np.sin(2 * np.pi * 0.3 * t) + rng.normal(0, 1, t.size), 70.0,
+                           source="stand.csv")
+    with pytest.raises(RecordError, match=r"stand.csv: no bouncing found; standing 0.0-20.0 s"):
+        prepare_record(standing)
+
+
+def test_a_span_by_hand_outside_the_record_is_one_line(lab, tmp_path, capsys):
+    with pytest.raises(RecordError, match=r"span=\(40, 60\) s reaches outside the record"):
+        prepare_record(lab.record, span=(40.0, 60.0))
+    path = tmp_path / "lab.csv"
+    lab.write(path)
+    for span, words in (("40:60", "reaches outside the record"), ("9:3", "START must be below END"),
+                        ("soon", "give START:END in s")):
+        assert main(["identify", str(path), "--mass", "70", "--span", span, "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and words in err, err
+    assert not (tmp_path / "o" / "person.json").exists()
+
+
+def test_two_bouts_fit_the_longest_and_name_the_other():
+    first = simulate_lab_record(**PERSON, bout=8.0, stand_before=3.0, stand_after=3.0, hum=(), drift=0.0, seed=1)
+    second = simulate_lab_record(**PERSON, bout=14.0, stand_before=3.0, stand_after=3.0, hum=(), drift=0.0, seed=2)
+    t1, t2 = first.record.time, second.record.time
+    record = make_record(np.r_[t1, t1[-1] + 0.001 + t2], np.r_[first.record.force, second.record.force], 70.0,
+                         source="two.csv")
+    prepared = prepare_record(record)
+    assert prepared.span[0] > t1[-1]  # the second, longer bout
+    note = next(n for n in prepared.notes if "2 bouts of bouncing" in n)
+    assert "the longest is fitted" in note and "--span" in note
+
+
+@pytest.mark.slow
+def test_the_person_of_a_lab_record_is_found_where_the_whole_record_misleads(lab):
+    truth = lab.truth["f_h"]
+    person = identify_person(lab.record)
+    whole = identify_person(lab.record, span=None, check=False, check_change=False)
+    assert person.f_h == pytest.approx(truth, rel=0.08)
+    assert person.intervals["f_h"][0] <= truth <= person.intervals["f_h"][1]
+    assert abs(whole.f_h / truth - 1) > 2 * abs(person.f_h / truth - 1)
+    assert [r.name for r in person.model.regressors][:3] == ["offset", "zero_drift_1", "zero_drift_2"]
+    assert person.change is not None and person.change["changed"] == []  # one person from end to end
+
+
+@pytest.mark.slow
+def test_a_person_who_changes_is_named_and_not_given_one_confident_value(tmp_path, capsys):
+    sim = simulate_lab_record(**PERSON, bout=24.0, hum=(), drift=5.0, f_h_change=0.2, change="step", seed=8)
+    path = tmp_path / "changes.csv"
+    sim.write(path)
+    assert main(["identify", str(path), "--mass", "70", "--quiet", "--out", str(tmp_path / "o")]) == 0
+    printed = capsys.readouterr().out
+    assert "warning: the person changes during the record: f_h" in printed
+    person = json.loads((tmp_path / "o" / "person.json").read_text())
+    first, second = person["change"]["halves"]
+    assert first["f_h"] == pytest.approx(sim.truth["f_h_start"], rel=0.08)
+    assert second["f_h"] == pytest.approx(sim.truth["f_h_end"], rel=0.08)
+    assert not person["f_h_determined"] and person["f_h_low"] <= first["f_h"] and second["f_h"] <= person["f_h_high"]
