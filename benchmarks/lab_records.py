@@ -46,9 +46,9 @@ Output
 ------
 ``--csv`` (default ``benchmarks/results/lab_records_seed<S>.csv``): one row per record (:data:`COLUMNS`),
 each appended in one ``write`` as it finishes, so a killed run loses at most the records in flight and
-``--resume`` fits only the missing ones. A record that fails (simulation or fit) is a row with ``error`` set;
-the run goes on. Then the tables (:func:`summary_lines`) are printed from every row of the CSV that the
-options ask for.
+``--resume`` fits only the missing ones (and those that failed). A record that fails (simulation or fit) is a row
+with ``error`` set; the run goes on. Then the tables (:func:`summary_lines`) are printed from every row of the CSV
+that the options ask for.
 """
 
 from __future__ import annotations
@@ -93,8 +93,10 @@ TWIN_RAMP = 0.5
 """Ramp up and down of a clean twin (cycles): the least that avoids a jolt at the start (ramps must be positive)."""
 
 TWIN = dict(stand_before=0.0, stand_after=0.0, hum=(), hum_variation=0.0, drift=0.0, sway=0.0, fs=200.0, tire=0.0,
-            slow=0.0, ramp_up=TWIN_RAMP, ramp_down=TWIN_RAMP)
-"""Settings that make a lab record's clean twin (``fs`` 200 Hz: the least ``simulate_lab_record`` takes)."""
+            slow=0.0, ramp_up=TWIN_RAMP, ramp_down=TWIN_RAMP, change="drift", change_time=None)
+"""Settings that make a lab record's clean twin (``fs`` 200 Hz: the least ``simulate_lab_record`` takes). The person
+is stationary (no change), so the lab draw's step time, which may fall outside the twin's shorter record, is
+dropped."""
 
 STATIONARY = dict(f_h_change=0.0, xi_h_change=0.0)
 """Fixed settings of a stationary person (the truth's change kind is ``"none"``)."""
@@ -246,7 +248,7 @@ def run_record(task) -> dict:
             xi_h_est=result.xi_h, xi_h_err=result.xi_h - truth["xi_h"], xi_h_determined=bool(d["xi_h_determined"]),
             ljung_box_p=d["ljung_box_p"], variation_model=result.model.variation, n_cycles=d["n_cycles"],
             fit_start=fit_start, fit_end=fit_end, span_ok=span_ok(fit_start, fit_end, span, settings["f_b"]),
-            span_note=(notes[0] if notes else "whole record fitted")[:160], n_warnings=len(warnings),
+            span_note=(notes[0] if notes else "whole record fitted")[:300], n_warnings=len(warnings),
             change_named=bool(named), change_warning=named[0][:200] if named else "", error="")
     except Exception as exc:  # noqa: BLE001 - one record must never stop the run
         out["seconds"] = round(time.perf_counter() - start, 3)
@@ -287,15 +289,17 @@ def open_csv(path: Path, resume: bool) -> set:
         header = data.split(b"\n", 1)[0].decode("utf-8").split(",")
         if tuple(header) != COLUMNS:
             raise SystemExit(f"{path}: its columns are not this script's; give another --csv")
-        done = pd.read_csv(path, usecols=["seed", "row", "record"])
-        return {(int(s), str(r), int(k)) for s, r, k in done.itertuples(index=False)}
+        done = pd.read_csv(path, usecols=["seed", "row", "record", "error"], dtype={"error": str})
+        done = done[done["error"].isna()]  # a record that failed is tried again (its new row is the one read)
+        return {(int(s), str(r), int(k)) for s, r, k in done[["seed", "row", "record"]].itertuples(index=False)}
     path.write_bytes(_line({c: c for c in COLUMNS}))
     return set()
 
 
 def load_rows(path: Path, seed: int, rows, n: int) -> pd.DataFrame:
     """The CSV's rows of this run (seed, rows, records below ``n``), the last of any duplicate."""
-    frame = pd.read_csv(path, keep_default_na=True, dtype={"error": str, "span_note": str, "change_warning": str})
+    frame = pd.read_csv(path, keep_default_na=True, dtype={"error": str, "span_note": str, "change_warning": str,
+                                                              "spawn_key": str})
     frame = frame[(frame["seed"] == seed) & frame["row"].isin(rows) & (frame["record"] < n)]
     frame = frame.drop_duplicates(["row", "record"], keep="last")
     frame["error"] = frame["error"].fillna("").astype(str)
@@ -430,7 +434,8 @@ def parse_args(argv=None):
     parser.add_argument("--csv", type=Path, default=None,
                         help="CSV of the records (default benchmarks/results/lab_records_seed<S>.csv; with --quick "
                              "a temporary file)")
-    parser.add_argument("--resume", action="store_true", help="go on with an existing --csv (fit the missing records)")
+    parser.add_argument("--resume", action="store_true",
+                        help="go on with an existing --csv (fit the missing records and those that failed)")
     parser.add_argument("--quick", action="store_true", help="2 records per row, a temporary CSV: a smoke run")
     args = parser.parse_args(argv)
     if args.records is None:
@@ -475,7 +480,8 @@ def main(argv=None):
                 report(i, future.result())
     frame = load_rows(args.csv, args.seed, args.rows, args.records)
     print(f"`{command}` — seed {args.seed}, {args.records} records per row; rows from {args.csv.name}; "
-          f"identify_person's defaults (intervals at {100 * LEVEL:g} %); {(time.perf_counter() - started) / 60:.1f} min "
+          f"identify_person's defaults (intervals at {100 * LEVEL:g} %); "
+          f"{(time.perf_counter() - started) / 60:.1f} min "
           "wall time this call\n")
     print("\n".join(summary_lines(frame, args.rows)))
 
