@@ -11,8 +11,10 @@ MASS = 70.0
 FB = 2.2
 
 
-def lab_record(seed=0, hum=(1.5, 0.6), bouncing=True, two=False, drift=4.0, off_at=None):
+def lab_record(seed=0, hum=(1.5, 0.6), bouncing=True, two=False, drift=4.0, off_at=None, tire=0.0):
     """Standing 4 s, a 2-cycle ramp, bouncing 30 s at 2.2 Hz, a 2-cycle ramp, standing 3 s; hum, drift, noise.
+
+    ``tire``: the bouncing's amplitude falls linearly by this fraction over the 30 s (the person tires).
 
     Returns the record, the true steady span (s) and the hum-free, noise-free force (N).
     """
@@ -22,6 +24,7 @@ def lab_record(seed=0, hum=(1.5, 0.6), bouncing=True, two=False, drift=4.0, off_
     t3 = t2 + 2 / FB
     t = np.arange(0.0, t3 + 3.0, 0.001)
     envelope = np.clip((t - t0) / (t1 - t0), 0, 1) * np.clip((t3 - t) / (t3 - t2), 0, 1) * bouncing
+    envelope *= 1.0 - tire * np.clip((t - t1) / (t2 - t1), 0, 1)
     if two:  # a pause of about 4 s in the middle: two bouts
         envelope *= np.clip(np.abs(t - (t1 + t2) / 2) - 2.0, 0, 1)
     phase = 2 * np.pi * FB * (t - t0)
@@ -75,6 +78,17 @@ def test_the_steady_bout_is_found_within_a_cycle_with_the_standing_levels():
     assert bouts.noise_sd == pytest.approx(2.0, rel=0.1)
     text = bouts.describe()
     assert "\n" not in text and "bouncing" in text and "standing" in text
+
+
+@pytest.mark.parametrize("seed", [2, 3])
+def test_a_tiring_person_is_bouncing_to_the_end_not_ramping_down_for_half_the_bout(seed):
+    record, (start, end), _ = lab_record(seed=seed, tire=0.3)  # the amplitude falls 30 % over the 30 s
+    bouts = find_bouts(remove_hum(record))
+    assert len(bouts.bouts) == 1
+    bout = bouts.bouts[0]
+    assert abs(bout.end - end) < 1.5 / FB and abs(bout.start - start) < 1.5 / FB
+    ramps = [s for s in bouts.segments if s.kind == "ramp"]
+    assert ramps and max(s.end - s.start for s in ramps) < 4 / FB  # starting and stopping: a few cycles
 
 
 def test_two_bouts_are_both_returned():

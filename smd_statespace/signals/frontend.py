@@ -1,25 +1,22 @@
 """A record as a lab exports it, made ready for the fit: mains hum, the bouncing bouts, trimming.
 
-A lab's export is sampled at 500-2000 Hz; the person stands still, starts bouncing over a few
-cycles, bounces, stops and stands again; the plate picks up mains hum (50 or 60 Hz and their
-harmonics) and its zero drifts slowly. Fitting the whole record as bouncing pulls the answer
-off (standing fitted as bouncing: up to 75 %), and a 50 Hz hum decimated to 100 Hz sits on the
-new Nyquist frequency (innovations alternating in sign at every lag). The steps:
+A lab's export is sampled at 500-2000 Hz; the person stands still, starts bouncing over a few cycles, bounces, stops
+and stands again; the plate picks up mains hum (50 or 60 Hz and their harmonics) and its zero drifts slowly. Fitting
+the whole record as bouncing pulls the answer off (standing fitted as bouncing: up to 75 %), and a 50 Hz hum
+decimated to 100 Hz sits on the new Nyquist frequency (innovations alternating in sign at every lag). The steps:
 
-1. :func:`mains_hum` finds hum: a line at a harmonic of 50 or 60 Hz (up to the Nyquist
-   frequency) whose power is :data:`LINE_RATIO` times its neighbourhood's in a Welch spectrum;
-   it refines the fundamental and follows each line's amplitude and phase over time (a fit of
-   a sinusoid in a sliding Hann window of :data:`HUM_WINDOW`, by complex demodulation, on the
-   force high-passed at :data:`HUM_HIGHPASS`, so the bouncing band never enters the fit).
-   :func:`remove_hum` subtracts the lines found.
-2. :func:`find_bouts` splits the record into standing, bouncing, ramps, other movement and
-   no contact, and reads the standing level before and after (the body weight and the drift
-   of the plate's zero) and the noise while standing.
+1. :func:`mains_hum` finds hum: a line at a harmonic of 50 or 60 Hz (below the Nyquist frequency) whose power is
+   :data:`LINE_RATIO` times its neighbourhood's in a Welch spectrum; it refines the fundamental and follows each
+   line's amplitude and phase (a sinusoid fitted in a sliding Hann window of :data:`HUM_WINDOW`, by complex
+   demodulation, to the force high-passed at :data:`HUM_HIGHPASS`, clear of the bouncing band); :func:`remove_hum`
+   subtracts them.
+2. :func:`find_bouts` splits the record into standing, bouncing, ramps, other movement and no contact, and reads
+   the standing levels before and after (body weight, the drift of the plate's zero) and the noise while standing.
 3. :func:`trim_record` restricts a record to a span (a steady bout).
-4. :func:`front_end` runs them with :func:`~smd_statespace.signals.decimate_record` (whose
-   guard band keeps the new Nyquist frequency empty).
+4. :func:`front_end` runs them with :func:`~smd_statespace.signals.decimate_record` (whose guard band keeps the new
+   Nyquist frequency empty).
 
-``benchmarks/frontend_speed.py`` measures it (40 s at 1000 Hz: about 0.07 s in all).
+``benchmarks/frontend_speed.py`` measures it (40 s at 1000 Hz: about 0.07 s in all), ``frontend_spans.py`` its spans.
 """
 
 from __future__ import annotations
@@ -34,8 +31,8 @@ from ..io import G, Record
 from .decimation import RECORD_RATE, decimate_record
 
 __all__ = ["MAINS", "LINE_RATIO", "HUM_WINDOW", "HUM_HIGHPASS", "ACTIVE_LEVEL", "CONTACT_LEVEL", "STEADY_SWING",
-           "MIN_BOUT_CYCLES", "Hum", "Span", "Bout", "Bouts", "FrontEnd", "mains_hum", "remove_hum", "find_bouts",
-           "trim_record", "front_end"]
+           "MIN_BOUT_CYCLES", "MAX_RAMP_CYCLES", "Hum", "Span", "Bout", "Bouts", "FrontEnd", "mains_hum",
+           "remove_hum", "find_bouts", "trim_record", "front_end"]
 
 MAINS = (50.0, 60.0)
 """Nominal mains frequencies (Hz) whose harmonics are searched for hum."""
@@ -56,11 +53,17 @@ CONTACT_LEVEL = 0.05
 """Force below this fraction of body weight (for at least 30 ms) is no contact."""
 
 STEADY_SWING = 0.9
-"""A cycle at the ends of a bout is steady when its swing reaches this fraction of the bout's median."""
+"""An end cycle of a bout is steady when its swing reaches this fraction of its reference (:func:`find_bouts`)."""
 
 MIN_BOUT_CYCLES = 4
 """Fewest steady cycles that make a rhythmic movement a bouncing bout."""
 
+MAX_RAMP_CYCLES = 4
+"""Most cycles at each end of a bout left out as ramp for a small swing. Starting and stopping grow the force from
+nothing (or let it die) over 1-3 cycles; a decline over many is the person tiring, and bouncing: against the bout's
+median alone, a person tiring by 20-35 % lost the last third of the bout (``benchmarks/frontend_spans.py``)."""
+
+_REFERENCE_CYCLES = 5  # an end cycle's reference: the median swing of the next 5 inward (ramp ones a minority)
 _PERIODS = (0.2, 1.25)  # lags (s) searched for the bouncing period: 0.8-5 Hz
 _RHYTHM_MIN = 0.5  # least autocorrelation at one period for a rhythm
 _MIN_STANDING = 0.5  # s: quieter gaps inside movement are movement
@@ -126,8 +129,7 @@ def _line_ratios(freq, power, centres):
 
 def _refine(x, fs, base, harmonics, lines):
     """The fundamental from the lines' peaks in a zero-padded Hann spectrum (parabola on the log)."""
-    n = x.size
-    size = 4 * n
+    n, size = x.size, 4 * x.size
     spectrum = np.abs(np.fft.rfft(x * np.hanning(n), size))
     step = fs / size
     estimates, weights = [], []
@@ -161,22 +163,21 @@ def mains_hum(record: Record, window: float = HUM_WINDOW) -> Hum:
     record : Record
         The measurement (force in N), sampled fast enough to hold 50 Hz (above 102 Hz).
     window : float
-        Length (s) of the sliding Hann window over which each line's amplitude and phase are
-        fitted (slowly varying amplitude and a mains frequency that wanders are followed).
+        Length (s) of the sliding Hann window over which each line's amplitude and phase are fitted (slowly varying
+        amplitude and a mains frequency that wanders are followed).
 
     Returns
     -------
     Hum
-        Whether hum was found, its fundamental (Hz), the harmonics' amplitudes (N), which are
-        lines, and the fitted hum waveform.
+        Whether hum was found, its fundamental (Hz), the harmonics' amplitudes (N), which are lines, and the fitted
+        hum waveform.
 
     Notes
     -----
-    A harmonic is a line when its Welch power (4 s Hann segments) is :data:`LINE_RATIO` times
-    the median of the bins 1.5-6 Hz away. Of 50 and 60 Hz the base with more lines wins (300 Hz
-    is a harmonic of both). The fundamental is refined from the lines' peaks in a zero-padded
-    spectrum of the whole record; each harmonic's amplitude is the median over time of the
-    sliding fit's ``2 |a_k(t)|``.
+    A harmonic is a line when its Welch power (4 s Hann segments) is :data:`LINE_RATIO` times the median of the bins
+    1.5-6 Hz away. Of 50 and 60 Hz the base with more lines wins (300 Hz is a harmonic of both). The fundamental is
+    refined from the lines' peaks in a zero-padded spectrum of the whole record; each harmonic's amplitude is the
+    median over time of the sliding fit's ``2 |a_k(t)|``.
     """
     if not (isinstance(window, (int, float)) and math.isfinite(window) and window > 0):
         raise OptionError(f"window={window!r} must be a positive duration in s")
@@ -223,10 +224,10 @@ def remove_hum(record: Record, hum: Hum | None = None) -> Record:
 
     Notes
     -----
-    A sliding Hann-weighted least-squares sinusoid at each line (complex demodulation), chosen
-    over zero-phase notches (``iirnotch``) by ``benchmarks/frontend_speed.py``: at a 4 s window it
-    leaves 2 % of a wandering hum, changes the band below 30 Hz by under 0.001 N and takes less of
-    the noise than notches of Q 25-100 (which leave 2-5 % and change it by up to 0.01 N).
+    A sliding Hann-weighted least-squares sinusoid at each line (complex demodulation), chosen over zero-phase
+    notches (``iirnotch``) by ``benchmarks/frontend_speed.py``: at a 4 s window it leaves 2 % of a wandering hum,
+    changes the band below 30 Hz by under 0.001 N and takes less of the noise than notches of Q 25-100 (which leave
+    2-5 % and change it by up to 0.01 N).
     """
     hum = mains_hum(record) if hum is None else hum
     if not hum.found:
@@ -244,9 +245,8 @@ class Span:
     Attributes
     ----------
     kind : str
-        ``standing``, ``bouncing`` (the steady part of a bout), ``ramp`` (starting or stopping
-        bouncing), ``movement`` (anything else: stepping on or off, a jump, a squat) or
-        ``no_contact`` (the force under :data:`CONTACT_LEVEL` of body weight).
+        ``standing``, ``bouncing`` (the steady part of a bout), ``ramp`` (starting or stopping), ``movement``
+        (stepping on or off, a jump, a squat) or ``no_contact`` (under :data:`CONTACT_LEVEL` of body weight).
     start, end : float
         Times (s) of its first and last sample, on the record's own time axis.
     """
@@ -263,16 +263,14 @@ class Bout:
     Attributes
     ----------
     start, end : float
-        The steady part (s): from the force peak opening the first steady cycle to the peak
-        closing the last one. The fit wants this part only.
+        The steady part (s): from the force peak opening the first steady cycle to the peak closing the last one.
     period : float
         The bouncing period (s), from the autocorrelation of the bout.
     cycles : int
         Steady cycles (peak to peak) between ``start`` and ``end``.
     ramp_in, ramp_out : tuple of float or None
-        ``(start, end)`` (s) of the movement before and after the steady part (starting and
-        stopping to bounce, cycles whose swing is under :data:`STEADY_SWING` of the median's),
-        excluded from the span.
+        ``(start, end)`` (s) of the movement before and after the steady part (starting and stopping to bounce:
+        :func:`find_bouts`), left out of the span.
     """
 
     start: float
@@ -301,11 +299,11 @@ class Bouts:
     bouts : tuple of Bout
         The bouncing bouts (empty when the person never bounces).
     level_before, level_after : float
-        Mean force (N) while standing before the first bout and after the last one (nan when
-        there is no such standing; with no bout, ``level_before`` is the mean of all standing).
+        Mean force (N) while standing before the first bout and after the last one (nan when there is no such
+        standing; with no bout, ``level_before`` is the mean of all standing).
     noise_sd : float
-        Standard deviation (N) of the force's white noise per sample while standing (at the
-        record's rate; from successive differences, robust to sway).
+        Standard deviation (N) of the force's white noise per sample while standing (at the record's rate; from
+        successive differences, robust to sway).
     """
 
     source: str
@@ -405,6 +403,16 @@ def _period(x, fs):
     return (lag + float(np.clip(shift, -0.5, 0.5))) / fs, float(b)
 
 
+def _ramp(swings, regular):
+    """Cycles opening ``swings`` that are ramp: off the period, or among the first MAX_RAMP_CYCLES low ones."""
+    n = low = 0  # low: the cycles taken for their swing alone
+    typical = np.median(swings)
+    while n + 1 < swings.size and not (regular[n] and (low >= MAX_RAMP_CYCLES or swings[n] >= STEADY_SWING * min(
+            typical, np.median(swings[n + 1:n + 1 + _REFERENCE_CYCLES])))):
+        low, n = low + bool(regular[n]), n + 1
+    return n
+
+
 def _bout(time, low, a, b, fs):
     """The bout in samples ``a:b`` of the low-passed force, or None when it is no bouncing."""
     period, rhythm = _period(low[a:b], fs)
@@ -416,11 +424,10 @@ def _bout(time, low, a, b, fs):
     if peaks.size < MIN_BOUT_CYCLES + 1:
         return None
     swings = 0.5 * (x[peaks[:-1]] + x[peaks[1:]]) - np.minimum.reduceat(x, peaks)[:-1]
-    lengths = np.diff(peaks) / fs
-    steady = (swings >= STEADY_SWING * np.median(swings)) & (np.abs(lengths / period - 1.0) < 0.3)
-    if steady.sum() < MIN_BOUT_CYCLES:
+    regular = np.abs(np.diff(peaks) / fs / period - 1.0) < 0.3
+    first, last = _ramp(swings, regular), swings.size - 1 - _ramp(swings[::-1], regular[::-1])
+    if last < first or regular[first:last + 1].sum() < MIN_BOUT_CYCLES:
         return None
-    first, last = int(np.argmax(steady)), steady.size - 1 - int(np.argmax(steady[::-1]))
     start, end = time[a + peaks[first]], time[a + peaks[last + 1]]
     ramp_in = (float(time[a]), float(start)) if peaks[first] > 0 else None
     ramp_out = (float(end), float(time[b - 1])) if a + peaks[last + 1] < b - 1 else None
@@ -450,27 +457,26 @@ def find_bouts(record: Record) -> Bouts:
     Parameters
     ----------
     record : Record
-        The measurement (force in N; ``record.mass`` in kg scales the thresholds), best with
-        its mains hum removed (:func:`remove_hum`).
+        The measurement (force in N; ``record.mass`` in kg scales the thresholds), best with its mains hum removed
+        (:func:`remove_hum`).
 
     Returns
     -------
     Bouts
-        The parts in time order, the bouts of bouncing (none: :meth:`Bouts.require` refuses
-        in words), the standing levels before and after (N) and the noise sd while standing.
+        The parts in time order, the bouts of bouncing (none: :meth:`Bouts.require` refuses in words), the standing
+        levels before and after (N) and the noise sd while standing.
 
     Notes
     -----
-    Per sample, the force low-passed at 20 Hz under :data:`CONTACT_LEVEL` of ``M g`` for 30 ms
-    or more is no contact; the RMS over 1 s of the force band-passed to 0.7-10 Hz above
-    :data:`ACTIVE_LEVEL` of ``M g`` is movement (quiet gaps under 0.5 s inside movement too);
-    the rest is standing (sway is slower and smaller). A movement is a bout of bouncing when
-    its force repeats (autocorrelation at least 0.5 at one period of 0.2-1.25 s) over at least
-    :data:`MIN_BOUT_CYCLES` steady cycles. A bout is cut at force peaks: from each end inwards,
-    cycles whose swing is under :data:`STEADY_SWING` of the bout's median swing, or whose length
-    is off the period by 30 % or more, are ramp (starting and stopping, 1-3 cycles) and left out
-    of the span, since the model's steady bouncing does not describe them; the interior is kept
-    whole. The standing levels leave out 0.25 s next to any movement.
+    Per sample, the force low-passed at 20 Hz under :data:`CONTACT_LEVEL` of ``M g`` for 30 ms or more is no
+    contact; the RMS over 1 s of the force band-passed to 0.7-10 Hz above :data:`ACTIVE_LEVEL` of ``M g`` is
+    movement (quiet gaps under 0.5 s inside movement too); the rest is standing. A movement is a bout of bouncing
+    when its force repeats (autocorrelation >= 0.5 at a period of 0.2-1.25 s) over at least :data:`MIN_BOUT_CYCLES`
+    steady cycles. A bout is cut at force peaks: from each end inwards, cycles off the period by 30 % or more, and
+    up to :data:`MAX_RAMP_CYCLES` cycles whose swing is under :data:`STEADY_SWING` of both the median of the next 5
+    inward and the bout's median, are ramp (starting and stopping: the force growing from nothing over 1-3 cycles,
+    or dying) and left out of the span (not steady bouncing); a slow decline (tiring) or a swell is bouncing, and
+    the interior is kept whole. The standing levels leave out 0.25 s next to any movement.
 
     Examples
     --------
@@ -482,9 +488,7 @@ def find_bouts(record: Record) -> Bouts:
     >>> [(s.kind, round(s.start, 1), round(s.end, 1)) for s in bouts.segments if s.kind != "ramp"]
     [('standing', 0.0, 4.5), ('bouncing', 5.1, 14.6), ('standing', 15.5, 20.0)]
     """
-    time = np.asarray(record.time, float)
-    force = np.asarray(record.force, float)
-    fs = record.fs
+    time, force, fs = np.asarray(record.time, float), np.asarray(record.force, float), record.fs
     state, low = _states(force, fs, record.mass * G)
     segments, bouts = [], []
     starts = np.flatnonzero(np.r_[True, state[1:] != state[:-1]])
@@ -508,15 +512,13 @@ def trim_record(record: Record, span) -> Record:
     ----------
     record : Record
     span : (float, float), Span or Bout
-        Start and end (s) on the record's time axis; samples with ``start <= t <= end`` (to
-        half a sample) are kept.
+        Start and end (s) on the record's time axis; samples with ``start <= t <= end`` (to half a sample) are kept.
 
     Returns
     -------
     Record
-        Time, force, floor acceleration and any array in ``record.extra`` of the record's
-        length cut alike; times keep their values, so spans, findings and figures of the
-        trimmed record read as on the whole one.
+        Time, force, floor acceleration and any array in ``record.extra`` of the record's length cut alike; times
+        keep their values, so spans, findings and figures of the trimmed record read as on the whole one.
 
     Raises
     ------
@@ -540,12 +542,10 @@ def trim_record(record: Record, span) -> Record:
     if keep.sum() < 3:
         raise RecordError(f"{record.source}: span=({start:g}, {end:g}) s holds {int(keep.sum())} samples; "
                           "at least 3 are needed")
-    n = time.size
-    extra = {k: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == (n,) else v)
+    extra = {k: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == (time.size,) else v)
              for k, v in (record.extra or {}).items()}
     floor_acc = None if record.floor_acc is None else np.asarray(record.floor_acc)[keep]
-    return replace(record, time=time[keep], force=np.asarray(record.force)[keep], floor_acc=floor_acc,
-                   extra=extra)
+    return replace(record, time=time[keep], force=np.asarray(record.force)[keep], floor_acc=floor_acc, extra=extra)
 
 
 @dataclass(frozen=True)
@@ -590,8 +590,8 @@ def front_end(record: Record, rate=RECORD_RATE) -> FrontEnd:
     Returns
     -------
     FrontEnd
-        ``front_end(record).steady()`` is the first bout's steady part, hum-free and decimated
-        (decimated whole before trimming, so the decimation's end effects stay outside the bout).
+        ``front_end(record).steady()`` is the first bout's steady part, hum-free and decimated (decimated whole
+        before trimming, so the decimation's end effects stay outside the bout).
     """
     hum = mains_hum(record)
     clean = remove_hum(record, hum)
