@@ -51,7 +51,7 @@ import numpy as np
 from .errors import SMDInputError
 from .io import G, Record
 
-__all__ = ["NotBouncingError", "Finding", "BouncingCheck", "check_bouncing"]
+__all__ = ["NotBouncingError", "Finding", "BouncingCheck", "check_bouncing", "check_clipping"]
 
 CONTACT_FRACTION = 0.05
 """Force below this fraction of body weight means no contact (the plate's noise is about 1 %)."""
@@ -333,6 +333,15 @@ def _mass_mismatch(mass: float, fraction: np.ndarray, active: np.ndarray, dt: fl
             f"quiet standing ({quiet.sum() * dt:.1f} s) weighs {ratio:.3f} times M g ({mass:.1f} kg): the "
             f"body mass given or the plate's zero is off (standing says {mass * ratio:.1f} kg)")
     return None
+
+
+def check_clipping(record: Record) -> Finding | None:
+    """The ``saturated`` refusal of :func:`check_bouncing` alone, cheap on a record at any rate (None: not clipped).
+
+    For the record as read: a decimation's low-pass rounds clipped tops off, so the full check, run on the
+    decimated record, no longer sees them.
+    """
+    return _saturation(np.asarray(record.time, dtype=float), np.asarray(record.force, dtype=float), _words(record))
 
 
 def check_bouncing(record: Record) -> BouncingCheck:

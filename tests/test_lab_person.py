@@ -7,6 +7,7 @@ drifting zero, 1000 Hz) with the truth known.
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from smd_statespace.cli import main
@@ -122,3 +123,22 @@ def test_a_person_who_changes_is_named_and_not_given_one_confident_value(tmp_pat
     assert first["f_h"] == pytest.approx(sim.truth["f_h_start"], rel=0.08)
     assert second["f_h"] == pytest.approx(sim.truth["f_h_end"], rel=0.08)
     assert not person["f_h_determined"] and person["f_h_low"] <= first["f_h"] and second["f_h"] <= person["f_h_high"]
+
+
+def test_two_people_and_stepping_off_are_refused_saying_what_was_found(lab, tmp_path, capsys):
+    record = lab.record
+    doubled = record.__class__(**{**record.__dict__, "force": 2 * record.force, "source": "two.csv"})
+    with pytest.raises(RecordError, match=r"two.csv: standing, the plate reads \d+ N = 1[34]\d\.\d kg at g, "
+                                          r"(1\.9\d|2\.0\d) times the given mass \(70 kg\): two people on the plate"):
+        prepare_record(doubled)
+    off = np.asarray(record.force).copy()
+    stand = record.time > lab.truth["span"]["bouncing_end_s"] + 0.5
+    off[stand & (record.time < record.time[-1] - 1.0)] = 0.0  # steps off after bouncing, back on for the last 1 s
+    stepped = record.__class__(**{**record.__dict__, "force": off, "source": "off.csv"})
+    with pytest.raises(RecordError, match=r"off.csv: the person leaves the plate at .* and comes back"):
+        prepare_record(stepped)
+    path = tmp_path / "clipped.csv"  # a record as read, clipped by the plate's range (flat tops at 1000 N)
+    pd.DataFrame({"time": record.time, "force": np.minimum(record.force, 1000.0)}).to_csv(path, index=False)
+    assert main(["identify", str(path), "--mass", "70", "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "clipped" in err and not (tmp_path / "c" / "person.json").exists()

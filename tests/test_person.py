@@ -445,20 +445,24 @@ def test_wald_interval_is_symmetric_inside_the_bounds_and_ends_at_a_bound_it_wou
 
 
 @pytest.mark.slow
-def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys):
+def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys, monkeypatch):
+    from smd_statespace import progress
     from smd_statespace.person.fit import AUTO_VARIATIONS
     from smd_statespace.person.search import TIMING_ITERATIONS
 
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=30, fs=1000.0, seed=11)
     capsys.readouterr()
+    monkeypatch.setattr(progress, "watched", lambda stream=None: True)  # as on a terminal
     result = identify_person(sim.record, progress=True)
-    # every variation model: its first fit and its own timing fits; the winner's final fit; the information
-    steps = len(AUTO_VARIATIONS) * (1 + TIMING_ITERATIONS + 1) + 2
+    # every variation model: its first fit and its own timing fits; the winner's final fit; the halves'; the
+    # information
+    steps = len(AUTO_VARIATIONS) * (1 + TIMING_ITERATIONS + 1) + 3
     bar = capsys.readouterr().err
     assert "identify (record)" in bar and f"{steps}/{steps}" in bar  # every search counted, none twice
     assert result.record.fs == pytest.approx(100.0) and result.model.y.size == sim.record.time.size // 10
-    assert result.notes == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and every 10th sample "
-                            "kept (rate 100 Hz; rate=None or --rate 0 keeps every sample)"]
+    assert result.notes == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and one sample in 10 "
+                            "kept (the rate asked: 100 Hz; to keep every sample, rate=None in Python or --rate 0 on "
+                            "the command line)"]
     assert "note: fitted at 100 Hz" in result.summary() and result.to_dict()["fs"] == pytest.approx(100.0)
     low, high = result.intervals["f_h"]
     assert low < 2.8 < high  # the person, from a tenth of the samples

@@ -268,8 +268,9 @@ def test_a_fast_record_is_decimated_before_its_cycles_and_the_runner_says_so():
     runner = CycleRunner(estimator=ScriptedEstimator(), progress=False)
     table = runner.run(fast)
     assert runner.preprocessed_.fs == pytest.approx(100.0)
-    assert runner.notes_ == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and every 10th sample "
-                             "kept (rate 100 Hz; rate=None or --rate 0 keeps every sample)"]
+    assert runner.notes_ == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and one sample in 10 "
+                             "kept (the rate asked: 100 Hz; to keep every sample, rate=None in Python or --rate 0 "
+                             "on the command line)"]
     every = CycleRunner(estimator=ScriptedEstimator(), progress=False, rate=None)
     full = every.run(fast)
     assert every.preprocessed_.fs == pytest.approx(1000.0) and every.notes_ == []

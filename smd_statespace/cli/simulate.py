@@ -167,7 +167,7 @@ def run_simulate(args) -> int:
         raise type(exc)(str(exc).replace("simulate_bouncing: ", "", 1)) from None
     csv_path, truth_path = synthetic.write(out, truth)
     record, info = synthetic.record, synthetic.truth
-    extra = f", effects {', '.join(names)}" if effects else ""
+    extra = f", effects {', '.join(effect.spec for effect in effects)}" if effects else ""
     extra += f", {args.variation} variation"
     seed = f"seed {info['seed']}" if args.seed is not None else "random seed (in the truth file)"
     print(
@@ -201,7 +201,7 @@ def _simulate_phone(args, mass, effects, names, out, truth, phone) -> int:
         raise type(exc)(str(exc).replace("simulate_bouncing: ", "", 1).replace("simulate_phone: ", "", 1)) from None
     csv_path, truth_path = record.write(out, truth)
     settings = record.truth["phone"]
-    extra = f", effects {', '.join(names)}" if effects else ""
+    extra = f", effects {', '.join(effect.spec for effect in effects)}" if effects else ""
     print(f"wrote {csv_path}: a phone's accelerometer ({settings['fs']:g} Hz, {len(record.time)} samples, "
           f"{settings['n_dropped']} dropped; tilt {settings['tilt_deg']:g} deg, sway {settings['sway_deg']:g} deg, "
           f"noise {settings['noise']:g} m/s^2) on a person bouncing {args.duration:g} s (f_b {args.fb:g} Hz, f_h "

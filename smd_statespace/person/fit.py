@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..applicability import check_bouncing
+from ..applicability import NotBouncingError, check_bouncing, check_clipping
 from ..errors import CycleError, OptionError, RecordError
 from ..io import G, Record
 from ..progress import tqdm
@@ -219,6 +219,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     if cov_type not in ("robust", "oim"):
         raise OptionError(f"cov_type {cov_type!r} is not one of: robust, oim")
     steps = len(names) * (1 + (TIMING_ITERATIONS + 1 if timing == "model" else 0)) + (2 if timing == "model" else 1)
+    steps += 1 if check_change else 0  # the halves' fits
     with tqdm(total=steps, desc="identify (record)", unit="fit", disable=not progress, leave=False) as bar:
         step = bar.update
         # every variation model is fitted at the first cycle timing and compared by AIC there; with
@@ -240,7 +241,10 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                            "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
-        change = change_test(model, fitted["params"], level) if check_change else None
+        change = None
+        if check_change:
+            change = change_test(model, fitted["params"], level)
+            step()
         result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
                                comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
                                prepared=prepared)
@@ -275,8 +279,14 @@ def _prepared(record, rate, span, regressors, check):
     refused with the applicability check's words when it has them, the front end's otherwise (with ``check`` False:
     the whole record, with a warning)."""
     extra = [r.values for r in regressors]
+    # clipping is seen on the record as read: the decimation's low-pass rounds the flat tops off
+    found = check_clipping(record)
+    clipped = [] if found is None else [f"{record.source}: {found.message}"]
+    if clipped and check:
+        raise NotBouncingError(clipped[0])
     try:
-        return prepare_record(record, rate, span, extra)
+        prepared = prepare_record(record, rate, span, extra)
+        return replace(prepared, warnings=clipped + prepared.warnings)
     except RecordError as exc:
         if not (isinstance(span, str) and span == "auto"):
             raise

@@ -56,9 +56,9 @@ Two numerical facts worth knowing, both measured on synthetic records:
 
 from .cycles import MIN_FORCE_RANGE, PEAK_PROMINENCE, PEAK_SPACING, PERIOD_RATIO_LIMITS, SUPPORTED_FB, Cycle, find_cycles
 from .decimation import GUARD_BAND, RECORD_RATE, check_rate, decimate_record, decimation_note
-from .frontend import (ACTIVE_LEVEL, CONTACT_LEVEL, HUM_HIGHPASS, HUM_WINDOW, LINE_RATIO, MAINS, MIN_BOUT_CYCLES,
-                       STEADY_SWING, Bout, Bouts, FrontEnd, Hum, Span, find_bouts, front_end, mains_hum, remove_hum,
-                       trim_record)
+from .frontend import (ACTIVE_LEVEL, CONTACT_LEVEL, HUM_HIGHPASS, HUM_WINDOW, LINE_RATIO, MAINS, MAX_RAMP_CYCLES,
+                       MIN_BOUT_CYCLES, STEADY_SWING, Bout, Bouts, FrontEnd, Hum, Span, find_bouts, front_end,
+                       mains_hum, remove_hum, trim_record)
 from .filters import PADDINGS, com_acceleration, highpass, integrate, motion
 from .pipeline import OBSERVATION_CHANNELS, Preprocessed, preprocess
 from .preparation import HUM_MARGIN, MASS_TOLERANCE, PreparedRecord, parse_span, prepare_record, safe_factor
@@ -70,6 +70,7 @@ __all__ = [
     "decimate_record",
     "decimation_note",
     "GUARD_BAND",
+    "MAX_RAMP_CYCLES",
     "Hum",
     "Span",
     "Bout",

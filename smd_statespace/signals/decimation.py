@@ -111,5 +111,6 @@ def decimation_note(measured_rate: float, record: Record, factor: int, rate) -> 
     """What :func:`decimate_record` did, in words for a result's notes (``[]`` when it kept every sample)."""
     if factor == 1:
         return []
-    return [f"fitted at {record.fs:.4g} Hz: the record ({measured_rate:.4g} Hz) was low-pass filtered and every "
-            f"{factor}th sample kept (rate {rate:g} Hz; rate=None or --rate 0 keeps every sample)"]
+    return [f"fitted at {record.fs:.4g} Hz: the record ({measured_rate:.4g} Hz) was low-pass filtered and one "
+            f"sample in {factor} kept (the rate asked: {rate:g} Hz; to keep every sample, rate=None in Python or "
+            "--rate 0 on the command line)"]

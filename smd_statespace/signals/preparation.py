@@ -34,13 +34,19 @@ from ..io import G, Record
 from .decimation import RECORD_RATE, check_rate, decimate_record, decimation_note
 from .frontend import Bouts, Hum, find_bouts, mains_hum, remove_hum, trim_record
 
-__all__ = ["HUM_MARGIN", "MASS_TOLERANCE", "PreparedRecord", "safe_factor", "prepare_record", "parse_span"]
+__all__ = ["HUM_MARGIN", "MASS_TOLERANCE", "OFF_PLATE", "WEIGHT_RATIO", "PreparedRecord", "safe_factor", "prepare_record", "parse_span"]
 
 HUM_MARGIN = 3.0
 """Least distance (Hz) between the fitting rate's Nyquist frequency and the mains hum below which the rate is lowered."""
 
 MASS_TOLERANCE = 0.02
 """A standing weight that differs from ``M_h g`` by more than this fraction is said in a warning."""
+
+WEIGHT_RATIO = (0.6, 1.6)
+"""A standing weight outside these multiples of ``M_h g`` is not this person alone: refused (two people, a wrong mass)."""
+
+OFF_PLATE = 1.0
+"""No contact this long (s) with contact before and after is stepping off mid-record (a jump's flight is shorter)."""
 
 _OTHER_PARTS = ("standing", "movement", "no_contact")
 
@@ -178,6 +184,7 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
     notes, warnings = ([hum.describe() + ", subtracted"] if hum.found else []), []
     trimmed = True
     if span == "auto":
+        _refuse_what_is_not_one_person(bouts, record)
         span, trimmed, said = _bouncing_span(clean, bouts)
         notes += said
         warnings += _weight_warnings(bouts, record)
@@ -193,6 +200,24 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
     keep = np.isin(decimated.time, fitted.time)
     return PreparedRecord(fitted, record, span, factor, hum, bouts, trimmed, notes, warnings,
                           [values[keep] for values in moved])
+
+
+def _refuse_what_is_not_one_person(bouts: Bouts, record: Record):
+    """A one-line :class:`RecordError` for two people on the plate (or a wrong mass) and for stepping off mid-record."""
+    weight = record.mass * G
+    for level in (bouts.level_before, bouts.level_after):
+        if np.isfinite(level) and not WEIGHT_RATIO[0] <= level / weight <= WEIGHT_RATIO[1]:
+            raise RecordError(f"{record.source}: standing, the plate reads {level:.0f} N = {level / G:.1f} kg at g, "
+                              f"{level / weight:.2f} times the given mass ({record.mass:g} kg): two people on the "
+                              "plate, or a wrong --mass")
+    parts = bouts.segments
+    for before, part, after in zip(parts, parts[1:], parts[2:]):
+        if part.kind == "no_contact" and part.end - part.start >= OFF_PLATE and "no_contact" not in (
+                before.kind, after.kind):
+            bouncing = ", ".join(f"{b.start:.1f}-{b.end:.1f} s" for b in bouts.bouts) or "none"
+            raise RecordError(f"{record.source}: the person leaves the plate at {part.start:.1f}-{part.end:.1f} s "
+                              f"and comes back (stepped off mid-record); bouncing {bouncing}: identify one part "
+                              "with --span START:END (span=(start, end))")
 
 
 def _bouncing_span(record: Record, bouts: Bouts) -> tuple:
