@@ -307,8 +307,8 @@ def truth_values(truth) -> dict:
     for source, name in (("K_h", "k_h"), ("C_h", "c_h")):
         if source in truth:
             values[name] = float(truth[source])
-    for name, value in truth.items():
-        if name.startswith("blf_") or name in ("k_h", "c_h"):
+    for name, value in truth.items():  # numbers only: a lab record's truth has lists (blf_start, blf_end)
+        if (name.startswith("blf_") or name in ("k_h", "c_h")) and isinstance(value, (int, float)):
             values.setdefault(name, float(value))
     for effect in dict(truth.get("effects") or {}).values():  # a simulation's effects: their parameters
         for name, value in dict(effect or {}).items():
