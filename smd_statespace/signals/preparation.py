@@ -13,9 +13,9 @@ plate zero that drifts; 500-2000 Hz — goes through the front end
    the ``span`` that fits it); the standing parts give the body weight before and after
    (the plate's zero and its drift, said against the given mass) and the noise level;
 3. decimated whole to about :data:`~smd_statespace.signals.RECORD_RATE` (:func:`safe_factor`:
-   with hum, to a rate whose Nyquist frequency lies :data:`HUM_MARGIN` below the hum, so the
-   decimation's low-pass removes what the subtraction left instead of leaving it at the new
-   Nyquist frequency), then trimmed to the bout.
+   with hum, to a rate whose Nyquist frequency lies :data:`HUM_MARGIN` or more from every multiple
+   of the hum, so that what the subtraction left is not at the new Nyquist frequency), then
+   trimmed to the bout.
 
 Every step is said in words in :attr:`PreparedRecord.notes`, e.g. ``bouncing 4.1-33.9 s
 fitted (62 cycles); standing 0.0-3.4 s and 34.6-38.0 s used for the body weight and the
@@ -37,7 +37,7 @@ from .frontend import Bouts, Hum, find_bouts, mains_hum, remove_hum, trim_record
 __all__ = ["HUM_MARGIN", "MASS_TOLERANCE", "OFF_PLATE", "WEIGHT_RATIO", "PreparedRecord", "safe_factor", "prepare_record", "parse_span"]
 
 HUM_MARGIN = 3.0
-"""Least distance (Hz) between the fitting rate's Nyquist frequency and the mains hum below which the rate is lowered."""
+"""Least distance (Hz) between the fitting rate's Nyquist frequency and a multiple of the mains hum."""
 
 MASS_TOLERANCE = 0.02
 """A standing weight that differs from ``M_h g`` by more than this fraction is said in a warning."""
@@ -92,17 +92,18 @@ class PreparedRecord:
 
 
 def safe_factor(fs: float, rate, hum: Hum | None) -> int:
-    """The decimation factor for a record at ``fs`` Hz: ``floor(fs / rate)``, raised when hum is near the new Nyquist.
+    """The decimation factor for a record at ``fs`` Hz: ``floor(fs / rate)``, raised while the new Nyquist is on the hum.
 
     With hum at ``f`` Hz, the fitting rate's Nyquist frequency ``fs / (2 q)`` must lie at least
-    :data:`HUM_MARGIN` below ``f``: the decimation's low-pass then removes the hum and what its
-    subtraction left, where at ``fs / q = 2 f`` (1000 Hz to 100 Hz with 50 Hz hum) both sit on
-    the new Nyquist frequency (innovations alternating in sign at every lag).
+    :data:`HUM_MARGIN` away from every multiple of ``f``: at ``fs / q = 2 f`` (1000 Hz to 100 Hz with 50 Hz
+    hum) what the subtraction left of the line sits on the new Nyquist frequency (innovations alternating
+    in sign at every lag); one sample fewer in ``q`` moves it below the line, which the decimation's
+    low-pass then removes.
 
     Examples
     --------
     >>> hum = Hum(True, 50.0, np.array([50.0]), np.array([1.0]), np.array([True]), np.zeros(1))
-    >>> safe_factor(1000.0, 100.0, None), safe_factor(1000.0, 100.0, hum), safe_factor(500.0, 100.0, hum)
+    >>> safe_factor(1000.0, 100.0, None), safe_factor(1000.0, 100.0, hum), safe_factor(1000.0, 200.0, hum)
     (10, 11, 6)
     """
     if check_rate(rate) is None:
@@ -110,8 +111,13 @@ def safe_factor(fs: float, rate, hum: Hum | None) -> int:
     factor = int(math.floor(fs / rate + 1e-9))
     if factor < 2 or hum is None or not hum.found:
         return max(factor, 1)
-    if fs / (2.0 * factor) > hum.frequency - HUM_MARGIN:
-        factor = int(math.ceil(fs / (2.0 * (hum.frequency - HUM_MARGIN))))
+
+    def on_the_hum(q):
+        nyquist = fs / (2.0 * q)
+        return abs(nyquist - hum.frequency * max(round(nyquist / hum.frequency), 1)) < HUM_MARGIN
+
+    while on_the_hum(factor):
+        factor += 1
     return factor
 
 
@@ -267,7 +273,7 @@ def _rate_notes(record: Record, decimated: Record, factor: int, rate, hum: Hum |
     """The decimation in words, and why the rate is below ``rate`` when hum lowered it."""
     notes = decimation_note(record.fs, decimated, factor, rate)
     if factor > 1 and hum is not None and hum.found and rate is not None and decimated.fs < rate:
-        notes.append(f"fitted at {decimated.fs:.4g} Hz rather than {rate:g}: its Nyquist frequency lies below the "
-                     f"{hum.frequency:.0f} Hz hum, which the decimation's low-pass then removes with what its "
-                     "subtraction left")
+        notes.append(f"fitted at {decimated.fs:.4g} Hz rather than {rate:g}: so that its Nyquist frequency is not on "
+                     f"the {hum.frequency:.0f} Hz hum or one of its multiples, where what the subtraction left would "
+                     "stay")
     return notes
