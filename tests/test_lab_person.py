@@ -112,19 +112,26 @@ def test_the_person_of_a_lab_record_is_found_where_the_whole_record_misleads(lab
     assert person.change is not None and person.change["changed"] == []  # one person from end to end
 
 
-@pytest.mark.slow
-def test_a_person_who_changes_is_named_and_not_given_one_confident_value(tmp_path, capsys):
-    sim = simulate_lab_record(**PERSON, bout=24.0, hum=(), drift=5.0, f_h_change=0.2, change="step", seed=8)
-    path = tmp_path / "changes.csv"
-    sim.write(path)
-    assert main(["identify", str(path), "--mass", "70", "--quiet", "--out", str(tmp_path / "o")]) == 0
-    printed = capsys.readouterr().out
-    assert "warning: the person changes during the record: f_h" in printed
-    person = json.loads((tmp_path / "o" / "person.json").read_text())
-    first, second = person["change"]["halves"]
-    assert first["f_h"] == pytest.approx(sim.truth["f_h_start"], rel=0.08)
-    assert second["f_h"] == pytest.approx(sim.truth["f_h_end"], rel=0.08)
-    assert not person["f_h_determined"] and person["f_h_low"] <= first["f_h"] and second["f_h"] <= person["f_h_high"]
+def half(start, end, f_h, f_h_sd, xi_h=0.3, xi_h_sd=0.03):
+    """A half's summary as change_test gives it (90 % intervals)."""
+    return {"start": start, "end": end, "f_h": f_h, "f_h_sd": f_h_sd, "f_h_low": f_h - 1.645 * f_h_sd,
+            "f_h_high": f_h + 1.645 * f_h_sd, "xi_h": xi_h, "xi_h_sd": xi_h_sd, "xi_h_low": xi_h - 1.645 * xi_h_sd,
+            "xi_h_high": xi_h + 1.645 * xi_h_sd}
+
+
+def test_halves_that_determine_f_h_and_differ_name_a_person_who_changes():
+    from smd_statespace.person.change import compare_halves
+    from smd_statespace.person.report import change_words
+
+    changed = compare_halves([half(4.0, 19.0, 2.40, 0.05), half(19.0, 34.0, 2.75, 0.06)])  # 4.5 sd apart
+    assert changed["changed"] == ["f_h"] and changed["z"]["f_h"] == pytest.approx(0.35 / np.hypot(0.05, 0.06))
+    words = change_words(changed)
+    assert words.startswith("the person changes during the record: f_h 2.4 Hz (2.32-2.48) in 4.0-19.0 s, 2.75 Hz")
+    assert "--span START:END" in words
+    # the same difference where a half does not determine f_h (sd over a quarter of the yardstick), or too small
+    assert compare_halves([half(4.0, 19.0, 2.40, 0.05), half(19.0, 34.0, 2.75, 0.30)])["changed"] == []
+    assert compare_halves([half(4.0, 19.0, 2.40, 0.001), half(19.0, 34.0, 2.45, 0.001)])["changed"] == []
+    assert change_words(compare_halves([half(4.0, 19.0, 2.4, 0.05), half(19.0, 34.0, 2.42, 0.05)])) == ""
 
 
 def test_two_people_and_stepping_off_are_refused_saying_what_was_found(lab, tmp_path, capsys):

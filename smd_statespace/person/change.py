@@ -26,7 +26,7 @@ from .judgement import DETERMINED_FRACTION, PRIOR_SD
 from .search import fit_model, information
 from .timing import CycleTiming
 
-__all__ = ["CHANGE_MIN", "CHANGE_Z", "MIN_HALF_CYCLES", "change_test"]
+__all__ = ["CHANGE_MIN", "CHANGE_Z", "MIN_HALF_CYCLES", "change_test", "compare_halves"]
 
 CHANGE_Z = 2.58
 """Difference of the halves' estimates, in calibrated standard errors of the difference, from which the person
@@ -82,7 +82,7 @@ def change_test(model, params, level=0.9) -> dict | None:
         if not fitted["converged"] or half.person_at_bound(fitted["params"]):
             return None
         halves.append(_summary(half, fitted["params"], level))
-    return _compared(halves)
+    return compare_halves(halves)
 
 
 def _half(model, keep, kept):
@@ -106,8 +106,13 @@ def _summary(model, params, level) -> dict:
     return out
 
 
-def _compared(halves) -> dict:
-    """``z`` and the parameters that changed between the two halves."""
+def compare_halves(halves) -> dict:
+    """``z`` and the parameters that changed between two halves' summaries (as :func:`change_test` returns them).
+
+    Each half: ``start``, ``end`` (s) and, per parameter, its value, ``{name}_sd`` (calibrated) and interval.
+    A parameter changed when both halves determine it, their difference is :data:`CHANGE_Z` sds of the
+    difference or more and at least :data:`CHANGE_MIN`.
+    """
     first, second = halves
     z, changed = {}, []
     for name in ("f_h", "xi_h"):
