@@ -94,7 +94,7 @@ def coverage_warnings(names) -> list:
     for name in names:
         cover = MEASURED_COVERAGE.get(name)
         if cover is not None and cover < COVERAGE_OK:
-            where = "docs/person-benchmark.md" if name == "record" else "docs/benchmarks.md"
+            where = "docs/person-calibration.md" if name == "record" else "docs/benchmarks.md"
             out.append(f"warning: {name}: intervals over-confident: its 90 % intervals of f_h covered the truth on "
                        f"{cover} % of simulated records ({where}); read its sd as a lower bound")
     return out
