@@ -9,10 +9,11 @@ variation model and cycle timing, and compares the halves' ``f_h`` and ``xi_h`` 
 their calibrated standard errors (:data:`~smd_statespace.person.calibration.CALIBRATION`): where
 each half determines the parameter on its own (the library's "determined" rule), a difference of
 :data:`CHANGE_Z` standard errors or more, and at least :data:`CHANGE_MIN` of the value, is a
-person who changes. Halves that do not determine it cannot tell a change from their own spread:
-the record's answer is then "not determined" already, and says so. The result then says so in words with both halves' values
-(:func:`~smd_statespace.person.report.change_words`, first among the warnings), does not call ``f_h``
-determined, and widens its interval over both halves'.
+person who changes: the result says so in words with both halves' values
+(:func:`~smd_statespace.person.report.change_words`, first among the warnings), does not call the
+parameter determined, and widens its interval over both halves'. Halves that do not determine it
+cannot tell a change from their own spread; the record's answer is then "not determined" already,
+and says so.
 """
 
 from __future__ import annotations

@@ -37,8 +37,8 @@ from .model import VARIATIONS, Regressor, RecordModel
 from .search import TIMING_ITERATIONS, FitError, choose_with_own_timing, comparison_row, fit_model, profile_interval
 from .timing import TIMING_METHODS, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "ZERO_DRIFT_DEGREE", "zero_drift", "identify_person", "fit_model", "person_result", "profile_interval",
-           "honest_intervals", "undetermined_interval"]
+__all__ = ["FitError", "MIN_CYCLES", "ZERO_DRIFT_DEGREE", "zero_drift", "identify_person", "fit_model", "person_result",
+           "profile_interval", "honest_intervals", "undetermined_interval"]
 
 ZERO_DRIFT_DEGREE = 2
 """Degree of the polynomial drift of the measurement's zero fitted with a lab-shaped record's person.
