@@ -5,15 +5,34 @@ standing, ramps, bouncing that tires and slows, mains hum, a drifting plate zero
 as a user does it, ``identify REC --mass M``: :func:`~smd_statespace.person.identify_person` with every default
 (``span="auto"``: the front end finds the steady bouncing part, subtracts the hum, fits a drift of the zero)::
 
-    python benchmarks/lab_records.py --records 40 --jobs 2 --rows lab,twin     # the documented run
-    python benchmarks/lab_records.py --records 40 --jobs 2 --resume            # go on after a kill
+    python benchmarks/lab_records.py --records 40 --jobs 2 --rows lab,clean,change,twin   # the documented run
+    python benchmarks/lab_records.py --records 40 --jobs 2 --rows lab,clean,change,twin --resume  # after a kill
+    python benchmarks/lab_records.py --people lab --seed 4344 --records 40 --jobs 2 --rows lab,change
     python benchmarks/lab_records.py --quick                                    # 2 records per row, temporary CSV
+
+People
+------
+``--people standard`` (the default): the person of record ``k`` is drawn as the established clean-record
+benchmark draws its people (``benchmarks/person_accuracy.py``'s ``draw_people``, reproduced exactly by
+:func:`draw_standard_person`: ``f_b`` 1.5-3.5 Hz, ``f_h`` 1.8-4.2 Hz, ``xi_h`` 0.1-0.5, mass 50-90 kg, each BLF
+the simulator's default times 0.7-1.3), from the record's own seed (:func:`person_seed`); its force varies from
+cycle to cycle as that benchmark's does (``fb_variation`` 0.02, ``coef_variation`` 0.10, :data:`STANDARD_FORCE`),
+``"jumps"`` on even records and ``"smooth"`` on odd ones. Issue 43's targets are stated against the clean
+records of these people. Every lab artefact (rate, standing, ramps, bout, sway, hum, drift, noise, tiring,
+slowing) is still drawn from :data:`~smd_statespace.simulation.lab.LAB_RANGES` (the draw of ``--people lab``
+with its person replaced; LAB_RANGES' check on the GRF's peak is not made for these people: a record whose GRF
+falls below zero fails in the simulator and is counted as failed). Rows ``lab``, ``twin``, ``clean`` and
+``change`` of record ``k`` are one person.
+
+``--people lab``: the person is LAB_RANGES' (``xi_h`` up to 0.8, ``f_h/f_b`` anywhere, variation up to 5 %/20 %),
+as in the first run (``lab_records_seed4343``).
 
 Rows
 ----
 ``lab``
     Typical lab records (:func:`~smd_statespace.simulation.lab.draw_lab_settings` over
-    :data:`~smd_statespace.simulation.lab.LAB_RANGES`) of a stationary person: ``f_h_change`` and
+    :data:`~smd_statespace.simulation.lab.LAB_RANGES`, the person as ``--people`` says) of a stationary
+    person: ``f_h_change`` and
     ``xi_h_change`` fixed at 0 (the truth's change kind is then ``"none"``; ``change="none"`` itself is not an
     argument ``simulate_lab_record`` takes, and fixing the sizes keeps every other draw as LAB_RANGES makes
     it). Tiring, slowing and every plate artefact drawn.
@@ -24,11 +43,20 @@ Rows
     :data:`TWIN_RAMP` cycles, a smooth half-cycle onset (a force switched on at once would start the person
     from rest with a jolt); the front end then fits the record whole, as a record bouncing end to end. The
     noise, the person and the force's cycle-to-cycle variation are the lab record's.
+``clean``
+    The established clean record of the same person (:func:`~smd_statespace.simulation.simulate_bouncing`,
+    30 s at 100 Hz, noise 1 % of body weight, the person's BLFs and force variation, its generator the lab
+    record's): with ``--people standard`` exactly the population ``person_accuracy.py`` measured the library's
+    accuracy on; seeded by the person's own simulator seed (:func:`draw_standard_person`'s ``sim_seed``).
 ``change``
-    The person changes: ``change`` fixed to ``"drift"`` (even records) and ``"step"`` (odd records),
-    ``|f_h_change|`` drawn 0.08-0.2 with a random sign (:data:`CHANGE_RANGES`; ``xi_h_change`` as LAB_RANGES
-    draws it). Measured: whether ``result.warnings`` names the change, a warning that starts with
-    :data:`CHANGE_WARNING` (False on every row until the library says it).
+    The person changes: ``change`` fixed to ``"drift"`` and ``"step"`` (``--people lab``: drift on even
+    records, step on odd ones; ``--people standard``: records 0, 1 drift, 2, 3 step, ..., so that each
+    of jumps and smooth meets each kind), ``|f_h_change|`` drawn 0.08-0.2 with a random sign
+    (:data:`CHANGE_RANGES`; ``xi_h_change`` as LAB_RANGES draws it). With ``--people standard`` the person
+    of record ``k`` is the ``lab`` row's (the artefacts are drawn apart; the step's time is moved with the
+    person's ``f_b`` to the same fraction of the bout). Measured: whether ``result.warnings`` names the
+    change, a warning that starts with :data:`CHANGE_WARNING`; on the stationary rows the same warning is a
+    false alarm.
 ``held_out``
     Combinations not used for tuning (:data:`HELD_OUT_RANGES`, marked held out in the output): 500 Hz with
     60 Hz hum at the top of LAB_RANGES' amplitudes, the ``"smooth"`` variation with ``tire`` 0.2-0.35,
@@ -40,11 +68,14 @@ Record ``k`` of a row is seeded from ``numpy.random.SeedSequence(seed).spawn(3)[
 (:func:`record_seed`; group 0: ``lab`` and ``twin``, 1: ``change``, 2: ``held_out``), spawned in two as
 ``simulate_typical_lab_record`` does (the settings' draw, the record's streams). A record is the same whatever
 ``--records`` and ``--jobs``. The default seed (4343) was never used for tuning the front end (its tests and
-measurements used seeds 0-39).
+measurements used seeds 0-39). With ``--people standard`` the record's seed is spawned in three: the settings'
+draw, the record's streams (the same two as ``--people lab``: the lab artefacts are those of ``--people lab``'s
+record) and the person (:func:`person_seed`: always group 0's, so one person across lab, twin, clean, change).
 
 Output
 ------
-``--csv`` (default ``benchmarks/results/lab_records_seed<S>.csv``): one row per record (:data:`COLUMNS`),
+``--csv`` (default ``benchmarks/results/lab_records_<people>_seed<S>.csv``; the first run, LabRanges people at
+seed 4343, is ``lab_records_seed4343.csv``): one row per record (:data:`COLUMNS`),
 each appended in one ``write`` as it finishes, so a killed run loses at most the records in flight and
 ``--resume`` fits only the missing ones (and those that failed). A record that fails (simulation or fit) is a row
 with ``error`` set; the run goes on. Then the tables (:func:`summary_lines`) are printed from every row of the CSV
@@ -77,11 +108,29 @@ from scipy import stats  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
-ROWS = ("lab", "twin", "change", "held_out")
+ROWS = ("lab", "twin", "clean", "change", "held_out")
 """The benchmark's rows, in the order of the tables."""
 
-GROUP = {"lab": 0, "twin": 0, "change": 1, "held_out": 2}
-"""Seed group of each row: ``lab`` and ``twin`` share their seeds (record ``k`` of both is one person)."""
+GROUP = {"lab": 0, "twin": 0, "clean": 0, "change": 1, "held_out": 2}
+"""Seed group of each row: ``lab``, ``twin`` and ``clean`` share their seeds (record ``k`` of all is one person)."""
+
+PEOPLE = ("standard", "lab")
+"""``--people``: the established clean-record population (``person_accuracy.py``'s) or LabRanges'."""
+
+STANDARD_RANGES = {"f_b": (1.5, 3.5), "f_h": (1.8, 4.2), "xi_h": (0.1, 0.5), "mass": (50.0, 90.0)}
+"""``person_accuracy.RANGES`` (the article's spread), drawn in this order."""
+
+STANDARD_BLF_FACTOR = (0.7, 1.3)
+"""``person_accuracy.BLF_FACTOR``: each BLF is the simulator's default times a uniform factor in this range."""
+
+STANDARD_FORCE = dict(fb_variation=0.02, coef_variation=0.10)
+"""The force's cycle-to-cycle variation of the standard people (``simulate_bouncing``'s defaults)."""
+
+STANDARD_VARIATIONS = ("jumps", "smooth")
+"""The force's generator of standard record ``k``: ``STANDARD_VARIATIONS[k % 2]``."""
+
+CLEAN = dict(duration=30.0, fs=100.0, noise=0.01)
+"""The established clean record (``person_accuracy.py``: 30 s at 100 Hz, GRF noise 1 % of body weight)."""
 
 HELD_OUT = {"held_out"}
 """Rows of combinations not used for tuning the front end."""
@@ -137,7 +186,7 @@ LAB_RANGES, CHANGE_RANGES, HELD_OUT_RANGES = _ranges()
 6-10 N, drift 30-60 N."""
 
 COLUMNS = (
-    "seed", "row", "record", "spawn_key", "held_out",
+    "seed", "people", "row", "record", "spawn_key", "held_out",
     # settings
     "fs", "variation", "hum_frequency", "hum_n", "hum_variation", "drift_n", "sway_n", "noise_n", "tire", "slow",
     "stand_before", "stand_after", "bout", "ramp_up", "ramp_down", "mass", "f_b", "fb_variation", "coef_variation",
@@ -161,23 +210,93 @@ def record_seed(seed: int, row: str, k: int) -> np.random.SeedSequence:
     return np.random.SeedSequence(seed, spawn_key=(GROUP[row], k))
 
 
-def settings_of(row: str, seed: int, k: int):
-    """``(settings, record seed)``: the keyword arguments of ``simulate_lab_record`` and its ``seed``."""
+def person_seed(seed: int, k: int) -> np.random.SeedSequence:
+    """The person of record ``k`` (every row but ``held_out``): the third child of group 0's record seed
+    (``record_seed(seed, "lab", k).spawn(3)[2]``; the first two are the settings' draw and the record's streams)."""
+    return record_seed(seed, "lab", k).spawn(3)[2]
+
+
+def draw_standard_person(child: np.random.SeedSequence) -> dict:
+    """One person as ``person_accuracy.draw_people`` draws record ``k`` from its ``child`` SeedSequence.
+
+    ``draw_people(n, seed)``'s record ``k`` is ``draw_standard_person(SeedSequence(seed).spawn(n)[k])``: the child
+    spawns the person's draw and the simulator's seed; ``f_b``, ``f_h``, ``xi_h``, mass uniform over
+    :data:`STANDARD_RANGES` in that order, then one factor per BLF (:data:`STANDARD_BLF_FACTOR`).
+
+    Returns
+    -------
+    dict
+        ``f_b, f_h, xi_h, mass, blf`` (tuple, g) and ``sim_seed`` (the clean record's seed).
+    """
+    from smd_statespace.simulation import DEFAULT_BLF
+
+    people_ss, sim_ss = child.spawn(2)
+    rng = np.random.default_rng(people_ss)
+    person = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in STANDARD_RANGES.items()}
+    factors = rng.uniform(*STANDARD_BLF_FACTOR, size=len(DEFAULT_BLF))
+    person["blf"] = tuple(float(base * factor) for base, factor in zip(DEFAULT_BLF, factors))
+    person["sim_seed"] = int(sim_ss.generate_state(1, np.uint32)[0])
+    return person
+
+
+def _with_person(settings: dict, person: dict, k: int) -> dict:
+    """Lab settings with their person replaced by a standard one (a step's time kept at its fraction of the bout)."""
+    out = dict(settings)
+    out.update(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], blf=person["blf"],
+               variation=STANDARD_VARIATIONS[k % 2], phases=None, **STANDARD_FORCE)
+    if settings["change"] == "step" and settings.get("change_time") is not None:
+        fraction = (settings["change_time"] - settings["stand_before"]
+                    - settings["ramp_up"] / settings["f_b"]) / settings["bout"]
+        out["change_time"] = out["stand_before"] + out["ramp_up"] / out["f_b"] + fraction * out["bout"]
+    return out
+
+
+def settings_of(row: str, seed: int, k: int, people: str = "standard"):
+    """``(settings, record seed, clean seed)``: the keyword arguments of ``simulate_lab_record``, its ``seed``,
+    and the seed of the person's clean record (row ``clean``)."""
     from smd_statespace.simulation.lab import draw_lab_settings
 
+    if people not in PEOPLE:
+        raise ValueError(f"unknown people {people!r}")
     draw, own = record_seed(seed, row, k).spawn(2)  # as simulate_typical_lab_record spawns
-    if row in ("lab", "twin"):
+    standard = people == "standard" and row != "held_out"
+    person = draw_standard_person(person_seed(seed, k))
+    if row in ("lab", "twin", "clean"):
         settings = draw_lab_settings(draw, LAB_RANGES, **STATIONARY)
-        if row == "twin":
-            settings.update(TWIN)
     elif row == "change":
-        settings = draw_lab_settings(draw, CHANGE_RANGES, change=CHANGE_KINDS[k % 2])
+        kind = CHANGE_KINDS[(k // 2) % 2] if standard else CHANGE_KINDS[k % 2]
+        settings = draw_lab_settings(draw, CHANGE_RANGES, change=kind)
     elif row == "held_out":
         fixed = dict(STATIONARY, **({"stand_after": 0.0} if k % 2 else {}))
         settings = draw_lab_settings(draw, HELD_OUT_RANGES, **fixed)
     else:
         raise ValueError(f"unknown row {row!r}")
-    return settings, own
+    if standard:
+        settings = _with_person(settings, person, k)
+    if row == "twin":
+        settings.update(TWIN)
+    return settings, own, person["sim_seed"]
+
+
+def clean_settings(settings: dict) -> dict:
+    """The clean record's settings in the lab settings' terms (for the CSV's columns): the person's, at
+    :data:`CLEAN`'s length, rate and noise, with no standing, ramps, plate artefacts, tiring or slowing."""
+    from smd_statespace.io import G
+
+    return dict(settings, fs=CLEAN["fs"], hum=(), hum_variation=0.0, drift=0.0, sway=0.0,
+                noise=CLEAN["noise"] * settings["mass"] * G, tire=0.0, slow=0.0, stand_before=0.0, stand_after=0.0,
+                bout=CLEAN["duration"], ramp_up=0.0, ramp_down=0.0, change="drift", change_time=None,
+                **STATIONARY)
+
+
+def simulate_clean(settings: dict, sim_seed: int):
+    """The person's established clean record: ``simulate_bouncing`` 30 s at 100 Hz, noise 1 % of body weight."""
+    from smd_statespace.simulation import simulate_bouncing
+
+    return simulate_bouncing(mass=settings["mass"], f_b=settings["f_b"], f_h=settings["f_h"], xi_h=settings["xi_h"],
+                             duration=CLEAN["duration"], fs=CLEAN["fs"], blf=list(settings["blf"]),
+                             noise=CLEAN["noise"], seed=int(sim_seed), variation=settings["variation"],
+                             fb_variation=settings["fb_variation"], coef_variation=settings["coef_variation"])
 
 
 def _first_line(exc: BaseException) -> str:
@@ -210,26 +329,37 @@ def span_ok(fit_start, fit_end, span: dict, f_b: float) -> bool:
 
 def run_record(task) -> dict:
     """Simulate and identify one record; never raises (a failure is the row's ``error``)."""
-    seed, row, k = task
+    seed, row, k, people = task if len(task) == 4 else (*task, "standard")
     out = {c: "" for c in COLUMNS}
-    out.update(seed=seed, row=row, record=k, spawn_key=f"{GROUP[row]}.{k}", held_out=row in HELD_OUT)
+    out.update(seed=seed, people=people, row=row, record=k, spawn_key=f"{GROUP[row]}.{k}", held_out=row in HELD_OUT)
     try:
         from smd_statespace.simulation.lab import simulate_lab_record
 
-        settings, own = settings_of(row, seed, k)
-        out.update(_settings_columns(settings))
+        settings, own, sim_seed = settings_of(row, seed, k, people)
         start = time.perf_counter()
-        synthetic = simulate_lab_record(**settings, seed=own)
+        if row == "clean":
+            settings = clean_settings(settings)
+            out.update(_settings_columns(settings))
+            synthetic = simulate_clean(settings, sim_seed)
+        else:
+            out.update(_settings_columns(settings))
+            synthetic = simulate_lab_record(**settings, seed=own)
         out["sim_seconds"] = round(time.perf_counter() - start, 3)
     except Exception as exc:  # noqa: BLE001 - one record must never stop the run
         out["error"] = "simulate: " + _first_line(exc)
         return out
     truth = synthetic.truth
-    span = truth["span"]
-    out.update(change_time=truth["change"]["time_s"] if truth["change"]["time_s"] is not None else "",
-               f_h_true=truth["f_h"], f_h_start=truth["f_h_start"], f_h_end=truth["f_h_end"], xi_h_true=truth["xi_h"],
-               bouncing_start=span["bouncing_start_s"], full_start=span["full_start_s"], full_end=span["full_end_s"],
-               bouncing_end=span["bouncing_end_s"])
+    if row == "clean":  # bouncing end to end, the person stationary
+        end = float(synthetic.record.time[-1])
+        span = {"bouncing_start_s": 0.0, "full_start_s": 0.0, "full_end_s": end, "bouncing_end_s": end}
+        change_time, f_h_start, f_h_end = "", truth["f_h"], truth["f_h"]
+    else:
+        span = truth["span"]
+        change_time = truth["change"]["time_s"] if truth["change"]["time_s"] is not None else ""
+        f_h_start, f_h_end = truth["f_h_start"], truth["f_h_end"]
+    out.update(change_time=change_time, f_h_true=truth["f_h"], f_h_start=f_h_start, f_h_end=f_h_end,
+               xi_h_true=truth["xi_h"], bouncing_start=span["bouncing_start_s"], full_start=span["full_start_s"],
+               full_end=span["full_end_s"], bouncing_end=span["bouncing_end_s"])
     start = time.perf_counter()
     try:
         from smd_statespace.person import identify_person
@@ -289,18 +419,21 @@ def open_csv(path: Path, resume: bool) -> set:
         header = data.split(b"\n", 1)[0].decode("utf-8").split(",")
         if tuple(header) != COLUMNS:
             raise SystemExit(f"{path}: its columns are not this script's; give another --csv")
-        done = pd.read_csv(path, usecols=["seed", "row", "record", "error"], dtype={"error": str})
+        done = pd.read_csv(path, usecols=["seed", "people", "row", "record", "error"],
+                           dtype={"error": str, "people": str})
         done = done[done["error"].isna()]  # a record that failed is tried again (its new row is the one read)
-        return {(int(s), str(r), int(k)) for s, r, k in done[["seed", "row", "record"]].itertuples(index=False)}
+        return {(int(s), str(r), int(k), str(p))
+                for s, r, k, p in done[["seed", "row", "record", "people"]].itertuples(index=False)}
     path.write_bytes(_line({c: c for c in COLUMNS}))
     return set()
 
 
-def load_rows(path: Path, seed: int, rows, n: int) -> pd.DataFrame:
-    """The CSV's rows of this run (seed, rows, records below ``n``), the last of any duplicate."""
+def load_rows(path: Path, seed: int, rows, n: int, people: str = "standard") -> pd.DataFrame:
+    """The CSV's rows of this run (seed, people, rows, records below ``n``), the last of any duplicate."""
     frame = pd.read_csv(path, keep_default_na=True, dtype={"error": str, "span_note": str, "change_warning": str,
-                                                              "spawn_key": str})
-    frame = frame[(frame["seed"] == seed) & frame["row"].isin(rows) & (frame["record"] < n)]
+                                                              "spawn_key": str, "people": str})
+    frame = frame[(frame["seed"] == seed) & (frame["people"] == people) & frame["row"].isin(rows)
+                  & (frame["record"] < n)]
     frame = frame.drop_duplicates(["row", "record"], keep="last")
     frame["error"] = frame["error"].fillna("").astype(str)
     for name in ("covered", "determined", "change_named", "span_ok", "held_out", "xi_h_determined"):
@@ -334,6 +467,20 @@ def _worst(values) -> str:
     return f"{np.max(values):.1f}" if len(values) else "—"
 
 
+def _determined_where(frame: pd.DataFrame, row: str, other: str) -> str:
+    """``row``'s f_h determined among the records whose ``other`` (twin or clean) record is determined (a record of
+    ``row`` that failed counts as not determined); "—" for the row itself or a row the twin does not pair with."""
+    pairs = {"lab": ("twin", "clean"), "twin": ("clean",)}
+    if other not in pairs.get(row, ()):
+        return "—"
+    ref = frame[(frame["row"] == other) & (frame["error"] == "")]
+    if not len(ref):
+        return "—"
+    ref_det = set(ref.loc[ref["determined"].astype(bool), "record"])
+    paired = frame[(frame["row"] == row) & frame["record"].isin(ref_det)]
+    return _share(int((paired["determined"].astype(bool) & (paired["error"] == "")).sum()), len(paired))
+
+
 def row_summary(frame: pd.DataFrame, row: str) -> list:
     """One markdown table row of the summary."""
     rows = frame[frame["row"] == row]
@@ -345,14 +492,7 @@ def row_summary(frame: pd.DataFrame, row: str) -> list:
     low, high = wilson(int(covered.sum()), len(ok))
     coverage = f"{100 * covered.mean():.0f} % ({low:.0f}-{high:.0f})" if len(ok) else "—"
     misses = int((det & ~covered).sum())
-    if row == "lab":
-        twin = frame[(frame["row"] == "twin") & (frame["error"] == "")]
-        twin_det = set(twin.loc[twin["determined"].astype(bool), "record"])
-        paired = rows[rows["record"].isin(twin_det)]
-        paired_ok = paired[(paired["error"] == "")]
-        among = _share(int(paired_ok["determined"].astype(bool).sum()), len(paired)) if len(twin) else "—"
-    else:
-        among = "—"
+    among = " / ".join(_determined_where(frame, row, other) for other in ("twin", "clean"))
     named = _share(int(ok["change_named"].astype(bool).sum()), len(ok))
     wrong_span = int((~ok["span_ok"].astype(bool)).sum())
     seconds = f"{ok['seconds'].astype(float).median():.1f}" if len(ok) else "—"
@@ -363,34 +503,78 @@ def row_summary(frame: pd.DataFrame, row: str) -> list:
 
 HEADER = ("row", "records (failed)", "f_h median abs error %: all / determined", "worst: all / determined",
           f"f_h {100 * LEVEL:g} % interval coverage (95 % Wilson)", "confident misses", "f_h determined",
-          "determined where the twin is", f"says \"{CHANGE_WARNING}\"", "span outside the bout", "median s")
+          "determined where the twin / the clean record is", f"says \"{CHANGE_WARNING}\"",
+          "span outside the bout", "median s")
 
 
 def _table(header, body) -> list:
     return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)] + ["| " + " | ".join(r) + " |" for r in body]
 
 
-def paired_lines(frame: pd.DataFrame) -> list:
-    """Lab records against their clean twins, record by record."""
-    lab = frame[(frame["row"] == "lab") & (frame["error"] == "")].set_index("record")
-    twin = frame[(frame["row"] == "twin") & (frame["error"] == "")].set_index("record")
+PAIRS = (("lab", "twin", "their clean twins"), ("lab", "clean", "the established clean records of the same people"),
+         ("twin", "clean", "the established clean records of the same people"))
+"""Rows compared record by record: ``(row, reference, the reference in words)``."""
+
+
+def paired_lines(frame: pd.DataFrame, name: str = "lab", other: str = "twin", words: str = "their clean twins") -> list:
+    """Records of row ``name`` against the records of row ``other`` of the same people, record by record."""
+    lab = frame[(frame["row"] == name) & (frame["error"] == "")].set_index("record")
+    twin = frame[(frame["row"] == other) & (frame["error"] == "")].set_index("record")
     both = lab.index.intersection(twin.index)
     if not len(both):
         return []
     lab, twin = lab.loc[both], twin.loc[both]
     ld, td = lab["determined"].astype(bool), twin["determined"].astype(bool)
-    cells = [("both determined", ld & td), ("twin only", ~ld & td), ("lab only", ld & ~td),
+    cells = [("both determined", ld & td), (f"{other} only", ~ld & td), (f"{name} only", ld & ~td),
              ("neither", ~ld & ~td)]
     body = []
-    for name, mask in cells:
+    for cell, mask in cells:
         e_lab, e_twin = lab.loc[mask, "f_h_err_pct"].abs(), twin.loc[mask, "f_h_err_pct"].abs()
-        body.append([name, str(int(mask.sum())), _pct(e_lab), _pct(e_twin), _worst(e_lab), _worst(e_twin),
+        body.append([cell, str(int(mask.sum())), _pct(e_lab), _pct(e_twin), _worst(e_lab), _worst(e_twin),
                      _share(int(lab.loc[mask, "covered"].astype(bool).sum()), int(mask.sum())),
                      _share(int(twin.loc[mask, "covered"].astype(bool).sum()), int(mask.sum()))])
-    header = ("f_h determined", "records", "median abs error % lab", "twin", "worst lab", "twin",
-              "covered lab", "twin")
-    return ["", f"Lab records against their clean twins ({len(both)} pairs fitted on both):", "",
+    header = ("f_h determined", "records", f"median abs error % {name}", other, f"worst {name}", other,
+              f"covered {name}", other)
+    return ["", f"{name.capitalize()} records against {words} ({len(both)} pairs fitted on both):", "",
             *_table(header, body)]
+
+
+TARGETS = {"f_h_med": 3.0, "f_h_worst": 8.0, "coverage": (85.0, 95.0), "misses": 0, "determined": 80.0,
+           "named": 90.0, "false_alarm": 5.0}
+"""Issue 43's targets: f_h median abs error <= 3 %, worst <= 8 % (every record, determined or not), 90 % intervals
+cover 85-95 %, no confident miss, f_h determined on >= 80 % of the records whose clean twin is; a change of >= 8 %
+named on >= 90 %, the same words on <= 5 % of stationary records."""
+
+
+def target_lines(frame: pd.DataFrame, rows) -> list:
+    """Issue 43's targets against the rows' numbers (the ``lab`` row; ``change`` for the change named)."""
+    lines = []
+    lab = frame[(frame["row"] == "lab") & (frame["error"] == "")]
+    if "lab" in rows and len(lab):
+        err = lab["f_h_err_pct"].abs().to_numpy(dtype=float)
+        covered = 100 * lab["covered"].astype(bool).mean()
+        misses = int((lab["determined"].astype(bool) & ~lab["covered"].astype(bool)).sum())
+        where = [f"{_determined_where(frame, 'lab', other)} where the {other} is" for other in ("twin", "clean")
+                 if _determined_where(frame, "lab", other) != "—"]
+        lines += [f"- f_h median abs error {np.median(err):.1f} % (target <= {TARGETS['f_h_med']:g} %), worst "
+                  f"{np.max(err):.1f} % (<= {TARGETS['f_h_worst']:g} %), every lab record counted",
+                  f"- 90 % intervals cover {covered:.0f} % (target {TARGETS['coverage'][0]:g}-"
+                  f"{TARGETS['coverage'][1]:g} %); confident misses {misses} (target 0)",
+                  f"- f_h determined: {'; '.join(where) if where else '— (no twin or clean row)'} (target >= "
+                  f"{TARGETS['determined']:g} %)"]
+    change = frame[(frame["row"] == "change") & (frame["error"] == "")]
+    if "change" in rows and len(change):
+        named = _share(int(change["change_named"].astype(bool).sum()), len(change))
+        lines.append(f"- a change of 8-20 % named: {named} (target >= {TARGETS['named']:g} %)")
+    alarms = []
+    for row in ("lab", "twin", "clean", "held_out"):
+        ok = frame[(frame["row"] == row) & (frame["error"] == "")]
+        if row in rows and len(ok):
+            alarms.append(f"{row} {_share(int(ok['change_named'].astype(bool).sum()), len(ok))}")
+    if alarms:
+        lines.append(f"- the same words on stationary people: {', '.join(alarms)} (target <= "
+                     f"{TARGETS['false_alarm']:g} %)")
+    return ["", "Issue 43's targets:", "", *lines] if lines else []
 
 
 def failure_lines(frame: pd.DataFrame) -> list:
@@ -414,9 +598,10 @@ def span_lines(frame: pd.DataFrame) -> list:
 
 def summary_lines(frame: pd.DataFrame, rows) -> list:
     body = [row_summary(frame, row) for row in rows if (frame["row"] == row).any()]
-    lines = _table(HEADER, body)
-    if {"lab", "twin"} <= set(rows):
-        lines += paired_lines(frame)
+    lines = _table(HEADER, body) + target_lines(frame, rows)
+    for name, other, words in PAIRS:
+        if {name, other} <= set(rows):
+            lines += paired_lines(frame, name, other, words)
     return lines + span_lines(frame) + failure_lines(frame)
 
 
@@ -429,10 +614,14 @@ def parse_args(argv=None):
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--records", type=int, default=None, help="records per row (default 40; 2 with --quick)")
     parser.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"root seed (default {DEFAULT_SEED})")
+    parser.add_argument("--people", choices=PEOPLE, default="standard",
+                        help="standard: person_accuracy.py's people (the established clean-record population) with "
+                             "the lab artefacts of LAB_RANGES; lab: LAB_RANGES' people (default standard)")
     parser.add_argument("--jobs", type=int, default=1, help="processes (default 1); the rows do not depend on it")
     parser.add_argument("--rows", default=",".join(ROWS), help=f"comma-separated rows (default {','.join(ROWS)})")
     parser.add_argument("--csv", type=Path, default=None,
-                        help="CSV of the records (default benchmarks/results/lab_records_seed<S>.csv; with --quick "
+                        help="CSV of the records (default benchmarks/results/lab_records_<people>_seed<S>.csv; with "
+                             "--quick "
                              "a temporary file)")
     parser.add_argument("--resume", action="store_true",
                         help="go on with an existing --csv (fit the missing records and those that failed)")
@@ -448,7 +637,7 @@ def parse_args(argv=None):
         parser.error(f"unknown row(s) {unknown}; choose from {', '.join(ROWS)}")
     if args.csv is None:
         args.csv = (Path(tempfile.mkdtemp(prefix="lab-records-")) / "lab_records.csv" if args.quick
-                    else REPO / "benchmarks" / "results" / f"lab_records_seed{args.seed}.csv")
+                    else REPO / "benchmarks" / "results" / f"lab_records_{args.people}_seed{args.seed}.csv")
     return args
 
 
@@ -457,8 +646,8 @@ def main(argv=None):
     command = "python benchmarks/lab_records.py " + shlex.join(sys.argv[1:] if argv is None else argv)
     done = open_csv(args.csv, args.resume)
     # lab and twin of one person next to each other: a partial run has whole pairs
-    tasks = [(args.seed, row, k) for k in range(args.records) for row in args.rows
-             if (args.seed, row, k) not in done]
+    tasks = [(args.seed, row, k, args.people) for k in range(args.records) for row in args.rows
+             if (args.seed, row, k, args.people) not in done]
     print(f"{len(tasks)} records to fit ({len(done)} in {args.csv}), {args.jobs} process(es)", file=sys.stderr)
     started = time.perf_counter()
 
@@ -478,8 +667,9 @@ def main(argv=None):
             futures = [pool.submit(run_record, task) for task in tasks]
             for i, future in enumerate(as_completed(futures), start=1):
                 report(i, future.result())
-    frame = load_rows(args.csv, args.seed, args.rows, args.records)
-    print(f"`{command}` — seed {args.seed}, {args.records} records per row; rows from {args.csv.name}; "
+    frame = load_rows(args.csv, args.seed, args.rows, args.records, args.people)
+    print(f"`{command}` — seed {args.seed}, people {args.people}, {args.records} records per row; rows from "
+          f"{args.csv.name}; "
           f"identify_person's defaults (intervals at {100 * LEVEL:g} %); "
           f"{(time.perf_counter() - started) / 60:.1f} min "
           "wall time this call\n")
