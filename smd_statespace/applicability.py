@@ -335,13 +335,14 @@ def _mass_mismatch(mass: float, fraction: np.ndarray, active: np.ndarray, dt: fl
     return None
 
 
-def check_clipping(record: Record) -> Finding | None:
-    """The ``saturated`` refusal of :func:`check_bouncing` alone, cheap on a record at any rate (None: not clipped).
+def check_clipping(record: Record) -> BouncingCheck:
+    """The ``saturated`` refusal of :func:`check_bouncing` alone, cheap on a record at any rate.
 
     For the record as read: a decimation's low-pass rounds clipped tops off, so the full check, run on the
-    decimated record, no longer sees them.
+    decimated record, no longer sees them. Its findings are empty or the one refusal.
     """
-    return _saturation(np.asarray(record.time, dtype=float), np.asarray(record.force, dtype=float), _words(record))
+    found = _saturation(np.asarray(record.time, dtype=float), np.asarray(record.force, dtype=float), _words(record))
+    return BouncingCheck(source=str(record.source), findings=[] if found is None else [found])
 
 
 def check_bouncing(record: Record) -> BouncingCheck:

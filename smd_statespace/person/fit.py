@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..applicability import NotBouncingError, check_bouncing, check_clipping
+from ..applicability import check_bouncing, check_clipping
 from ..errors import CycleError, OptionError, RecordError
 from ..io import G, Record
 from ..progress import tqdm
@@ -280,10 +280,7 @@ def _prepared(record, rate, span, regressors, check):
     the whole record, with a warning)."""
     extra = [r.values for r in regressors]
     # clipping is seen on the record as read: the decimation's low-pass rounds the flat tops off
-    found = check_clipping(record)
-    clipped = [] if found is None else [f"{record.source}: {found.message}"]
-    if clipped and check:
-        raise NotBouncingError(clipped[0])
+    clipped = check_clipping(record).raise_if_refused(override=not check)
     try:
         prepared = prepare_record(record, rate, span, extra)
         return replace(prepared, warnings=clipped + prepared.warnings)
