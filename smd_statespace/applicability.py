@@ -247,7 +247,7 @@ def _period(weight_fraction, dt):
         return float("nan"), float(np.max(acf[lo:hi + 1]))
     values = acf[lo + peaks]
     # a multiple of the period correlates about as well as the period itself: take the shortest
-    good = peaks[values >= 0.9 * values.max()]
+    good = peaks[values >= values.max() - 0.1 * abs(values.max())]  # (the highest itself when all are negative)
     lag = lo + int(good[0])
     left, centre, right = acf[lag - 1], acf[lag], acf[lag + 1]
     curvature = left - 2.0 * centre + right

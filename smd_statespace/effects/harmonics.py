@@ -54,6 +54,11 @@ class Harmonics(Effect):
         if self.phases is not None and len(self.phases) != self.count:
             raise OptionError(f"{where}: phases has {len(self.phases)} values, the effect adds {self.count} harmonics")
 
+    @property
+    def options(self) -> dict:
+        """The options built with, ``count`` always first: a spec says how many harmonics it adds."""
+        return {"count": self.count, **super().options}
+
     def orders(self, model) -> np.ndarray:
         """Harmonic orders this effect adds to ``model``."""
         return np.arange(model.n_harmonics + 1, model.n_harmonics + self.count + 1)

@@ -37,18 +37,23 @@ from .model import VARIATIONS, Regressor, RecordModel
 from .search import TIMING_ITERATIONS, FitError, choose_with_own_timing, comparison_row, fit_model, profile_interval
 from .timing import TIMING_METHODS, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "ZERO_DRIFT_DEGREE", "zero_drift", "identify_person", "fit_model", "person_result",
-           "profile_interval", "honest_intervals", "undetermined_interval"]
+__all__ = ["FitError", "MIN_CYCLES", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person", "fit_model",
+           "person_result", "profile_interval", "honest_intervals", "undetermined_interval"]
 
-ZERO_DRIFT_DEGREE = 2
-"""Degree of the polynomial drift of the measurement's zero fitted with a lab-shaped record's person.
+ZERO_DRIFT_SECONDS = 10.0
+"""Span (s) per degree of the polynomial drift of the measurement's zero fitted with a lab-shaped record's person.
 
-A plate's zero that drifts slowly over the record (a few to tens of N) is a slow term of the
-measured ``GRF / M_h - g`` that the person does not feel: Legendre polynomials of degree 1 to
-this over the fitted span, each with an unknown coefficient concentrated out with the template
-(no search dimension), beside the constant offset. Added when the front end left standing parts
-out (:attr:`~smd_statespace.signals.PreparedRecord.trimmed`); a record bouncing end to end is
-fitted as before.
+A plate's zero that drifts slowly over the record (a few to tens of N) is a slow term of the measured
+``GRF / M_h - g`` that the person does not feel: Legendre polynomials of degree 1 to ``ceil(T / 10 s)``
+(at least 2) over the fitted span ``T``, each with an unknown coefficient concentrated out with the template
+(no search dimension), beside the constant offset. Added when the front end left standing parts out
+(:attr:`~smd_statespace.signals.PreparedRecord.trimmed`); a record bouncing end to end is fitted as before.
+
+Measured on lab records of the ``smooth`` generator (their fits are the ones a drift moves; ``jumps`` records
+moved by under 1 %), three people, drifts of 20-25 N: a cubic (the generator's own), ``f_h`` +120/+54/+72 %
+with degree 2, +11/-16/+6 % with degree 3; a thermal settling ``25 (1 - exp(-t / 8 s))`` N, +110/+71 % with
+degree 2, +12/+51 % with one degree per 10 s (cosines up to 0.1 Hz: +14/+64 %). A random walk smoothed over
+2 s was left at +24/+78 % by every basis: a drift that wanders that fast needs a state of its own.
 """
 
 MIN_CYCLES = 8
@@ -133,7 +138,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         export it (standing before and after, ramps, mains hum, a drifting zero) is fitted on the
         steady part of its longest bout of bouncing, the hum subtracted and the fitting rate kept
         clear of it, the standing parts read for the body weight and the plate's zero, and a
-        slow drift of the measurement's zero (:data:`ZERO_DRIFT_DEGREE`) estimated with the person;
+        slow drift of the measurement's zero (:data:`ZERO_DRIFT_SECONDS`) estimated with the person;
         a record bouncing from end to end is fitted whole, as before. ``(start, end)`` (s): that
         part. None: the whole record as it is (decimated only). ``result.notes`` says what was done.
     check_change : bool
@@ -258,18 +263,21 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     return result
 
 
-def zero_drift(time, degree=ZERO_DRIFT_DEGREE) -> list:
-    """Regressors of a slowly drifting zero of the measurement: Legendre polynomials of degree 1 to ``degree`` in time.
+def zero_drift(time) -> list:
+    """Regressors of a slowly drifting zero of the measurement: Legendre polynomials in time.
 
-    Measurement-only (``dynamic=False``): the plate's zero moves the measured acceleration, not the person.
+    Degree 1 to ``ceil(T / ZERO_DRIFT_SECONDS)`` (at least 2) over the span ``T``; measurement-only
+    (``dynamic=False``): the plate's zero moves the measured acceleration, not the person.
 
     Examples
     --------
     >>> [r.name for r in zero_drift(np.linspace(4.0, 34.0, 7))]
-    ['zero_drift_1', 'zero_drift_2']
+    ['zero_drift_1', 'zero_drift_2', 'zero_drift_3']
     """
     time = np.asarray(time, dtype=float)
-    scaled = 2.0 * (time - time[0]) / max(time[-1] - time[0], 1e-12) - 1.0
+    span = max(time[-1] - time[0], 1e-12)
+    degree = max(2, int(np.ceil(span / ZERO_DRIFT_SECONDS - 1e-9)))
+    scaled = 2.0 * (time - time[0]) / span - 1.0
     return [Regressor(f"zero_drift_{k}", np.polynomial.legendre.Legendre.basis(k)(scaled), "m/s^2", dynamic=False)
             for k in range(1, degree + 1)]
 
