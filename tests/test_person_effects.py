@@ -492,3 +492,24 @@ def test_identify_effect_re_places_the_cycle_starts_with_the_effect_and_tests_it
     assert all(row["effects"] == ["harmonics:count=2"] for row in fitted.comparison)
     assert fitted.model.variation == min((row for row in fitted.comparison if not row["on_bound"]),
                                          key=lambda row: row["aic"])["variation"]
+
+
+def test_a_candidate_whose_terms_are_all_near_zero_is_not_evidence():
+    """Issue 45's record: harmonics 5-6 of 0.0004 +- 0.0003 g were proposed; terms of no size are not proposed."""
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from smd_statespace.person.diagnose import indistinguishable_from_zero
+
+    def fits(blf, sd, estimates):
+        base = SimpleNamespace(model=SimpleNamespace(n_harmonics=4))
+        template = pd.DataFrame({"blf": [0.3, 0.15, 0.05, 0.02, *blf], "sd": [0.01] * 4 + list(sd)},
+                                index=range(1, 5 + len(blf)))
+        fitted = SimpleNamespace(model=SimpleNamespace(n_harmonics=4 + len(blf)), template_blf=lambda: template)
+        return base, fitted, pd.DataFrame(estimates, columns=["value", "sd"])
+
+    assert indistinguishable_from_zero(*fits([0.0004, 0.0002], [0.0003, 0.0003], []))
+    assert not indistinguishable_from_zero(*fits([0.04, 0.0002], [0.003, 0.0003], []))  # one harmonic is there
+    assert indistinguishable_from_zero(*fits([], [], [[3.0, 2.0]]))  # c_q 3 +- 2: within 2 sd of none
+    assert not indistinguishable_from_zero(*fits([], [], [[9.0, 1.0]]))

@@ -48,7 +48,14 @@ from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from .extend import configured_for_record, fit_effects
 
-__all__ = ["PersonDiagnosis", "diagnose_person", "candidate_row"]
+__all__ = ["LESS_WHITE", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "indistinguishable_from_zero"]
+
+ZERO_Z = 2.0
+"""A candidate whose added parameters and harmonics are all within this many sds of zero is not proposed."""
+
+LESS_WHITE = 0.1
+"""A candidate with which the innovations' Ljung-Box p falls below this fraction of its value without it is not
+proposed (less white: it does not take what the model misses; the fraction leaves the p-values' own noise)."""
 
 
 def candidate_row(base, fitted, level: float) -> dict:
@@ -76,8 +83,22 @@ def candidate_row(base, fitted, level: float) -> dict:
     # the term and the person's resonance together imitate the residual
     # a nonlinear term whose path never settles follows the data, not the physics: its likelihood ratio is no
     # evidence (on clean records such a runaway gave a cubic spring LR 184, f_h 2.30 -> 1.40 Hz)
-    row["significant"] = bool(log_p < math.log(level)) and not row["on_bound"] and row["settled"] and lr > 0
+    # nor one whose added unknowns are all indistinguishable from zero (harmonics of 0.0004 +- 0.0003 g imitate
+    # a misfit elsewhere), nor one that leaves the innovations less white than without it
+    row["zero"] = indistinguishable_from_zero(base, fitted, estimates)
+    row["less_white"] = bool(after_tests["ljung_box_p"] < LESS_WHITE * before_tests["ljung_box_p"])
+    row["significant"] = (bool(log_p < math.log(level)) and not row["on_bound"] and row["settled"] and lr > 0
+                          and not row["zero"] and not row["less_white"])
     return row
+
+
+def indistinguishable_from_zero(base, fitted, estimates, z: float = ZERO_Z) -> bool:
+    """True when every parameter the candidate estimates, and every harmonic it adds, is within ``z`` sds of 0."""
+    values = [(row["value"], row["sd"]) for _, row in estimates.iterrows()]
+    blf = fitted.template_blf()
+    values += [(blf.loc[i, "blf"], blf.loc[i, "sd"]) for i in range(base.model.n_harmonics + 1,
+                                                                     fitted.model.n_harmonics + 1)]
+    return bool(values) and all(np.isfinite(sd) and abs(value) < z * sd for value, sd in values)
 
 
 def _parameters_text(base, fitted, estimates) -> str:
@@ -160,6 +181,14 @@ class PersonDiagnosis:
                            f"{table.loc[name, 'f_h']:.3g} Hz, xi_h {table.loc[name, 'xi_h']:.3g}; "
                            f"{table.loc[name, 'parameters']}): the term and the person's resonance together "
                            "imitate the residual, so it is not proposed")
+            for name in table.index[table["zero"].astype(bool)]:
+                out.append(f"{name}: what it adds is indistinguishable from zero ({table.loc[name, 'parameters']}, "
+                           f"each within {ZERO_Z:g} sd): a likelihood ratio of {table.loc[name, 'lr']:.1f} from "
+                           "terms of no size is something else imitated, so it is not proposed")
+            for name in table.index[table["less_white"].astype(bool) & ~table["zero"].astype(bool)]:
+                out.append(f"{name}: with it the innovations are less white (Ljung-Box p "
+                           f"{table.loc[name, 'ljung_box_p_before']:.2g} -> {table.loc[name, 'ljung_box_p']:.2g}): "
+                           "it does not take what the model misses, so it is not proposed")
             for name in table.index[~table["settled"].astype(bool)]:
                 out.append(f"{name}: its linearised path had not settled after the last linearisation (the "
                            f"approximate likelihood kept rising, LR {table.loc[name, 'lr']:.1f}, as the path "
