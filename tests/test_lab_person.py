@@ -151,3 +151,18 @@ def test_two_people_and_stepping_off_are_refused_saying_what_was_found(lab, tmp_
     assert main(["identify", str(path), "--mass", "70", "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
     assert len(err.splitlines()) == 1 and "clipped" in err and not (tmp_path / "c" / "person.json").exists()
+
+
+def test_a_trimmed_records_intervals_take_the_lab_factor(long_fit):
+    """The calibrated sd of f_h of a record the front end trimmed is LAB_FACTOR times the same fit's otherwise."""
+    from types import SimpleNamespace
+
+    from smd_statespace.person.answer import person_result
+    from smd_statespace.person.calibration import LAB_FACTOR
+
+    fitted = {"params": long_fit.params, "loglike": long_fit.loglike, "n_evaluations": 0, "converged": True}
+    plain = person_result(long_fit.record, long_fit.model, fitted, prepared=SimpleNamespace(trimmed=False))
+    lab = person_result(long_fit.record, long_fit.model, fitted, prepared=SimpleNamespace(trimmed=True))
+    assert lab.sd("f_h") == pytest.approx(LAB_FACTOR["f_h"] * plain.sd("f_h"), rel=1e-9)
+    assert lab.sd("xi_h") == pytest.approx(LAB_FACTOR["xi_h"] * plain.sd("xi_h"), rel=1e-9)
+    assert LAB_FACTOR["f_h"] > 1.0

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibration import CALIBRATION, model_error_floor, wald_interval
+from .calibration import CALIBRATION, LAB_FACTOR, model_error_floor, wald_interval
 from .results import PRIOR_SD, VARIATION_DISAGREEMENT, PersonResult
 from .search import information, profile_interval
 
@@ -28,7 +28,9 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     """
     params = fitted["params"]
     cov, free = information(model, params, cov_type)
-    factors = CALIBRATION[model.variation]
+    factors = dict(CALIBRATION[model.variation])
+    if getattr(extra.get("prepared"), "trimmed", False):  # a lab's export: measured on its own (LAB_FACTOR)
+        factors = {name: factor * LAB_FACTOR[name] for name, factor in factors.items()}
     if intervals == "calibrated":
         scale = np.ones(params.size)
         scale[model.position("f_h")], scale[model.position("xi_h")] = factors["f_h"], factors["xi_h"]
