@@ -195,8 +195,9 @@ COLUMNS = (
     "f_h_true", "f_h_start", "f_h_end", "xi_h_true", "bouncing_start", "full_start", "full_end", "bouncing_end",
     # the fit
     "f_h_est", "f_h_err_pct", "f_h_low", "f_h_high", "covered", "determined", "xi_h_est", "xi_h_err",
-    "xi_h_determined", "ljung_box_p", "variation_model", "n_cycles", "fit_start", "fit_end", "span_ok",
-    "span_note", "n_warnings", "change_named", "change_warning", "sim_seconds", "seconds", "error",
+    "xi_h_determined", "xi_h_low", "xi_h_high", "xi_h_covered", "ljung_box_p", "variation_model", "n_cycles",
+    "fit_start", "fit_end", "span_ok", "span_note", "n_warnings", "change_named", "change_warning", "sim_seconds",
+    "seconds", "error",
 )
 """One CSV row per record."""
 
@@ -376,6 +377,8 @@ def run_record(task) -> dict:
             f_h_est=result.f_h, f_h_err_pct=100.0 * (result.f_h - truth["f_h"]) / truth["f_h"], f_h_low=low,
             f_h_high=high, covered=bool(low <= truth["f_h"] <= high), determined=bool(d["f_h_determined"]),
             xi_h_est=result.xi_h, xi_h_err=result.xi_h - truth["xi_h"], xi_h_determined=bool(d["xi_h_determined"]),
+            xi_h_low=float(result.intervals["xi_h"][0]), xi_h_high=float(result.intervals["xi_h"][1]),
+            xi_h_covered=bool(result.intervals["xi_h"][0] <= truth["xi_h"] <= result.intervals["xi_h"][1]),
             ljung_box_p=d["ljung_box_p"], variation_model=result.model.variation, n_cycles=d["n_cycles"],
             fit_start=fit_start, fit_end=fit_end, span_ok=span_ok(fit_start, fit_end, span, settings["f_b"]),
             span_note=(notes[0] if notes else "whole record fitted")[:300], n_warnings=len(warnings),
@@ -436,7 +439,9 @@ def load_rows(path: Path, seed: int, rows, n: int, people: str = "standard") -> 
                   & (frame["record"] < n)]
     frame = frame.drop_duplicates(["row", "record"], keep="last")
     frame["error"] = frame["error"].fillna("").astype(str)
-    for name in ("covered", "determined", "change_named", "span_ok", "held_out", "xi_h_determined"):
+    for name in ("covered", "determined", "change_named", "span_ok", "held_out", "xi_h_determined", "xi_h_covered"):
+        if name not in frame:  # a CSV written before the column was
+            continue
         frame[name] = frame[name].map({True: True, False: False, "True": True, "False": False})
     return frame.sort_values(["row", "record"])
 
