@@ -184,6 +184,7 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
         span = parse_span(f"{span[0]}:{span[1]}", "span") if not isinstance(span, str) else parse_span(span, "span")
         if span is None:
             return prepare_record(record, rate, None, extra)
+        trim_record(record, span)  # a span outside the record: one line before any work
     hum = mains_hum(record)
     clean = remove_hum(record, hum)
     bouts = find_bouts(clean) if span == "auto" else None
@@ -195,7 +196,6 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
         notes += said
         warnings += _weight_warnings(bouts, record)
     else:
-        trim_record(record, span)  # a span outside the record: one line before any work
         notes.append(f"span {span[0]:g}-{span[1]:g} s fitted, as given")
     factor = safe_factor(record.fs, rate, hum)
     decimated, factor, moved = decimate_record(clean, None if factor < 2 else record.fs / factor, extra)
