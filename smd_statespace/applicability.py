@@ -51,7 +51,8 @@ import numpy as np
 from .errors import SMDInputError
 from .io import G, Record
 
-__all__ = ["NotBouncingError", "Finding", "BouncingCheck", "check_bouncing", "check_clipping"]
+__all__ = ["NotBouncingError", "Finding", "BouncingCheck", "check_bouncing", "check_clipping", "repeating_period",
+           "runs"]
 
 CONTACT_FRACTION = 0.05
 """Force below this fraction of body weight means no contact (the plate's noise is about 1 %)."""
@@ -168,7 +169,7 @@ class BouncingCheck:
         return [f"{f.message} (checked, then identified anyway)" if f.refuse else f.message for f in self.findings]
 
 
-def _runs(mask):
+def runs(mask):
     """``(start, stop)`` index pairs of the runs of True in ``mask`` (stop exclusive)."""
     edges = np.diff(np.r_[0, mask.astype(np.int8), 0])
     return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
@@ -193,7 +194,7 @@ def _words(record) -> dict:
 
 
 def _contact(time, weight_fraction, dt, words=_PLATE_WORDS) -> Finding | None:
-    starts, stops = _runs(weight_fraction < CONTACT_FRACTION)
+    starts, stops = runs(weight_fraction < CONTACT_FRACTION)
     keep = (stops - starts) * dt >= CONTACT_MIN_DURATION
     starts, stops = starts[keep], stops[keep]
     if starts.size == 0:
@@ -210,7 +211,7 @@ def _saturation(time, force, words=_PLATE_WORDS) -> Finding | None:
     if span <= 0.0:
         return Finding("not_rhythmic", True, "the force is constant: no measurement to identify")
     for label, extreme in (("largest", force.max()), ("smallest", force.min())):
-        starts, stops = _runs(np.abs(force - extreme) <= 1e-9 * span)
+        starts, stops = runs(np.abs(force - extreme) <= 1e-9 * span)
         keep = stops - starts >= SATURATION_MIN_RUN
         if np.any(keep):
             return Finding("saturated", True,
@@ -229,8 +230,11 @@ def _autocorrelation(x):
     return acf / acf[0] if acf[0] > 0 else np.zeros(n)
 
 
-def _period(weight_fraction, dt):
+def repeating_period(weight_fraction, dt):
     """The bouncing period (s) and the autocorrelation there; the shortest lag near the best peak.
+
+    Lags of :data:`PERIOD_RANGE` are searched; ``(nan, ...)`` when there is no peak there. Used by
+    :func:`check_bouncing` and by the record front end (:func:`~smd_statespace.signals.find_bouts`).
 
     The lag is refined between samples by a parabola through the peak and its
     neighbours (a period of 62.5 samples read as 62 would slide the mean cycle
@@ -379,7 +383,7 @@ def check_bouncing(record: Record) -> BouncingCheck:
     for finding in (_contact(time, fraction, dt, words), _saturation(time, force, words)):
         if finding is not None:
             check.findings.append(finding)
-    period, rhythm = _period(fraction, dt)
+    period, rhythm = repeating_period(fraction, dt)
     check.period, check.rhythm = period, rhythm
     duration = float(time[-1] - time[0] + dt)
     if not np.isfinite(period) or not rhythm >= RHYTHM_MIN:
@@ -408,7 +412,7 @@ def check_bouncing(record: Record) -> BouncingCheck:
             f"the force repeats every {period:.2f} s ({1.0 / period:.2f} Hz), outside "
             f"{BOUNCING_RANGE[0]:g}-{BOUNCING_RANGE[1]:g} Hz where people bounce (the article: 1.5-3.5 Hz)"))
     if check.active_seconds < ACTIVE_FRACTION * duration:
-        starts, stops = _runs(active)
+        starts, stops = runs(active)
         check.findings.append(Finding(
             "partly_active", False,
             f"the person bounces in {check.active_seconds:.1f} s of {duration:.1f} s "

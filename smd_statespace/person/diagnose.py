@@ -48,7 +48,8 @@ from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from .extend import configured_for_record, fit_effects
 
-__all__ = ["LESS_WHITE", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "indistinguishable_from_zero"]
+__all__ = ["LESS_WHITE", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row",
+           "indistinguishable_from_zero"]
 
 ZERO_Z = 2.0
 """A candidate whose added parameters and harmonics are all within this many sds of zero is not proposed."""

@@ -275,7 +275,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", prog
     model, fitted, linearisations, settled = _settle_path(model, fitted, progress)
     # the test is made here, at result's starts and variation model: its statistic and its count of added unknowns
     comparison, tested = result.comparison, fitted["loglike"]
-    tested_df = (len(fitted["params"]) - len(result.params)) + (len(model.delta_names) - len(result.model.delta_names))
+    tested_df = model.unknowns(fitted["params"]) - result.model.unknowns(result.params)
     if timing and any(row.get("timing") == "re-placed" for row in result.comparison):
         model, fitted, comparison = _with_own_timing(model, fitted, result, effects, progress)
         if model.approximate:  # the starts moved: the path is predicted again about them

@@ -268,6 +268,10 @@ class RecordModel:
         return [f"{name}0" for name in self.dynamics.names] + [f"template_{c}" for c in self.coefficient_names] + [
             r.name for r in self.regressors]
 
+    def unknowns(self, params) -> int:
+        """How many unknowns a fit estimates: the searched ``params`` and the concentrated :attr:`delta_names`."""
+        return len(params) + len(self.delta_names)
+
     @property
     def variance_groups(self) -> list:
         """Names of the variance groups: ``0`` (a0) and ``1..n`` (harmonics)."""

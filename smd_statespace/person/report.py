@@ -16,9 +16,7 @@ __all__ = ["change_words", "person_warnings", "result_dict", "summary_text", "ta
 
 def person_warnings(result) -> list:
     """Plain-word warnings: the record's checks, parameters at a bound or not determined, residual tests that reject."""
-    out = list(result.record_warnings)
-    if change_words(result.change):
-        out.append(change_words(result.change))
+    out = list(result.record_warnings) + [words for words in [change_words(result.change)] if words]
     named = result.model.unpack(result.params)
     for name in ("f_h", "xi_h"):
         low, high = result.model.bound(name)

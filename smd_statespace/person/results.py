@@ -320,8 +320,7 @@ class PersonResult:
 
     def added_unknowns(self, other) -> int:
         """How many more unknowns this fit estimates than ``other``: searched parameters and concentrated ones."""
-        return (len(self.params) - len(other.params)) + (
-            len(self.model.delta_names) - len(other.model.delta_names))
+        return self.model.unknowns(self.params) - other.model.unknowns(other.params)
 
     def effect_test(self) -> dict:
         """Likelihood ratio of the effects against :attr:`before` (the same person without them).

@@ -56,7 +56,7 @@ Two numerical facts worth knowing, both measured on synthetic records:
 
 from .cycles import MIN_FORCE_RANGE, PEAK_PROMINENCE, PEAK_SPACING, PERIOD_RATIO_LIMITS, SUPPORTED_FB, Cycle, find_cycles
 from .decimation import GUARD_BAND, RECORD_RATE, check_rate, decimate_record, decimation_note
-from .frontend import (ACTIVE_LEVEL, CONTACT_LEVEL, HUM_HIGHPASS, HUM_WINDOW, LINE_RATIO, MAINS, MAX_RAMP_CYCLES,
+from .frontend import (ACTIVE_LEVEL, HUM_HIGHPASS, HUM_WINDOW, LINE_RATIO, MAINS, MAX_RAMP_CYCLES,
                        MIN_BOUT_CYCLES, STEADY_SWING, Bout, Bouts, FrontEnd, Hum, Span, find_bouts, front_end,
                        mains_hum, remove_hum, trim_record)
 from .filters import PADDINGS, com_acceleration, highpass, integrate, motion
@@ -92,7 +92,6 @@ __all__ = [
     "HUM_WINDOW",
     "HUM_HIGHPASS",
     "ACTIVE_LEVEL",
-    "CONTACT_LEVEL",
     "STEADY_SWING",
     "MIN_BOUT_CYCLES",
     "OBSERVATION_CHANNELS",

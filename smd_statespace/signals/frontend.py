@@ -26,11 +26,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..applicability import CONTACT_FRACTION, CONTACT_MIN_DURATION, RHYTHM_MIN, repeating_period, runs
 from ..errors import OptionError, RecordError
 from ..io import G, Record
 from .decimation import RECORD_RATE, decimate_record
 
-__all__ = ["MAINS", "LINE_RATIO", "HUM_WINDOW", "HUM_HIGHPASS", "ACTIVE_LEVEL", "CONTACT_LEVEL", "STEADY_SWING",
+__all__ = ["MAINS", "LINE_RATIO", "HUM_WINDOW", "HUM_HIGHPASS", "ACTIVE_LEVEL", "STEADY_SWING",
            "MIN_BOUT_CYCLES", "MAX_RAMP_CYCLES", "Hum", "Span", "Bout", "Bouts", "FrontEnd", "mains_hum",
            "remove_hum", "find_bouts", "trim_record", "front_end"]
 
@@ -49,9 +50,6 @@ HUM_HIGHPASS = 35.0
 ACTIVE_LEVEL = 0.03
 """RMS of the 0.7-10 Hz force over 1 s, as a fraction of body weight, above which the person moves."""
 
-CONTACT_LEVEL = 0.05
-"""Force below this fraction of body weight (for at least 30 ms) is no contact."""
-
 STEADY_SWING = 0.9
 """An end cycle of a bout is steady when its swing reaches this fraction of its reference (:func:`find_bouts`)."""
 
@@ -64,8 +62,6 @@ nothing (or let it die) over 1-3 cycles; a decline over many is the person tirin
 median alone, a person tiring by 20-35 % lost the last third of the bout (``benchmarks/frontend_spans.py``)."""
 
 _REFERENCE_CYCLES = 5  # an end cycle's reference: the median swing of the next 5 inward (ramp ones a minority)
-_PERIODS = (0.2, 1.25)  # lags (s) searched for the bouncing period: 0.8-5 Hz
-_RHYTHM_MIN = 0.5  # least autocorrelation at one period for a rhythm
 _MIN_STANDING = 0.5  # s: quieter gaps inside movement are movement
 _MARGIN = 0.25  # s of standing next to movement left out of the levels
 
@@ -246,7 +242,8 @@ class Span:
     ----------
     kind : str
         ``standing``, ``bouncing`` (the steady part of a bout), ``ramp`` (starting or stopping), ``movement``
-        (stepping on or off, a jump, a squat) or ``no_contact`` (under :data:`CONTACT_LEVEL` of body weight).
+        (stepping on or off, a jump, a squat) or ``no_contact`` (under
+        :data:`~smd_statespace.applicability.CONTACT_FRACTION` of body weight).
     start, end : float
         Times (s) of its first and last sample, on the record's own time axis.
     """
@@ -356,11 +353,6 @@ class Bouts:
         return self
 
 
-def _runs(mask):  # (starts, stops) of the runs of True, stop exclusive
-    edges = np.diff(np.r_[0, mask.astype(np.int8), 0])
-    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-
-
 def _moving_mean(x, n):
     c = np.cumsum(np.r_[0.0, x])
     lo = np.clip(np.arange(x.size) - n // 2, 0, x.size)
@@ -375,32 +367,14 @@ def _states(force, fs, weight):
     band = signal.sosfiltfilt(signal.butter(2, [0.7, min(10.0, 0.4 * fs)], "bandpass", fs=fs, output="sos"), force)
     rms = np.sqrt(_moving_mean(band ** 2, max(int(round(fs)), 3)))
     state = np.where(rms > ACTIVE_LEVEL * weight, 2, 1)
-    starts, stops = _runs(low < CONTACT_LEVEL * weight)
+    starts, stops = runs(low < CONTACT_FRACTION * weight)
     for a, b in zip(starts, stops):
-        state[a:b] = 0 if (b - a) / fs >= 0.03 else 2
-    starts, stops = _runs(state == 1)  # short quiet gaps inside movement are movement
+        state[a:b] = 0 if (b - a) / fs >= CONTACT_MIN_DURATION else 2
+    starts, stops = runs(state == 1)  # short quiet gaps inside movement are movement
     for a, b in zip(starts, stops):
         if (b - a) / fs < _MIN_STANDING and a > 0 and b < state.size:
             state[a:b] = 2
     return state, low
-
-
-def _period(x, fs):
-    """The repeating period (s) of ``x`` and its autocorrelation there (nan, 0 without a rhythm)."""
-    n = x.size
-    acf = np.fft.irfft(np.abs(np.fft.rfft(x - x.mean(), 2 * n)) ** 2)[:n]
-    lo, hi = int(_PERIODS[0] * fs), min(int(_PERIODS[1] * fs), n - 2)
-    if acf[0] <= 0 or hi <= lo + 2:
-        return float("nan"), 0.0
-    acf = acf / acf[0]
-    peaks, _ = _signal().find_peaks(acf[lo:hi + 1])
-    values = acf[lo + peaks]
-    if peaks.size == 0 or values.max() <= 0:  # no peak, or none positive (a single event)
-        return float("nan"), 0.0
-    lag = lo + int(peaks[values >= 0.9 * values.max()][0])  # the shortest of the best (not a multiple)
-    a, b, c = acf[lag - 1:lag + 2]
-    shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
-    return (lag + float(np.clip(shift, -0.5, 0.5))) / fs, float(b)
 
 
 def _ramp(swings, regular):
@@ -415,8 +389,8 @@ def _ramp(swings, regular):
 
 def _bout(time, low, a, b, fs):
     """The bout in samples ``a:b`` of the low-passed force, or None when it is no bouncing."""
-    period, rhythm = _period(low[a:b], fs)
-    if not (np.isfinite(period) and rhythm >= _RHYTHM_MIN):
+    period, rhythm = repeating_period(low[a:b], 1.0 / fs)  # the applicability check's period and rhythm
+    if not (np.isfinite(period) and rhythm >= RHYTHM_MIN):
         return None
     x = low[a:b]
     swing_all = np.subtract(*np.percentile(x, [99, 1]))
@@ -437,7 +411,7 @@ def _bout(time, low, a, b, fs):
 def _levels(force, state, bouts, time, fs):
     """Mean standing force before the first bout and after the last (N), and the noise sd (N)."""
     standing = state == 1
-    starts, stops = _runs(standing)
+    starts, stops = runs(standing)
     margin = int(round(_MARGIN * fs))
     used = np.zeros_like(standing)
     for a, b in zip(starts, stops):
@@ -468,7 +442,9 @@ def find_bouts(record: Record) -> Bouts:
 
     Notes
     -----
-    Per sample, the force low-passed at 20 Hz under :data:`CONTACT_LEVEL` of ``M g`` for 30 ms or more is no
+    Per sample, the force low-passed at 20 Hz under
+    :data:`~smd_statespace.applicability.CONTACT_FRACTION` of ``M g`` for
+    :data:`~smd_statespace.applicability.CONTACT_MIN_DURATION` or more is no
     contact; the RMS over 1 s of the force band-passed to 0.7-10 Hz above :data:`ACTIVE_LEVEL` of ``M g`` is
     movement (quiet gaps under 0.5 s inside movement too); the rest is standing. A movement is a bout of bouncing
     when its force repeats (autocorrelation >= 0.5 at a period of 0.2-1.25 s) over at least :data:`MIN_BOUT_CYCLES`

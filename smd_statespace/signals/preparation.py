@@ -176,15 +176,15 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
     """
     check_rate(rate)
     extra = [np.asarray(values, dtype=float) for values in extra]
+    if isinstance(span, str):
+        span = parse_span(span, "span")  # "auto", None ("all") or a pair
     if span is None:
         decimated, factor, moved = decimate_record(record, rate, extra)
         return PreparedRecord(decimated, record, None, factor, notes=_rate_notes(record, decimated, factor, rate),
                               extra=moved)
-    if not (isinstance(span, str) and span == "auto"):
-        span = parse_span(f"{span[0]}:{span[1]}", "span") if not isinstance(span, str) else parse_span(span, "span")
-        if span is None:
-            return prepare_record(record, rate, None, extra)
-        trim_record(record, span)  # a span outside the record: one line before any work
+    if span != "auto":
+        trim_record(record, span)  # a malformed span, or one outside the record: one line before any work
+        span = (float(span[0]), float(span[1]))
     hum = mains_hum(record)
     clean = remove_hum(record, hum)
     bouts = find_bouts(clean) if span == "auto" else None
