@@ -108,6 +108,9 @@ from scipy import stats  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import person_accuracy  # noqa: E402  (beside this script: the established people, the Wilson interval)
+
 ROWS = ("lab", "twin", "clean", "change", "held_out")
 """The benchmark's rows, in the order of the tables."""
 
@@ -116,12 +119,6 @@ GROUP = {"lab": 0, "twin": 0, "clean": 0, "change": 1, "held_out": 2}
 
 PEOPLE = ("standard", "lab")
 """``--people``: the established clean-record population (``person_accuracy.py``'s) or LabRanges'."""
-
-STANDARD_RANGES = {"f_b": (1.5, 3.5), "f_h": (1.8, 4.2), "xi_h": (0.1, 0.5), "mass": (50.0, 90.0)}
-"""``person_accuracy.RANGES`` (the article's spread), drawn in this order."""
-
-STANDARD_BLF_FACTOR = (0.7, 1.3)
-"""``person_accuracy.BLF_FACTOR``: each BLF is the simulator's default times a uniform factor in this range."""
 
 STANDARD_FORCE = dict(fb_variation=0.02, coef_variation=0.10)
 """The force's cycle-to-cycle variation of the standard people (``simulate_bouncing``'s defaults)."""
@@ -218,25 +215,11 @@ def person_seed(seed: int, k: int) -> np.random.SeedSequence:
 
 
 def draw_standard_person(child: np.random.SeedSequence) -> dict:
-    """One person as ``person_accuracy.draw_people`` draws record ``k`` from its ``child`` SeedSequence.
-
-    ``draw_people(n, seed)``'s record ``k`` is ``draw_standard_person(SeedSequence(seed).spawn(n)[k])``: the child
-    spawns the person's draw and the simulator's seed; ``f_b``, ``f_h``, ``xi_h``, mass uniform over
-    :data:`STANDARD_RANGES` in that order, then one factor per BLF (:data:`STANDARD_BLF_FACTOR`).
-
-    Returns
-    -------
-    dict
-        ``f_b, f_h, xi_h, mass, blf`` (tuple, g) and ``sim_seed`` (the clean record's seed).
-    """
-    from smd_statespace.simulation import DEFAULT_BLF
-
-    people_ss, sim_ss = child.spawn(2)
-    rng = np.random.default_rng(people_ss)
-    person = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in STANDARD_RANGES.items()}
-    factors = rng.uniform(*STANDARD_BLF_FACTOR, size=len(DEFAULT_BLF))
-    person["blf"] = tuple(float(base * factor) for base, factor in zip(DEFAULT_BLF, factors))
-    person["sim_seed"] = int(sim_ss.generate_state(1, np.uint32)[0])
+    """One person as ``person_accuracy.draw_people`` draws record ``k`` from its ``child`` SeedSequence
+    (``person_accuracy.draw_person``): ``f_b, f_h, xi_h, mass, blf`` (tuple, g) and ``sim_seed`` (the clean
+    record's seed)."""
+    person = person_accuracy.draw_person(child)
+    person["blf"] = tuple(person.pop(f"blf{i}") for i in range(1, len(person_accuracy.DEFAULT_BLF) + 1))
     return person
 
 
@@ -450,16 +433,6 @@ def load_rows(path: Path, seed: int, rows, n: int, people: str = "standard") -> 
 # tables
 
 
-def wilson(k: int, n: int, z: float = 1.959964) -> tuple:
-    """95 % Wilson interval (%) of ``k`` successes in ``n``."""
-    if n == 0:
-        return (math.nan, math.nan)
-    p = k / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (100 * max(centre - half, 0.0), 100 * min(centre + half, 1.0))
-
-
 def _share(k: int, n: int) -> str:
     return f"{k}/{n} ({100 * k / n:.0f} %)" if n else "—"
 
@@ -494,7 +467,7 @@ def row_summary(frame: pd.DataFrame, row: str) -> list:
     err = ok["f_h_err_pct"].abs().to_numpy(dtype=float)
     det = ok["determined"].astype(bool).to_numpy()
     covered = ok["covered"].astype(bool).to_numpy()
-    low, high = wilson(int(covered.sum()), len(ok))
+    low, high = person_accuracy.coverage_interval(100 * covered.mean() if len(ok) else np.nan, len(ok))
     coverage = f"{100 * covered.mean():.0f} % ({low:.0f}-{high:.0f})" if len(ok) else "—"
     misses = int((det & ~covered).sum())
     among = " / ".join(_determined_where(frame, row, other) for other in ("twin", "clean"))

@@ -177,21 +177,28 @@ def draw_people(n: int, seed: int, spread: str = "article") -> pd.DataFrame:
     pandas.DataFrame
         ``record, f_b, f_h, xi_h, mass, blf1..blf4, sim_seed``.
     """
-    rows = []
-    for k, child in enumerate(np.random.SeedSequence(seed).spawn(n)):
-        people_ss, sim_ss = child.spawn(2)
-        rng = np.random.default_rng(people_ss)
-        row = {"record": k}
-        for name, (lo, hi) in (RANGES if spread == "article" else WIDE_RANGES).items():
-            row[name] = float(rng.uniform(lo, hi))
-        if "f_h_over_f_b" in row:
-            row["f_h"] = row.pop("f_h_over_f_b") * row["f_b"]
-        factors = rng.uniform(*BLF_FACTOR, size=len(DEFAULT_BLF))
-        for i, (base, factor) in enumerate(zip(DEFAULT_BLF, factors), start=1):
-            row[f"blf{i}"] = float(base * factor)
-        row["sim_seed"] = int(sim_ss.generate_state(1, np.uint32)[0])
-        rows.append(row)
-    return pd.DataFrame(rows)
+    return pd.DataFrame([{"record": k, **draw_person(child, spread)}
+                         for k, child in enumerate(np.random.SeedSequence(seed).spawn(n))])
+
+
+def draw_person(child: np.random.SeedSequence, spread: str = "article") -> dict:
+    """One person of :func:`draw_people` from its record's ``child`` SeedSequence: ``f_b, f_h, xi_h, mass,
+    blf1..blf4, sim_seed``.
+
+    The child spawns the person's draw and the simulator's seed; the ranges are drawn in their order, then one
+    factor per BLF (:data:`BLF_FACTOR`).
+    """
+    people_ss, sim_ss = child.spawn(2)
+    rng = np.random.default_rng(people_ss)
+    row = {name: float(rng.uniform(lo, hi)) for name, (lo, hi) in (RANGES if spread == "article"
+                                                                    else WIDE_RANGES).items()}
+    if "f_h_over_f_b" in row:
+        row["f_h"] = row.pop("f_h_over_f_b") * row["f_b"]
+    factors = rng.uniform(*BLF_FACTOR, size=len(DEFAULT_BLF))
+    for i, (base, factor) in enumerate(zip(DEFAULT_BLF, factors), start=1):
+        row[f"blf{i}"] = float(base * factor)
+    row["sim_seed"] = int(sim_ss.generate_state(1, np.uint32)[0])
+    return row
 
 
 def simulate(person, generator: str, noise=NOISE, **overrides):
