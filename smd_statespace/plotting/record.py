@@ -11,6 +11,7 @@ writes it as ``person_record.png``.
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -57,7 +58,7 @@ def plot_record_parts(prepared, path=None) -> Figure:
     top.set(xlabel="time (s)", ylabel="force (N)", xlim=(original.time[0], original.time[-1]))
     top.legend(fontsize=7, loc="upper right", ncol=3)
     said = next((note for note in prepared.notes if note.startswith(("bouncing", "span"))), "the whole record fitted")
-    top.set_title(f"{original.source}: {said.split(';')[0]}", fontsize=9, loc="left")
+    top.set_title(f"{Path(str(original.source)).name}: {said.split(';')[0]}", fontsize=9, loc="left")
     _spectrum(bottom, prepared)
     return _save(fig, path)
 
@@ -66,13 +67,16 @@ def _spectrum(ax, prepared):
     """Welch spectra (4 s segments) of the force as read and with the hum subtracted; hum lines and the new Nyquist."""
     original = prepared.original
     fs = original.fs
-    clean = original if prepared.hum is None or not prepared.hum.found else replace(
-        original, force=original.force - prepared.hum.waveform)
+    hum = prepared.hum is not None and prepared.hum.found
+    curves = [(original, "0.55", 2.0, "as read" if hum else "as read (no mains hum found)")]
+    if hum:  # a second curve only when something was subtracted
+        curves.append((replace(original, force=original.force - prepared.hum.waveform), "tab:blue", 0.7,
+                       "hum subtracted"))
     segment = min(original.time.size, int(4 * fs))
-    for record, color, width, label in ((original, "0.55", 2.0, "as read"), (clean, "tab:blue", 0.7, "hum subtracted")):
+    for record, color, width, label in curves:
         frequency, power = signal.welch(record.force - np.mean(record.force), fs=fs, nperseg=segment)
         ax.semilogy(frequency[1:], power[1:], color=color, lw=width, label=label)
-    if prepared.hum is not None and prepared.hum.found:
+    if hum:
         for frequency, amplitude, line in zip(prepared.hum.harmonics, prepared.hum.amplitudes, prepared.hum.lines):
             if line:
                 ax.axvline(frequency, color="tab:red", lw=0.8, ls=":")
