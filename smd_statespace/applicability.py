@@ -206,11 +206,13 @@ def _contact(time, weight_fraction, dt, words=_PLATE_WORDS) -> Finding | None:
                    "(jumping, running, hopping); the SMD model assumes continuous contact")
 
 
-def _saturation(time, force, words=_PLATE_WORDS) -> Finding | None:
+def _saturation(time, force, weight, words=_PLATE_WORDS) -> Finding | None:
     span = float(np.ptp(force))
     if span <= 0.0:
         return Finding("not_rhythmic", True, "the force is constant: no measurement to identify")
     for label, extreme in (("largest", force.max()), ("smallest", force.min())):
+        if label == "smallest" and extreme < CONTACT_FRACTION * weight:
+            continue  # an empty plate reading its zero: no contact (``contact_lost``), not clipping
         starts, stops = runs(np.abs(force - extreme) <= 1e-9 * span)
         keep = stops - starts >= SATURATION_MIN_RUN
         if np.any(keep):
@@ -345,7 +347,8 @@ def check_clipping(record: Record) -> BouncingCheck:
     For the record as read: a decimation's low-pass rounds clipped tops off, so the full check, run on the
     decimated record, no longer sees them. Its findings are empty or the one refusal.
     """
-    found = _saturation(np.asarray(record.time, dtype=float), np.asarray(record.force, dtype=float), _words(record))
+    found = _saturation(np.asarray(record.time, dtype=float), np.asarray(record.force, dtype=float),
+                        record.mass * G, _words(record))
     return BouncingCheck(source=str(record.source), findings=[] if found is None else [found])
 
 
@@ -380,7 +383,7 @@ def check_bouncing(record: Record) -> BouncingCheck:
     fraction = force / weight
     check = BouncingCheck(source=str(record.source))
     words = _words(record)
-    for finding in (_contact(time, fraction, dt, words), _saturation(time, force, words)):
+    for finding in (_contact(time, fraction, dt, words), _saturation(time, force, weight, words)):
         if finding is not None:
             check.findings.append(finding)
     period, rhythm = repeating_period(fraction, dt)

@@ -158,3 +158,19 @@ def test_any_finite_force_gets_a_table_or_one_line(tmp_path_factory, values):
         assert status == 2
         lines = [line for line in err.getvalue().splitlines() if line.strip()]
         assert len(lines) == 1 and "Traceback" not in err.getvalue(), err.getvalue()
+
+
+def test_an_empty_plate_reading_zero_is_no_contact_not_clipping(bouncing):
+    """A lab's export reads exactly 0 N while nobody is on the plate (before stepping on, in a jump's flight): that
+    is contact lost, not a clipped amplifier (BMClab's jump1.txt was refused as 'saturated' at -0.0 N)."""
+    from smd_statespace.applicability import check_clipping
+
+    force = bouncing.record.force.copy()
+    force[(bouncing.record.time > 4.0) & (bouncing.record.time < 4.5)] = 0.0  # a flight
+    force[bouncing.record.time < 1.0] = 0.0  # before stepping on
+    record = make_record(bouncing.record.time, force, MASS)
+    assert check_clipping(record).findings == []
+    kinds = [f.kind for f in check_bouncing(record).findings]
+    assert kinds[0] == "contact_lost" and "saturated" not in kinds
+    clipped = make_record(bouncing.record.time, np.minimum(force, 1.3 * WEIGHT), MASS)  # clipping still seen
+    assert [f.kind for f in check_clipping(clipped).findings] == ["saturated"]
