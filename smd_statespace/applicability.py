@@ -49,13 +49,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import SMDInputError
-from .io import G, Record
+from .io import CONTACT_FRACTION, G, Record  # noqa: F401 - CONTACT_FRACTION is read here by signals.frontend
 
 __all__ = ["NotBouncingError", "Finding", "BouncingCheck", "check_bouncing", "check_clipping", "repeating_period",
            "runs"]
-
-CONTACT_FRACTION = 0.05
-"""Force below this fraction of body weight means no contact (the plate's noise is about 1 %)."""
 
 CONTACT_MIN_DURATION = 0.03
 """Shortest loss of contact (s) reported: shorter dips are noise or impact transients."""

@@ -137,3 +137,17 @@ def test_check_range_gives_floats_and_is_the_check_of_every_range_option():
         make_effect("floor_mode:damping_range=0/0.1")
     with pytest.raises(OptionError, match="cubic_stiffness: beta_range must satisfy low < high"):
         make_effect("cubic_stiffness:beta_range=5/-5")
+
+
+def test_a_record_with_the_empty_plate_before_and_after_is_read():
+    """A lab's export reads 0 N before stepping on and after stepping off (BMClab's jump2.txt: 5 s of 10 off the
+    plate, refused as 'mean 389 N, check the units'); the unit check takes the mean while someone is on the plate."""
+    from smd_statespace.io import G, make_record
+
+    t = np.arange(0.0, 10.0, 0.002)
+    force = np.where((t > 2.0) & (t < 7.0), 70 * G * (1 + 0.3 * np.sin(2 * np.pi * 2 * t)), 0.0)
+    assert make_record(t, force, 70.0).mass == 70.0
+    with pytest.raises(RecordError, match="it looks like kN"):
+        make_record(t, force / 1000.0, 70.0)
+    with pytest.raises(RecordError, match="check the units"):
+        make_record(t, force, 140.0)  # a wrong mass is still refused
