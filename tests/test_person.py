@@ -609,6 +609,25 @@ def test_a_grf_whose_highest_peak_jumps_between_two_humps_still_gets_one_boundar
     assert np.sqrt(-2.0 * np.log(abs(np.mean(turn)))) / (2.0 * np.pi) < 0.03
 
 
+@pytest.mark.parametrize("case", ["half-cycle peaks", "a line off half the rate"])
+def test_peak_intervals_are_regrouped_only_by_a_line_at_half_their_rate(case):
+    """A dominant 2nd harmonic (``f_h`` near ``2 f_b``) puts two GRF peaks in each force cycle: the line at half
+    their rate regroups them. A quiet record with some other line 5 % off half the peak rate (31-33 times its
+    neighbourhood on two lab records) must not: its cycles were made two force cycles long
+    (:data:`~smd_statespace.person.timing.SUBHARMONIC_OFFSET`)."""
+    if case == "half-cycle peaks":
+        sim = simulate_bouncing(mass=70.0, f_b=1.7, f_h=3.3, xi_h=0.1, duration=30.0, fs=100.0,
+                                blf=(0.1, 0.3, 0.05, 0.02), noise=0.01, seed=3, variation="jumps")
+        force = sim.record.force
+        peaks, _ = find_cycles(sim.record.time, force, (0.5, 10.0))
+        assert peaks.size > 1.8 * len(sim.cycles)  # the case: two peaks per cycle
+    else:
+        sim = simulate_bouncing(mass=70.0, f_b=2.6, f_h=3.3, xi_h=0.4, duration=30.0, fs=100.0,
+                                blf=(0.3, 0.15, 0.04, 0.02), noise=0.001, seed=3, variation="jumps")
+        force = sim.record.force + 0.003 * 70.0 * G * np.sin(2.0 * np.pi * 1.05 * 1.3 * sim.record.time)
+    assert abs(estimate_timing(sim.record.time, force).n_cycles - len(sim.cycles)) <= 1
+
+
 def test_the_first_boundary_of_a_record_that_starts_from_rest_is_not_pulled_into_the_cycle():
     """A person starting from rest (``coefficients`` generator, record 0 of ``person_accuracy.py --seed 2027``):
     the template alignment put the first inner boundary 0.14 s into a 0.43 s cycle (true start 0.00), which cost
