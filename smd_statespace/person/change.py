@@ -18,16 +18,14 @@ and says so.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from .calibration import CALIBRATION, wald_interval
 from .judgement import DETERMINED_FRACTION, PRIOR_SD
 from .search import fit_model, information
-from .timing import CycleTiming
+from .validation import halves, part
 
-__all__ = ["CHANGE_MIN", "CHANGE_Z", "MIN_HALF_CYCLES", "change_test", "compare_halves"]
+__all__ = ["CHANGE_MIN", "CHANGE_Z", "change_test", "compare_halves"]
 
 CHANGE_Z = 2.58
 """Difference of the halves' estimates, in calibrated standard errors of the difference, from which the person
@@ -42,10 +40,6 @@ At z >= 2.0, ``xi_h`` was named on a stationary 1000 Hz record whose innovations
 
 CHANGE_MIN = {"f_h": 0.04, "xi_h": 0.06}
 """Smallest difference that is called a change: 4 % of ``f_h``, 0.06 of ``xi_h`` (absolute)."""
-
-MIN_HALF_CYCLES = 8
-"""Fewest whole force cycles in each half for the test (the record-level model needs as many)."""
-
 
 def change_test(model, params, level=0.9) -> dict | None:
     """The person fitted on each half of the record, and whether ``f_h`` or ``xi_h`` differ between them.
@@ -65,33 +59,20 @@ def change_test(model, params, level=0.9) -> dict | None:
         ``halves``: per half its ``start``, ``end`` (s), ``f_h``, ``xi_h``, their calibrated sds
         and intervals; ``z`` (per parameter, the difference over its sd); ``changed``: the
         parameters that differ (empty: one person explains the record). None when the record
-        is too short to split (fewer than :data:`MIN_HALF_CYCLES` cycles a half), the model
+        is too short to split (fewer than :data:`~smd_statespace.person.validation.MIN_HALF_CYCLES` cycles a half), the model
         has effects, or a half's fit fails.
     """
-    if model.dynamics.model.effects:
+    cut = halves(model)
+    if model.dynamics.model.effects or cut is None:
         return None
-    boundaries = np.asarray(model.timing.boundaries, dtype=float)
-    time = model.time
-    inside = boundaries[(boundaries > time[0]) & (boundaries < time[-1])]
-    if inside.size < 2 * MIN_HALF_CYCLES + 1:
-        return None
-    cut = inside[inside.size // 2]
-    halves = []
-    for keep, kept in ((time < cut, boundaries <= cut), (time >= cut, boundaries >= cut)):
-        half = _half(model, keep, kept)
+    summaries = []
+    for keep, kept in cut:
+        half = part(model, keep, kept)
         fitted = fit_model(half, params, quick=True)
         if not fitted["converged"] or half.person_at_bound(fitted["params"]):
             return None
-        halves.append(_summary(half, fitted["params"], level))
-    return compare_halves(halves)
-
-
-def _half(model, keep, kept):
-    """The record-level model on the samples ``keep`` with the cycle boundaries ``kept`` (the same options)."""
-    timing = CycleTiming(model.timing.boundaries[kept], model.timing.method)
-    regressors = tuple(replace(r, values=np.asarray(r.values)[keep]) for r in model.regressors)
-    return replace(model, time=model.time[keep], y=model.y[keep], timing=timing, regressors=regressors,
-                   dynamics=None, nominal=None)
+        summaries.append(_summary(half, fitted["params"], level))
+    return compare_halves(summaries)
 
 
 def _summary(model, params, level) -> dict:

@@ -26,6 +26,12 @@ is tried only when asked for (``--effect floor_mode:source=modal``): its
 frequency is searched over a fine grid of about 230 trials, which costs
 seconds, and its test counts them (Bonferroni).
 
+A candidate that passes the test is also validated on held-out data
+(:func:`~smd_statespace.person.validation.cross_validated_loglike`): the
+person with and without it fitted on each half of the record and scored on the
+other half; one that predicts the held-out halves worse is not proposed, whatever
+its likelihood ratio on the whole record.
+
 When two candidates both explain the residual (a cubic spring makes
 harmonics of the bouncing frequency; so does an asymmetric stiffness), the
 two best are fitted together and each is tested on top of the other: the
@@ -47,8 +53,9 @@ from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from .extend import configured_for_record, fit_effects
+from .validation import cross_validated_loglike
 
-__all__ = ["LESS_WHITE", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row",
+__all__ = ["LESS_WHITE", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
            "indistinguishable_from_zero"]
 
 ZERO_Z = 2.0
@@ -90,7 +97,23 @@ def candidate_row(base, fitted, level: float) -> dict:
     row["less_white"] = bool(after_tests["ljung_box_p"] < LESS_WHITE * before_tests["ljung_box_p"])
     row["significant"] = (bool(log_p < math.log(level)) and not row["on_bound"] and row["settled"] and lr > 0
                           and not row["zero"] and not row["less_white"])
+    row.update(held_out_before=math.nan, held_out=math.nan, held_out_worse=False)
     return row
+
+
+def held_out(row: dict, base_loglike, fitted) -> dict:
+    """``row`` with its held-out log-likelihoods (without, with the candidate) and whether it predicts worse.
+
+    ``base_loglike``: :func:`~smd_statespace.person.validation.cross_validated_loglike` of the person
+    without the candidate (None when the record cannot be halved: nothing is judged). A candidate that
+    predicts the held-out halves worse than the person without it is not significant.
+    """
+    with_it = cross_validated_loglike(fitted.model, fitted.params) if base_loglike is not None else None
+    if with_it is None:
+        return row
+    worse = bool(with_it["loglike"] < base_loglike["loglike"])
+    return {**row, "held_out_before": base_loglike["loglike"], "held_out": with_it["loglike"],
+            "held_out_worse": worse, "significant": row["significant"] and not worse}
 
 
 def indistinguishable_from_zero(base, fitted, estimates, z: float = ZERO_Z) -> bool:
@@ -190,6 +213,11 @@ class PersonDiagnosis:
                 out.append(f"{name}: with it the innovations are less white (Ljung-Box p "
                            f"{table.loc[name, 'ljung_box_p_before']:.2g} -> {table.loc[name, 'ljung_box_p']:.2g}): "
                            "it does not take what the model misses, so it is not proposed")
+            for name in table.index[table["held_out_worse"].astype(bool)]:
+                out.append(f"{name}: fitted on each half of the record, it predicts the other half worse than the "
+                           f"person without it (held-out log-likelihood {table.loc[name, 'held_out_before']:.1f} -> "
+                           f"{table.loc[name, 'held_out']:.1f}): it fits this record, not the person, so it is not "
+                           "proposed")
             for name in table.index[~table["settled"].astype(bool)]:
                 out.append(f"{name}: its linearised path had not settled after the last linearisation (the "
                            f"approximate likelihood kept rising, LR {table.loc[name, 'lr']:.1f}, as the path "
@@ -285,6 +313,10 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
             continue
         fits[effect.name] = fitted
         rows.append({**candidate_row(result, fitted, level), "seconds": time.perf_counter() - started})
+    passed = [i for i, row in enumerate(rows) if row["significant"]]
+    base_loglike = cross_validated_loglike(result.model, result.params) if passed else None
+    for i in passed:  # the held-out check only where the test is passed (one half-fit pair each)
+        rows[i] = held_out(rows[i], base_loglike, fits[rows[i]["effect"]])
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha)
     significant = diagnosis.missing
     if len(significant) >= 2:
@@ -302,6 +334,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
         else:
             index = next(i for i, row in enumerate(rows) if row["effect"] == name)
             fits[name] = fitted
-            rows[index] = {**candidate_row(result, fitted, level),
+            screened = {key: rows[index][key] for key in ("held_out_before", "held_out", "held_out_worse")}
+            rows[index] = {**candidate_row(result, fitted, level), **screened,
                            "seconds": rows[index]["seconds"] + time.perf_counter() - started}
     return diagnosis
