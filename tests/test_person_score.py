@@ -231,6 +231,12 @@ def test_the_cycle_clustered_sandwich_uses_the_profiled_scores(record):
     se_sandwich = np.sqrt(np.diag(information(model, params, "robust")[0])[:2])
     ratio = se_sandwich / se_observed
     assert np.all((0.7 < ratio) & (ratio < 2.0)), ratio
+    # the default takes the wider of the two for f_h and xi_h, and their correlation and the rest from the oim
+    wider, observed = information(model, params, "oim_or_robust")[0], information(model, params, "oim")[0]
+    np.testing.assert_allclose(np.sqrt(np.diag(wider)[:2]), np.maximum(se_observed, se_sandwich), rtol=1e-9)
+    np.testing.assert_allclose(wider[2:, 2:], observed[2:, 2:], rtol=1e-12)
+    np.testing.assert_allclose(wider[0, 1] / np.sqrt(wider[0, 0] * wider[1, 1]),
+                               observed[0, 1] / np.sqrt(observed[0, 0] * observed[1, 1]), rtol=1e-9)
 
 
 def test_a_broken_pass_gives_nan(record):

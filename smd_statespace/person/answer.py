@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibration import CALIBRATION, LAB_FACTOR, model_error_floor, wald_interval
+from .calibration import CALIBRATION, model_error_floor, wald_interval
 from .results import PRIOR_SD, VARIATION_DISAGREEMENT, PersonResult
-from .search import information, profile_interval
+from .search import WIDER_SANDWICH, information, profile_interval
 
 __all__ = ["person_result", "honest_intervals", "undetermined_interval"]
 
 
-def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, cov_type="oim", comparison=(),
+def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, cov_type=WIDER_SANDWICH, comparison=(),
                   record_warnings=(), notes=(), **extra):
     """The :class:`~smd_statespace.person.results.PersonResult` of a fitted record-level model.
 
@@ -29,8 +29,6 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     params = fitted["params"]
     cov, free = information(model, params, cov_type)
     factors = dict(CALIBRATION[model.variation])
-    if getattr(extra.get("prepared"), "trimmed", False):  # a lab's export: measured on its own (LAB_FACTOR)
-        factors = {name: factor * LAB_FACTOR[name] for name, factor in factors.items()}
     if intervals == "calibrated":
         scale = np.ones(params.size)
         scale[model.position("f_h")], scale[model.position("xi_h")] = factors["f_h"], factors["xi_h"]

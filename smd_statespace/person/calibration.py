@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from scipy import stats
 
-__all__ = ["CALIBRATION", "LAB_FACTOR", "MODEL_ERROR_FLOOR", "model_error_floor", "wald_interval"]
+__all__ = ["CALIBRATION", "MODEL_ERROR_FLOOR", "model_error_floor", "wald_interval"]
 
 
 CALIBRATION = {"independent": {"f_h": 2.75, "xi_h": 2.72}, "smooth": {"f_h": 3.29, "xi_h": 1.68},
@@ -28,19 +28,11 @@ not an artefact): measured with ``benchmarks/person_calibration.py`` on the rows
 chosen on 280, "smooth" on 224 (docs/person-calibration.md).
 "random_walk" and "both" were not measured: they take the pooled factors. The factors
 before (1.89, 2.63 and 3.21, 1.96) were measured on the jumps and smooth generators
-alone at 1 % BW, with an earlier search.
-"""
-
-
-LAB_FACTOR = {"f_h": 1.22, "xi_h": 1.31}
-"""A further factor on the calibrated standard errors of a record the front end trimmed (a lab's export).
-
-Measured as :data:`CALIBRATION` was, on lab records (``benchmarks/lab_records.py --people standard --seed 4343
---rows lab``: the people of the clean benchmark under a lab's artefacts, 39 fitted): the 90th percentile of
-``|estimate - truth| / sd`` over the answers called determined was, for ``f_h``, 2.00 = 1.22 x 1.645 (22 answers;
-their clean records 0.75) and, for ``xi_h`` (measured with ``f_h``'s factor in place, the sd read off the interval,
-model-error floor included), 2.15 = 1.31 x 1.645 (30 answers; clean records 1.10). Checked on seed 4346
-(docs/lab-records.md).
+alone at 1 % BW, with an earlier search. The factors multiply the sds of the default covariance
+(:data:`~smd_statespace.person.search.WIDER_SANDWICH`: the observed information's, raised to the sandwich's
+where that is wider); they were measured on the observed information's, which on these records the sandwich
+equals within a few per cent (0.87-1.14 times, median 1.04, on 40 clean records of ``benchmarks/lab_records.py``
+seed 4346).
 """
 
 

@@ -46,6 +46,7 @@ from ..progress import tqdm
 from .dynamics import PersonDynamics
 from .effect_adapter import record_default, record_harmonics, record_starts
 from .model import RecordModel
+from .search import WIDER_SANDWICH
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "record_effects", "configured_for_record",
            "split_effects", "record_signals", "effect_model", "fit_effects"]
@@ -218,7 +219,7 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     return out
 
 
-def fit_effects(result, effects, *, intervals="calibrated", cov_type="oim", progress=False, timing=True):
+def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDWICH, progress=False, timing=True):
     """Identify the person of ``result`` again with ``effects`` added to its model.
 
     Parameters

@@ -34,7 +34,8 @@ from ..signals import RECORD_RATE, prepare_record
 from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
 from .model import VARIATIONS, Regressor, RecordModel
-from .search import TIMING_ITERATIONS, FitError, choose_with_own_timing, comparison_row, fit_model, profile_interval
+from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, comparison_row,
+                     fit_model, profile_interval)
 from .timing import TIMING_METHODS, estimate_timing
 
 __all__ = ["FitError", "MIN_CYCLES", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person", "fit_model",
@@ -67,7 +68,7 @@ INTERVAL_METHODS = ("calibrated", "wald", "profile")
 
 
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
-                    intervals="calibrated", level=0.9, regressors=(), cov_type="oim", drift=False, check=True,
+                    intervals="calibrated", level=0.9, regressors=(), cov_type=WIDER_SANDWICH, drift=False, check=True,
                     rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto",
                     check_change=True):
     """Identify one person's SMD model from a whole bouncing record.
@@ -114,9 +115,11 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     regressors : sequence of Regressor
         Effects' signals with unknown coefficients (a constant offset, for an
         imprecise body mass or plate zero, is always included).
-    cov_type : {"robust", "oim"}
-        Covariance of the estimates (:func:`information`): inverse observed
-        information (default) or cycle-clustered sandwich.
+    cov_type : {"oim_or_robust", "oim", "robust"}
+        Covariance of the estimates (:func:`information`): the inverse observed
+        information with the sds of ``f_h`` and ``xi_h`` raised to the cycle-clustered
+        sandwich's where that is wider (default, :data:`~smd_statespace.person.search.WIDER_SANDWICH`),
+        the inverse observed information alone, or the sandwich.
     drift : bool
         Let the force coefficients also wander within cycles (a per-sample
         random walk with one estimated variance per harmonic group).
@@ -221,8 +224,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise, drift=drift,
                            regressors=all_regressors, phase_template=template)
 
-    if cov_type not in ("robust", "oim"):
-        raise OptionError(f"cov_type {cov_type!r} is not one of: robust, oim")
+    if cov_type not in COV_TYPES:
+        raise OptionError(f"cov_type {cov_type!r} is not one of: {', '.join(COV_TYPES)}")
     steps = len(names) * (1 + (TIMING_ITERATIONS + 1 if timing == "model" else 0)) + (2 if timing == "model" else 1)
     steps += 1 if check_change else 0  # the halves' fits
     with tqdm(total=steps, desc="identify (record)", unit="fit", disable=not progress, leave=False) as bar:
