@@ -17,9 +17,10 @@ DEFAULT_ESTIMATORS = "record,ekf,grid"
 filter (the UKF costs 7 times more for the same accuracy) and the exact grid, the only per-cycle
 estimator whose intervals cover; the article's pf on request (its intervals cover 3 %)."""
 
-RECORD_COVERAGE = 96
+RECORD_COVERAGE = 97
 """Coverage (%) of the record-level model's calibrated 90 % interval of ``f_h`` on fresh records, with the
-shipped calibration (:data:`~smd_statespace.person.calibration.CALIBRATION`): 148 of 154 records of seed 2029,
+shipped calibration (:data:`~smd_statespace.person.calibration.CALIBRATION`, the default covariance
+:data:`~smd_statespace.person.search.WIDER_SANDWICH`): 150 of 154 records of seed 2029,
 16 people per generator of force variation (five) and noise level (0.3 and 1 % BW), 6 failed fits left out
 (docs/person-calibration.md, "On fresh records"; rows in ``benchmarks/results/person_accuracy_seed2029*.csv``,
 which ``tests/test_person.py`` recomputes it from)."""
