@@ -54,9 +54,12 @@ Stillness
 ---------
 
 A stretch longer than :data:`STILL_DURATION` whose movement (RMS about its own mean)
-is below :data:`STILL_FRACTION` of the record's dynamic RMS (``acc - g(t)``) with
-bouncing on both sides is refused: the model would see a person who stopped. At
-either end such a stretch is reported (``still_start``, ``still_end``), not refused.
+is below :data:`STILL_FRACTION` of the record's dynamic RMS (``acc - g(t)``) is
+reported (``still``; at either end also ``still_start``, ``still_end``), not refused:
+a phone record is picked up, strapped on, worn standing, then bounced with, and the
+person model's front end fits only the bouncing (until 2026-11-28 a still stretch
+between movements was refused, which refused every record with handling before a
+standing start).
 """
 
 from __future__ import annotations
@@ -192,8 +195,9 @@ def _project(acc: np.ndarray, gravity_t: np.ndarray, magnitude: np.ndarray, grav
     return a_v, tilt, change
 
 
-def _still_ends(time: np.ndarray, acc: np.ndarray, gravity_t: np.ndarray, fs: float, source: str) -> tuple:
-    """``(still_start, still_end)`` (s): still stretches at the record's ends; one between bouncing is refused."""
+def _still_parts(time: np.ndarray, acc: np.ndarray, gravity_t: np.ndarray, fs: float) -> tuple:
+    """``(still_start, still_end, still)``: the lengths (s) of still stretches at the record's ends and the
+    ``[start, end]`` times (s) of every still stretch."""
     dynamic_rms = float(np.sqrt(np.mean(((acc - gravity_t) ** 2).sum(axis=1))))
     stretches = _still_stretches(acc, dynamic_rms, fs)
     n = time.size
@@ -201,15 +205,10 @@ def _still_ends(time: np.ndarray, acc: np.ndarray, gravity_t: np.ndarray, fs: fl
     for start, stop in stretches:  # a handful of stretches, not samples
         if start == 0:
             still_start = (stop - start) / fs
-        elif stop == n:
+        if stop == n:
             still_end = (stop - start) / fs
-        else:
-            raise RecordError(
-                f"{source}: no movement from t = {time[start]:.1f} s for {(stop - start) / fs:.1f} s "
-                f"(RMS below {STILL_FRACTION:.0%} of the record's) while the rest moves: was the phone put down? "
-                "use a record of continuous bouncing"
-            )
-    return still_start, still_end
+    still = [[float(time[start]), float(time[stop - 1])] for start, stop in stretches]
+    return still_start, still_end, still
 
 
 def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: str = "<arrays>") -> tuple:
@@ -252,7 +251,10 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
         (the phone's slow sway; both None for one channel); ``cutoff`` (Hz);
         ``still_start`` and ``still_end`` (s), the length of a still stretch at the
         start or end of the record (e.g. before the bouncing began), 0 if none;
-        they are not refused, trim them if the model should not see them.
+        ``still``, the ``[start, end]`` times (s) of every still stretch (standing
+        with the phone worn, or the phone put down). None is refused: the person
+        model's front end (:func:`~smd_statespace.signals.prepare_record`) fits the
+        longest bout of bouncing and says what it left out.
 
     Raises
     ------
@@ -260,9 +262,7 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
         Arrays of mismatched shapes or with non-finite values; time not uniform
         (within :data:`~smd_statespace.io.SAMPLING_TOLERANCE`); a record shorter
         than ``1 / cutoff``; a gravity magnitude not about 9.81 m/s^2 (a record in
-        g, or without gravity); or a still stretch longer than
-        :data:`STILL_DURATION` between stretches of bouncing (the phone put down
-        halfway, or the bouncing stopped), naming its time and length.
+        g, or without gravity).
     OptionError
         ``cutoff`` is not in (0, 0.6] Hz.
     """
@@ -276,7 +276,7 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
     gravity_t = acc2 - highpass(acc2, fs, cutoff, GRAVITY_ORDER, axis=0)
     magnitude, gravity = _gravity_magnitude(gravity_t, source)
     a_v, tilt, change = _project(acc2, gravity_t, magnitude, gravity)
-    still_start, still_end = _still_ends(time, acc2, gravity_t, fs, source)
+    still_start, still_end, still = _still_parts(time, acc2, gravity_t, fs)
     info = {
         "gravity": gravity,
         "tilt_deg": tilt,
@@ -284,5 +284,6 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
         "cutoff": float(cutoff),
         "still_start": float(still_start),
         "still_end": float(still_end),
+        "still": still,
     }
     return a_v, info

@@ -8,6 +8,7 @@ from pathlib import Path
 from ..errors import OptionError, SMDInputError
 from ..simulation import VARIATIONS
 from ..simulation.phone import PHONE_DEFAULTS
+from ..simulation.phone_session import SESSION_DEFAULTS
 from .common import _nonnegative, _numbers, _positive, _seed
 
 LAB_OPTIONS = (("stand", ("stand_before", "stand_after"), _numbers, "S[,S]",
@@ -107,6 +108,10 @@ def add_simulate(subparsers):
                              "a typical lab record, from --seed")
     for flag, _, kind, unit, what in LAB_OPTIONS:
         parser.add_argument(f"--{flag}", type=kind, default=None, metavar=unit, help=f"with --lab: {what}")
+    parser.add_argument("--handling", type=_numbers, default=None, metavar="S[,S]",
+                        help="with --lab --accelerometer (a phone's record of the whole trial): the phone picked "
+                             "up and strapped on before, taken off and put down after (s; 0 for none; default "
+                             f"{SESSION_DEFAULTS['pick_up']:g},{SESSION_DEFAULTS['take_off']:g})")
     parser.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="physical effect, repeatable: any registered effect (floor_mode, harmonics, "
                              "cubic_stiffness, a user's); keys are its options or its parameters' true values "
@@ -246,16 +251,20 @@ def _simulate_lab(args, out, truth) -> int:
     from ..io import check_mass
     from ..simulation.lab import simulate_lab_record, simulate_typical_lab_record
 
-    for flag in ("duration", "noise", "effect", "accelerometer"):
+    for flag in ("duration", "noise", "effect"):
         if getattr(args, flag):
             raise OptionError(f"--{flag} does not apply to --lab (the record's length is --stand, the ramps and "
                               "--bout; its noise --plate-noise N; no effects)")
+    if args.handling is not None and not args.accelerometer:
+        raise OptionError("--handling applies to a phone's record of a whole trial (--lab --accelerometer)")
     settings = _lab_settings(args)
     if "mass" in settings:
         settings["mass"] = check_mass(settings["mass"], source="--mass")
     missing = [f"--{flag}" for flag, key in PERSON_OPTIONS[:4] if key not in settings]
     if missing and not args.typical:
         raise OptionError(f"--lab needs {', '.join(missing)} (or --typical to draw them)")
+    if args.accelerometer:
+        return _simulate_session(args, settings, out, truth)
     try:
         if args.typical:
             synthetic = simulate_typical_lab_record(seed=args.seed, **settings)
@@ -273,4 +282,45 @@ def _simulate_lab(args, out, truth) -> int:
           f"{info['xi_h_start']:.3g}-{info['xi_h_end']:.3g}, tiring {info['tire']:.2g}, "
           f"{info['variations']['generator']} variation); hum {hum['frequency_hz']:g} Hz, drift up to "
           f"{info['drift']['max_abs_n']:.3g} N, noise {info['noise_n']:.3g} N; truth in {truth_path}")
+    return 0
+
+
+PLATE_ONLY = ("hum", "hum-amplitude", "hum-variation", "drift", "plate-noise", "fs", "typical")
+"""Options of ``simulate --lab`` that a phone's record of the trial (``--lab --accelerometer``) does not take."""
+
+
+def _simulate_session(args, settings, out, truth) -> int:
+    """``simulate --lab --accelerometer``: a phone's record of a whole trial, handling included."""
+    from ..simulation.phone_session import simulate_phone_session
+
+    plate = [flag for flag in PLATE_ONLY if getattr(args, flag.replace("-", "_")) not in (None, False)]
+    if plate:
+        raise OptionError(f"--{plate[0]} does not apply to a phone's record (--lab --accelerometer): the phone's "
+                          "options are --phone-rate, --tilt, --bias, --phone-noise, --handling")
+    unused = [flag for flag in ("sway", "jitter", "drop") if getattr(args, flag) is not None]
+    if unused:
+        raise OptionError(f"--{unused[0]} does not apply to --lab --accelerometer (the phone is worn still; "
+                          "--body-sway is the person's)")
+    phone = {key: getattr(args, flag.replace("-", "_")) for flag, key, *_ in PHONE_OPTIONS
+             if getattr(args, flag.replace("-", "_")) is not None}
+    handling = args.handling
+    if handling is not None:
+        if len(handling) not in (1, 2) or any(v < 0 for v in handling):
+            raise OptionError(f"--handling takes one or two numbers >= 0 (before and after), got {handling!r}")
+        phone["pick_up"], phone["take_off"] = (handling * 2)[:2] if len(handling) == 1 else handling
+    settings.pop("fs", None)
+    try:
+        record = simulate_phone_session(seed=args.seed, **settings, **phone)
+    except SMDInputError as exc:
+        text = str(exc).replace("simulate_phone_session: fs ", "--phone-rate ", 1)
+        for key, flag in (("pick_up", "--handling"), ("take_off", "--handling"), ("noise", "--phone-noise")):
+            text = text.replace(f"simulate_phone_session: {key} ", f"{flag} ", 1)
+        raise _lab_error(type(exc)(text)) from None
+    csv_path, truth_path = record.write(out, truth)
+    session = record.truth["session"]
+    print(f"wrote {csv_path}: a phone's record of a whole trial ({session['fs']:g} Hz, {record.time[-1]:.2f} s): "
+          f"picked up until {session['pick_up'][1]:.2f} s, worn {session['worn'][0]:.2f}-{session['worn'][1]:.2f} s "
+          f"(bouncing {session['bouncing'][0]:.2f}-{session['bouncing'][1]:.2f} s), taken off until "
+          f"{session['take_off'][1]:.2f} s; truth in {truth_path}; identify it with: smd-statespace identify "
+          f"{csv_path} --accelerometer")
     return 0

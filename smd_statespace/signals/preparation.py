@@ -233,7 +233,8 @@ def _bouncing_span(record: Record, bouts: Bouts) -> tuple:
     if not others and len(bouts.bouts) == 1:  # bouncing from end to end (ramps of a cycle or less at the ends)
         return None, False, []
     chosen = max(bouts.bouts, key=lambda bout: bout.cycles)
-    notes = [f"bouncing {chosen.start:.1f}-{chosen.end:.1f} s fitted ({chosen.cycles} cycles)" + _left_out(bouts)]
+    phone = record.extra.get("sensor") == "accelerometer"
+    notes = [f"bouncing {chosen.start:.1f}-{chosen.end:.1f} s fitted ({chosen.cycles} cycles)" + _left_out(bouts, phone)]
     if len(bouts.bouts) > 1:
         rest = [b for b in bouts.bouts if b is not chosen]
         notes.append(f"{len(bouts.bouts)} bouts of bouncing: the longest is fitted; "
@@ -242,11 +243,17 @@ def _bouncing_span(record: Record, bouts: Bouts) -> tuple:
     return chosen.span, True, notes
 
 
-def _left_out(bouts: Bouts) -> str:
-    """``; standing 0.0-3.4 s and 34.6-38.0 s used for ...; ramps ... left out`` for the note of the fitted span."""
+def _left_out(bouts: Bouts, phone: bool = False) -> str:
+    """``; standing 0.0-3.4 s and 34.6-38.0 s used for ...; ramps ... left out`` for the note of the fitted span
+    (a phone's record: still parts and handling named as a phone's)."""
     words = []
-    for kind, use in (("standing", "used for the body weight and the plate's zero"), ("ramp", "left out"),
-                      ("movement", "left out (not bouncing)"), ("no_contact", "left out (no contact with the plate)")):
+    uses = (("standing", "used for the body weight and the plate's zero"), ("ramp", "left out"),
+            ("movement", "left out (not bouncing)"), ("no_contact", "left out (no contact with the plate)"))
+    if phone:
+        uses = (("standing", "still (the phone worn standing, or put down) left out"), ("ramp", "left out"),
+                ("movement", "left out (the phone handled, or not bouncing)"),
+                ("no_contact", "left out (free fall: a jump or a drop)"))
+    for kind, use in uses:
         spans = [s for s in bouts.segments if s.kind == kind]
         if spans:
             listed = " and ".join(f"{s.start:.1f}-{s.end:.1f} s" for s in spans[:3]) + (" ..." if len(spans) > 3
