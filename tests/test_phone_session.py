@@ -1,5 +1,7 @@
 """A phone's record of a whole trial (simulation.phone_session) and the phone path's front end on it."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -51,7 +53,7 @@ def test_identify_fits_only_the_bouncing_of_a_handled_phone_record(tmp_path, cap
     out = tmp_path / "person"
     assert main(["identify", str(csv), "--accelerometer", "--out", str(out), "--quiet"]) == 0
     printed = capsys.readouterr().out
-    truth = __import__("json").loads((tmp_path / "session_truth.json").read_text())["session"]
+    truth = json.loads((tmp_path / "session_truth.json").read_text())["session"]
     note = next(line for line in printed.splitlines() if line.startswith("note: bouncing"))
     start, end = (float(v) for v in note.split()[2].split("-"))
     assert truth["bouncing"][0] <= start and end <= truth["bouncing"][1] + 0.5
@@ -80,3 +82,42 @@ def test_handling_needs_the_phone(tmp_path, capsys):
             "--xi", "0.3", "--bout", "20", "--handling", "3"]
     assert main(argv) == 2
     assert "--handling applies to a phone's record" in capsys.readouterr().err
+
+
+def _fake(extra, determined=True, kurtosis=3.0):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(record=SimpleNamespace(extra=extra), test_pvalues=lambda: {"kurtosis": kurtosis},
+                           determined=lambda name: determined)
+
+
+def test_a_phone_record_that_leaves_the_person_open_says_which_phone_artefacts_it_shows():
+    from smd_statespace.person.phone_report import phone_words
+
+    clock = {"fs_nominal": 200.0, "largest_gap": 0.25, "largest_gap_at": 12.0, "n_dropped": 150,
+             "n_samples_in": 5850, "jitter_sd": 0.001}
+    phone = {"sensor": "accelerometer", "clock": clock, "geometry": {"direction_change_deg": 14.0}}
+    words = phone_words(_fake(phone, determined=False))
+    assert words.startswith("f_h and xi_h not determined; this phone record shows: 150 samples missing (2.5 %)")
+    assert "longest gap 0.25 s at 12.0 s (50 samples" in words and "scattered by 1 ms" in words
+    assert "turned by 14 degrees" in words
+    assert phone_words(_fake(phone, determined=True, kurtosis=3.0)) == ""  # determined, Gaussian: nothing to say
+    assert "kurtosis 9.0" in phone_words(_fake(phone, determined=True, kurtosis=9.0))
+    assert phone_words(_fake({"clock": clock}, determined=False)) == ""  # a force plate's record
+    quiet = {"sensor": "accelerometer", "clock": dict(clock, largest_gap=0.01, jitter_sd=1e-4),
+             "geometry": {"direction_change_deg": 2.0}}
+    assert "shows none of a phone's known artefacts strongly" in phone_words(_fake(quiet, determined=False))
+
+
+def test_a_phone_record_with_gaps_is_told_in_words(tmp_path):
+    """Four bursts of dropped samples of up to 0.25 s (simulate_phone's gaps): f_h comes out +21 % (the gaps are
+    interpolated by straight lines), not determined, and the warning names the gaps with their size."""
+    from smd_statespace.accelerometer import accelerometer_record
+    from smd_statespace.person import identify_person
+    from smd_statespace.simulation.phone import simulate_phone
+
+    rec = simulate_phone(mass=70, f_b=2.2, f_h=2.9, xi_h=0.3, duration=30, seed=11, gaps=(4, 0.25))
+    path, _ = rec.write(tmp_path / "gaps.csv")
+    result = identify_person(accelerometer_record(path))
+    said = [w for w in result.warnings if "this phone record shows" in w]
+    assert len(said) == 1 and "the longest gap 0.26 s" in said[0]

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..io import G
 from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
+from .phone_report import phone_words
 
 __all__ = ["change_words", "person_warnings", "result_dict", "summary_text", "table_row"]
 
@@ -60,6 +61,9 @@ def person_warnings(result) -> list:
         elif not np.isfinite(row["sd"]) or row["sd"] > 0.25 * (row["range_high"] - row["range_low"]):
             out.append(f"{name} is not determined by this record (sd {row['sd']:.3g}{unit} against its "
                        f"range {row['range_low']:g}-{row['range_high']:g})")
+    phone = phone_words(result)
+    if phone:
+        out.append(phone)
     tests = result.test_pvalues()
     command = f"`smd-statespace diagnose {result.record_arguments()}`"
     if result.misfit or tests["ljung_box_p"] < WHITENESS_ALPHA:
