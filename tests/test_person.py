@@ -75,11 +75,19 @@ def test_step_is_the_exact_solution_of_eq2_under_a_harmonic_force():
     {"variation": "smooth"},
     {"variation": "smooth", "drift": True,
      "phase_template": np.array([0.0, -0.2, 0.1, 0.1, 0.05, 0.03, 0.0, 0.01, 0.0])},
+    {"variation": "smooth", "observed": "gaps"},
+    {"observed": "gaps", "phase_template": np.array([0.0, -0.2, 0.1, 0.1, 0.05, 0.03, 0.0, 0.01, 0.0])},
 ])
 def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options):
-    """The concentrated likelihood of the compiled pass is statsmodels' exact Kalman likelihood at the same point."""
+    """The concentrated likelihood of the compiled pass is statsmodels' exact Kalman likelihood at the same point;
+    with samples missing (a phone's gaps), statsmodels' with those samples NaN (its own missing-data filter)."""
     sim = short_sim
     y = acceleration(sim)
+    if options.get("observed") == "gaps":
+        observed = np.ones(y.size, dtype=bool)
+        observed[100:130] = observed[300:303] = False
+        options = dict(options, observed=observed)
+        y = np.where(observed, y, 1e3)  # whatever a gap holds is not used
     regressors = (Regressor("offset", np.ones_like(y), dynamic=False), Regressor("ramp", sim.record.time / 10.0))
     model = RecordModel(sim.record.time, y, estimate_timing(sim.record.time, sim.record.force), regressors=regressors,
                         **options)

@@ -105,7 +105,16 @@ CASES = {
     "drift": lambda r: build(r, drift=True),
     "regressors": lambda r: build(r, regressors=(Regressor("sway", np.sin(2 * np.pi * 0.7 * r[0])),
                                                  Regressor("floor", np.cos(2 * np.pi * 1.3 * r[0]), observed=False))),
+    "missing": lambda r: build(r, variation="smooth", phase_template=TEMPLATE, observed=gaps(r[0])),
 }
+
+
+def gaps(time):
+    """Samples missing in three bursts (a phone's gaps: 5, 25 and 40 samples)."""
+    observed = np.ones(time.size, dtype=bool)
+    for start, length in ((150, 5), (400, 25), (700, 40)):
+        observed[start:start + length] = False
+    return observed
 
 
 def disturbance_model(record):

@@ -38,8 +38,12 @@ from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, cho
                      fit_model, profile_interval)
 from .timing import TIMING_METHODS, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person", "fit_model",
+__all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person", "fit_model",
            "person_result", "profile_interval", "honest_intervals", "undetermined_interval"]
+
+UNMEASURED_SHARE = 0.02
+"""A fitted sample whose value the decimation's low-pass drew more than this share from samples inside a gap of a
+phone's clock (:data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`) is left out of the likelihood."""
 
 ZERO_DRIFT_SECONDS = 10.0
 """Span (s) per degree of the polynomial drift of the measurement's zero fitted with a lab-shaped record's person.
@@ -199,7 +203,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
-    prepared = _prepared(record, rate, span, regressors, check)
+    prepared, observed = _prepared(record, rate, span, regressors, check)
     record = prepared.record
     record_warnings = prepared.warnings + check_bouncing(record).raise_if_refused(override=not check)
     regressors = [replace(r, values=v) for r, v in zip(regressors, prepared.extra)]
@@ -222,7 +226,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
 
     def model_for(timing_, variation_, template):
         return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise, drift=drift,
-                           regressors=all_regressors, phase_template=template)
+                           regressors=all_regressors, phase_template=template, observed=observed)
 
     if cov_type not in COV_TYPES:
         raise OptionError(f"cov_type {cov_type!r} is not one of: {', '.join(COV_TYPES)}")
@@ -286,10 +290,22 @@ def zero_drift(time) -> list:
 
 
 def _prepared(record, rate, span, regressors, check):
-    """The record the fit takes (:func:`~smd_statespace.signals.prepare_record`); a record with no bouncing part is
-    refused with the applicability check's words when it has them, the front end's otherwise (with ``check`` False:
-    the whole record, with a warning)."""
-    extra = [r.values for r in regressors]
+    """``(prepared, observed)``: the record the fit takes (:func:`~smd_statespace.signals.prepare_record`) and which
+    of its samples were measured (None: all; a phone's gaps, ``record.extra["unmeasured"]``, decimated and trimmed
+    with it: a fitted sample that the decimation's low-pass drew more than :data:`UNMEASURED_SHARE` from a gap is
+    not measured). A record with no bouncing part is refused with the applicability check's words when it has
+    them, the front end's otherwise (with ``check`` False: the whole record, with a warning)."""
+    unmeasured = record.extra.get("unmeasured")
+    gaps = [] if unmeasured is None or not np.any(unmeasured) else [np.asarray(unmeasured, dtype=float)]
+    prepared = _front_end(record, rate, span, [r.values for r in regressors] + gaps, check)
+    if not gaps:
+        return prepared, None
+    observed = np.abs(prepared.extra[-1]) <= UNMEASURED_SHARE
+    return replace(prepared, extra=prepared.extra[:-1]), observed
+
+
+def _front_end(record, rate, span, extra, check):
+    """:func:`_prepared`'s front end with the arrays ``extra`` moved along."""
     # clipping is seen on the record as read: the decimation's low-pass rounds the flat tops off
     clipped = check_clipping(record).raise_if_refused(override=not check)
     try:

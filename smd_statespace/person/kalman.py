@@ -208,7 +208,7 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
-                   smooth_phi, smooth_q, smooth_p0):
+                   smooth_phi, smooth_q, smooth_p0, observed):
     """Run the augmented Kalman filter over one record.
 
     Parameters
@@ -253,6 +253,10 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
         Variation :data:`SMOOTH` only: transition over one sample of a
         deviation and its rate (a Matern-3/2 process), its process covariance
         and its stationary covariance, for a unit stationary variance.
+    observed : ndarray of bool, shape (N,)
+        False where the sample is missing (a gap in a phone's clock): the filter predicts over it and
+        makes no update; its innovation, regression and variance are returned as 0, 0 and 1, so that it
+        adds nothing to ``S``, ``s``, ``ee`` or the sum of ``log f``.
 
     Returns
     -------
@@ -339,6 +343,12 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
         # update with y_k
         if varying:
             row = hx[k]
+        if not observed[k]:  # a missing sample: predicted over, no update
+            e_out[k] = 0.0
+            f_out[k] = 1.0
+            for c in range(q):
+                Ev_out[k, c] = 0.0
+            continue
         for i in range(nx):
             h[i] = row[i]
         for i in range(p):

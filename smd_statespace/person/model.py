@@ -142,6 +142,10 @@ class RecordModel:
     nominal : ndarray, shape (N, n_x), optional
         The path a nonlinear effect is linearised about (the smoothed
         dynamic states of a previous fit); needed only then.
+    observed : ndarray of bool, shape (N,), optional
+        False at samples that were not measured (a gap in a phone's clock, where
+        ``y`` holds an interpolation): the likelihood predicts over them and does
+        not use their value. Default: every sample measured.
     """
 
     time: np.ndarray
@@ -155,6 +159,7 @@ class RecordModel:
     phase_template: np.ndarray | None = None
     dynamics: PersonDynamics | None = None
     nominal: np.ndarray | None = None
+    observed: np.ndarray | None = None
     _phase: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -162,6 +167,10 @@ class RecordModel:
             raise OptionError(f"variation {self.variation!r} is not one of: {', '.join(VARIATIONS)}")
         self.time = np.asarray(self.time, dtype=float)
         self.y = np.asarray(self.y, dtype=float)
+        self.observed = (np.ones(self.y.size, dtype=np.bool_) if self.observed is None
+                         else np.asarray(self.observed, dtype=np.bool_))
+        if self.observed.shape != self.y.shape:
+            raise OptionError(f"observed has shape {self.observed.shape}; the record has {self.y.size} samples")
         if self.dynamics is None:
             from ..model import SMDModel
 
@@ -229,6 +238,11 @@ class RecordModel:
     def effect_parameters(self) -> list:
         """Names of the effects' parameters in :attr:`param_names` (they come last)."""
         return self.dynamics.parameter_names
+
+    @property
+    def n_observed(self) -> int:
+        """Samples that were measured (``observed``)."""
+        return int(np.count_nonzero(self.observed))
 
     @property
     def dt(self) -> float:
@@ -465,7 +479,8 @@ class RecordModel:
         return RecordSystem(hx=dynamics["hx"], H=self._H_all, Phi=dynamics["Phi"], Gam=dynamics["Gam"], Qx=qx,
                             offset=dynamics["offset"], y_known=dynamics["y_known"], X_obs=self._X_obs,
                             X_tr=dynamics["X_tr"], reset=self._phase[3], code=VARIATIONS[self.variation].code, D=D, E=E,
-                            drift=S, smooth_phi=smooth[0], smooth_q=smooth[1], smooth_p0=smooth[2])
+                            drift=S, smooth_phi=smooth[0], smooth_q=smooth[1], smooth_p0=smooth[2],
+                            observed=self.observed)
 
     def timing_rates(self) -> np.ndarray:
         """Phase rate ``2 pi f_b`` of every cycle (rad/s), shape (J,)."""
@@ -476,7 +491,7 @@ class RecordModel:
         """Run the compiled pass and concentrate; returns the pass's arrays and :func:`kalman.concentrate`'s."""
         sys = self.system(params)
         e, Ev, f, S, s, ee = kalman.augmented_pass(*sys.pass_arguments(self.y, self.n_coefficients))
-        out = kalman.concentrate(S, s, ee, f, self.y.size, self.held_delta)
+        out = kalman.concentrate(S, s, ee, f, self.n_observed, self.held_delta)
         out.update(innovations_raw=e, innovation_regression=Ev, innovation_variance_unscaled=f)
         return out
 
@@ -495,7 +510,7 @@ class RecordModel:
         out = self.filter(params)
         raw = out["innovations_raw"] - out["innovation_regression"] @ delta
         variance = out["innovation_variance_unscaled"] * sigma2
-        return -0.5 * (np.log(2.0 * np.pi * variance) + raw**2 / variance)
+        return np.where(self.observed, -0.5 * (np.log(2.0 * np.pi * variance) + raw**2 / variance), 0.0)
 
     def innovations(self, params, fitted=None) -> tuple:
         """Standardised one-step innovations and their raw values (m/s^2) at the fitted ``delta``."""

@@ -1,8 +1,8 @@
 """What a phone's record shows of a phone's own artefacts, in words, when the person is not determined.
 
 A force plate samples on a clock that does not drift or stall, along an axis that does not turn.
-A phone does neither: it drops samples and bursts of them (the gaps are interpolated, a straight
-line where the person moved), stamps its samples late or early (the stamps are taken as the
+A phone does neither: it drops samples and bursts of them (the samples in a gap are left out of the
+likelihood, :data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`), stamps its samples late or early (the stamps are taken as the
 truth), and turns with the body (the vertical is a low-pass of the gravity it sees). When a phone
 record leaves ``f_h`` or ``xi_h`` undetermined, or its innovations are heavy-tailed,
 :func:`phone_words` says which of these the record shows and how strongly, from what the reading
@@ -12,12 +12,9 @@ again (and how) or whether the person is what the record leaves open.
 
 from __future__ import annotations
 
-__all__ = ["GAP_SAMPLES", "JITTER_FRACTION", "TURN_DEGREES", "HEAVY_TAILS", "phone_words"]
+from ..accelerometer.record import GAP_SAMPLES
 
-GAP_SAMPLES = 3.0
-"""A gap in the stamps longer than this many nominal intervals is named (what is interpolated across it is not a
-measurement: on simulated records four gaps of up to 0.25 s put errors of 5-8 m/s^2 into the vertical, its
-kurtosis 82-217, ``benchmarks/phone_phenomena.py``)."""
+__all__ = ["JITTER_FRACTION", "TURN_DEGREES", "HEAVY_TAILS", "phone_words"]
 
 JITTER_FRACTION = 0.1
 """Stamps scattered about the phone's fitted clock by more than this fraction of a sample interval are named (1 ms
@@ -39,8 +36,8 @@ def _clock_words(clock: dict) -> list:
         dropped = int(clock.get("n_dropped", 0))
         share = 100.0 * dropped / max(int(clock.get("n_samples_in", 1)) + dropped, 1)
         words.append(f"{dropped} samples missing ({share:.1f} %), the longest gap {gap:.3g} s at "
-                     f"{float(clock.get('largest_gap_at', 0.0)):.1f} s ({gap * fs:.0f} samples, interpolated by a "
-                     "straight line: not a measurement)")
+                     f"{float(clock.get('largest_gap_at', 0.0)):.1f} s ({gap * fs:.0f} samples; the gaps are left "
+                     "out of the likelihood, and the person is read across them)")
     jitter = float(clock.get("jitter_sd", 0.0) or 0.0)
     if fs > 0 and jitter * fs > JITTER_FRACTION:
         words.append(f"time stamps scattered by {1e3 * jitter:.2g} ms about the phone's clock "
@@ -54,7 +51,8 @@ def phone_words(result) -> str:
 
     Said for an accelerometer's record whose ``f_h`` or ``xi_h`` is not determined or whose
     innovations are heavy-tailed (kurtosis over :data:`HEAVY_TAILS`): the gaps, the stamps' scatter
-    and the turning of the gravity direction that exceed :data:`GAP_SAMPLES`,
+    and the turning of the gravity direction that exceed
+    :data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`,
     :data:`JITTER_FRACTION` and :data:`TURN_DEGREES`, each with its size; or that none does.
     """
     extra = result.record.extra

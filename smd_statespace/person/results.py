@@ -540,7 +540,7 @@ class PersonResult:
         """``ljung_box_p``, ``jarque_bera_p``, ``heteroskedasticity_p`` and the innovations' kurtosis."""
         lb = self.test_serial_correlation()
         lags = self.default_lags()
-        innov = self.standardized_innovations()
+        innov = self.standardized_innovations()[self.model.observed]  # a missing sample has no innovation
         centred = innov - innov.mean()
         return {
             "ljung_box_p": float(lb[0, 1, lags - 1]),

@@ -407,7 +407,8 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
         der["d_Qx"], der["d_D"], der["d_E"], der["d_drift"], der["d_sphi"], der["d_sq"], der["d_sp0"])
     variance = sigma2 * f
     standard2 = v**2 / variance
-    sample = -0.5 * (np.log(2.0 * math.pi * variance) + standard2)
+    observed, n_obs = model.observed, model.n_observed  # a missing sample adds nothing (v, dv, df are 0 there)
+    sample = np.where(observed, -0.5 * (np.log(2.0 * math.pi * variance) + standard2), 0.0)
     relative = df / f[:, None]  # d log f
     per_sample = -0.5 * (relative * (1.0 - standard2)[:, None]) - (v / variance)[:, None] * dv
     weighted = dv / variance[:, None]
@@ -416,12 +417,12 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
     # delta and sigma^2 as nuisance parameters: d v / d delta = -Ev, d log(sigma^2 f) / d sigma^2 = 1 / sigma^2
     cross = -weighted.T @ fitted["innovation_regression"]  # (k, q)
     total = relative.sum(axis=0)
-    profile = info - cross @ (sigma2 * fitted["delta_cov_unscaled"]) @ cross.T - 0.5 * np.outer(total, total) / N
+    profile = info - cross @ (sigma2 * fitted["delta_cov_unscaled"]) @ cross.T - 0.5 * np.outer(total, total) / n_obs
     # the per-sample scores with delta and sigma^2 profiled out (the efficient scores): what is left of each
     # parameter's score once the template, initial state and scale have taken their share (sandwich covariances)
     delta_scores = (v / variance)[:, None] * fitted["innovation_regression"]
     efficient = (per_sample - delta_scores @ (sigma2 * fitted["delta_cov_unscaled"]) @ cross.T
-                 + 0.5 * np.outer(1.0 - standard2, total) / N)
+                 + 0.5 * np.outer(np.where(observed, 1.0 - standard2, 0.0), total) / n_obs)
     return {"loglike": float(fitted["loglike"]), "sample_loglike": sample, "gradient": per_sample.sum(axis=0),
             "per_sample": per_sample, "efficient_per_sample": efficient, "expected_information": info,
             "profile_information": 0.5 * (profile + profile.T),

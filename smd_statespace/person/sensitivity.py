@@ -115,16 +115,18 @@ def _write_rows(T, G, Y, U, X, corner):
 
 @numba.njit(cache=True, fastmath=FASTMATH)
 def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
-                     smooth_phi, smooth_q, smooth_p0, delta,
+                     smooth_phi, smooth_q, smooth_p0, observed, delta,
                      dyn, d_hx, d_Phi, d_Gam, d_offset, d_X_tr, d_y,
                      d_Qx, d_D, d_E, d_drift, d_sphi, d_sq, d_sp0):
     """The Kalman filter at known ``delta`` and its forward derivatives with respect to ``k`` parameters.
 
     Parameters
     ----------
-    y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template, smooth_phi, smooth_q, smooth_p0
+    y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template, smooth_phi, smooth_q, \
+smooth_p0, observed
         As :func:`~smd_statespace.person.kalman.augmented_pass` (``y`` less
-        the known part of the observation).
+        the known part of the observation; a missing sample's innovation and its derivatives are 0, its
+        variance 1 and its derivatives 0).
     delta : ndarray, shape (q,)
         The linear unknowns ``[x_0 (n_x), template (n_template), beta (r)]``, held fixed.
     dyn : ndarray of int, shape (k,)
@@ -358,6 +360,13 @@ def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D
         # ---- update with y_k
         if varying:
             row = hx[kk]
+        if not observed[kk]:  # a missing sample: predicted over, no update
+            v_out[kk] = 0.0
+            f_out[kk] = 1.0
+            for j in range(k):
+                dv_out[kk, j] = 0.0
+                df_out[kk, j] = 0.0
+            continue
         for i in range(nx):
             h[i] = row[i]
         for i in range(p):

@@ -53,7 +53,7 @@ class RecordStateSpace(MLEModel):
         self.delta = np.asarray(delta, dtype=float)
         p, nx = model.n_force_states, model.n_dynamic
         k_states = VARIATIONS[model.variation].state_size(nx, p, model.n_coefficients)
-        super().__init__(model.y, k_states=k_states, k_posdef=k_states)
+        super().__init__(np.where(model.observed, model.y, np.nan), k_states=k_states, k_posdef=k_states)  # missing
         self.ssm.filter_concentrated = True
         self.ssm["selection"] = np.eye(k_states)
         self.ssm["obs_cov", 0, 0] = 1.0

@@ -59,6 +59,8 @@ class RecordSystem:
     smooth_phi, smooth_q, smooth_p0 : ndarray, shape (2, 2)
         The Matern-3/2 step, its process covariance and its stationary covariance (variation
         "smooth"; zeros otherwise).
+    observed : ndarray of bool, shape (N,)
+        False at a missing sample (the passes predict over it and make no update).
     """
 
     hx: np.ndarray
@@ -78,6 +80,7 @@ class RecordSystem:
     smooth_phi: np.ndarray
     smooth_q: np.ndarray
     smooth_p0: np.ndarray
+    observed: np.ndarray
 
     def pass_arguments(self, y, n_template) -> tuple:
         """The positional arguments of :func:`~smd_statespace.person.kalman.augmented_pass` for the measured
@@ -85,7 +88,7 @@ class RecordSystem:
         :func:`~smd_statespace.person.sensitivity.sensitivity_pass` too."""
         return (y - self.y_known, self.hx, self.H, self.Phi, self.Gam, self.Qx, self.offset, self.X_obs, self.X_tr,
                 self.reset, self.code, self.D, self.E, self.drift, n_template, self.smooth_phi, self.smooth_q,
-                self.smooth_p0)
+                self.smooth_p0, self.observed)
 
 
 @dataclass(frozen=True)

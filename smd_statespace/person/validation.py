@@ -62,7 +62,7 @@ def part(model, keep, kept):
         dynamics = PersonDynamics(model.dynamics.model, model.time[keep], signals)
     nominal = None if model.nominal is None else np.asarray(model.nominal)[keep]
     return replace(model, time=model.time[keep], y=model.y[keep], timing=timing, regressors=regressors,
-                   dynamics=dynamics, nominal=nominal)
+                   dynamics=dynamics, nominal=nominal, observed=model.observed[keep])
 
 
 def held_out_loglike(model, params, delta, sigma2) -> float:
@@ -101,7 +101,7 @@ def held_out_loglike(model, params, delta, sigma2) -> float:
     estimate, *_ = np.linalg.lstsq(columns, residual * weight, rcond=None)
     residual = residual - regression[:, own] @ estimate
     scaled = variance * sigma2
-    return float(-0.5 * np.sum(np.log(2.0 * np.pi * scaled) + residual**2 / scaled))
+    return float(-0.5 * np.sum((np.log(2.0 * np.pi * scaled) + residual**2 / scaled)[model.observed]))
 
 
 def cross_validated_loglike(model, params) -> dict | None:
