@@ -59,7 +59,8 @@ def change_test(model, params, level=0.9) -> dict | None:
         ``halves``: per half its ``start``, ``end`` (s), ``f_h``, ``xi_h``, their calibrated sds
         and intervals; ``z`` (per parameter, the difference over its sd); ``changed``: the
         parameters that differ (empty: one person explains the record). None when the record
-        is too short to split (fewer than :data:`~smd_statespace.person.validation.MIN_HALF_CYCLES` cycles a half), the model
+        is too short to split (fewer than :data:`~smd_statespace.person.validation.MIN_HALF_CYCLES` cycles a
+        half), the model
         has effects, or a half's fit fails.
     """
     cut = halves(model)

@@ -38,7 +38,8 @@ from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, cho
                      fit_model, profile_interval)
 from .timing import TIMING_METHODS, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person", "fit_model",
+__all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person",
+           "fit_model",
            "person_result", "profile_interval", "honest_intervals", "undetermined_interval"]
 
 UNMEASURED_SHARE = 0.02

@@ -2,8 +2,8 @@
 
 A force plate samples on a clock that does not drift or stall, along an axis that does not turn.
 A phone does neither: it drops samples and bursts of them (the samples in a gap are left out of the
-likelihood, :data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`), stamps its samples late or early (the stamps are taken as the
-truth), and turns with the body (the vertical is a low-pass of the gravity it sees). When a phone
+likelihood, :data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`), stamps its samples late or early
+(the stamps are taken as the truth), and turns with the body (the vertical is a low-pass of the gravity it sees). When a phone
 record leaves ``f_h`` or ``xi_h`` undetermined, or its innovations are heavy-tailed,
 :func:`phone_words` says which of these the record shows and how strongly, from what the reading
 measured (``record.extra["clock"]``, ``["geometry"]``), so that a user knows whether to record

@@ -24,8 +24,8 @@ from ..errors import OptionError, SMDInputError
 from .model import RecordModel
 from .timing import CycleTiming
 
-__all__ = ["COV_TYPES", "WIDER_SANDWICH", "FitError", "fit_model", "information", "profile_interval", "corrected_timing", "fit_timing",
-           "choose_with_own_timing", "comparison_row"]
+__all__ = ["COV_TYPES", "WIDER_SANDWICH", "FitError", "fit_model", "information", "profile_interval",
+           "corrected_timing", "fit_timing", "choose_with_own_timing", "comparison_row"]
 
 
 START_F_H = (1.2, 1.7, 2.3, 3.0, 3.9, 5.0)

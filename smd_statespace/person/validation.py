@@ -88,7 +88,8 @@ def held_out_loglike(model, params, delta, sigma2) -> float:
         pass breaks down at these parameters).
     """
     out = model.filter(params)
-    raw, regression, variance = out["innovations_raw"], out["innovation_regression"], out["innovation_variance_unscaled"]
+    raw, regression = out["innovations_raw"], out["innovation_regression"]
+    variance = out["innovation_variance_unscaled"]
     if not (np.all(np.isfinite(raw)) and np.all(np.isfinite(variance))):
         return -np.inf
     n_x, p = model.n_dynamic, model.n_coefficients
