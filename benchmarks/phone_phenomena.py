@@ -280,13 +280,33 @@ HEADER = ("row", "people (failed)", "plate \\|f_h err\\| % median / worst", "pho
           "variation model differs", "reading error (a_v - truth) rms / max m/s^2 / kurtosis (median)")
 
 
+SIDE = ("row", "signed median f_h error % plate / phone", "median (\\|phone\\| - \\|plate\\|) error, points",
+        "records over 8 %: plate / phone", "phone chose `smooth`", "phone f_h interval width, median Hz")
+
+
+def _side_cells(rows: pd.DataFrame) -> list:
+    """Where the errors go: their sign, the pair's difference, the tail, the variation model, the intervals."""
+    ok = rows[rows["error"] == ""]
+    if not len(ok):
+        return ["—"] * (len(SIDE) - 1)
+    plate, phone = ok["plate_f_h_error"].astype(float), ok["phone_f_h_error"].astype(float)
+    width = ok["phone_f_h_high"].astype(float) - ok["phone_f_h_low"].astype(float)
+    return [f"{100 * plate.median():+.1f} / {100 * phone.median():+.1f}",
+            f"{100 * (phone.abs() - plate.abs()).median():+.1f}",
+            f"{int((plate.abs() > 0.08).sum())} / {int((phone.abs() > 0.08).sum())}",
+            f"{int((ok['phone_variation'] == 'smooth').sum())}/{len(ok)}", f"{width.median():.2f}"]
+
+
 def summary_lines(frame: pd.DataFrame, rows) -> list:
     lines = ["| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
+    side = ["", "| " + " | ".join(SIDE) + " |", "|" + "---|" * len(SIDE)]
     for name in rows:
         here = frame[frame["row"] == name]
         if len(here):
             label = name + (" (held out)" if name in HELD_OUT else "")
             lines.append("| " + " | ".join([label] + _row_cells(here)) + " |")
+            side.append("| " + " | ".join([label] + _side_cells(here)) + " |")
+    lines += side
     lines += ["", "Rows (options of `simulate_phone` over the baseline's "
               f"`{json.dumps(BASELINE)}`; body sway's frequency 0.2-1 Hz per person):", ""]
     lines += [f"- `{name}`{' (held out)' if name in HELD_OUT else ''}: `{json.dumps(opts)}`"
