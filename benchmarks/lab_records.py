@@ -91,9 +91,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 import argparse  # noqa: E402
-import csv  # noqa: E402
 import dataclasses  # noqa: E402
-import io  # noqa: E402
 import math  # noqa: E402
 import shlex  # noqa: E402
 import sys  # noqa: E402
@@ -110,6 +108,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import person_accuracy  # noqa: E402  (beside this script: the established people, the Wilson interval)
+from result_csv import append_row, open_csv  # noqa: E402  (beside this script: the resumable CSV)
 
 ROWS = ("lab", "twin", "clean", "change", "held_out")
 """The benchmark's rows, in the order of the tables."""
@@ -197,6 +196,9 @@ COLUMNS = (
     "seconds", "error",
 )
 """One CSV row per record."""
+
+CSV_KEYS = (("seed", int), ("row", str), ("record", int), ("people", str))
+"""The columns that name a record in the CSV (``--resume`` skips the records fitted without error)."""
 
 
 # ---------------------------------------------------------------------------
@@ -374,44 +376,6 @@ def run_record(task) -> dict:
 
 # ---------------------------------------------------------------------------
 # the CSV: one line per record, each in one write
-
-
-def _line(values: dict) -> bytes:
-    buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerow([values[c] for c in COLUMNS])
-    return buffer.getvalue().encode("utf-8")
-
-
-def append_row(path: Path, values: dict):
-    """Append one record's row in a single ``write`` (O_APPEND), then fsync."""
-    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
-    try:
-        os.write(fd, _line(values))
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def open_csv(path: Path, resume: bool) -> set:
-    """Make the CSV ready; the ``(seed, row, record)`` already in it (``resume``)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if path.exists() and path.stat().st_size > 0:
-        if not resume:
-            raise SystemExit(f"{path} exists: give --resume to go on with it, or another --csv")
-        data = path.read_bytes()
-        if not data.endswith(b"\n"):  # a line cut by a kill: drop it
-            with open(path, "r+b") as handle:
-                handle.truncate(data.rfind(b"\n") + 1)
-        header = data.split(b"\n", 1)[0].decode("utf-8").split(",")
-        if tuple(header) != COLUMNS:
-            raise SystemExit(f"{path}: its columns are not this script's; give another --csv")
-        done = pd.read_csv(path, usecols=["seed", "people", "row", "record", "error"],
-                           dtype={"error": str, "people": str})
-        done = done[done["error"].isna()]  # a record that failed is tried again (its new row is the one read)
-        return {(int(s), str(r), int(k), str(p))
-                for s, r, k, p in done[["seed", "row", "record", "people"]].itertuples(index=False)}
-    path.write_bytes(_line({c: c for c in COLUMNS}))
-    return set()
 
 
 def load_rows(path: Path, seed: int, rows, n: int, people: str = "standard") -> pd.DataFrame:
@@ -622,7 +586,7 @@ def parse_args(argv=None):
 def main(argv=None):
     args = parse_args(argv)
     command = "python benchmarks/lab_records.py " + shlex.join(sys.argv[1:] if argv is None else argv)
-    done = open_csv(args.csv, args.resume)
+    done = open_csv(args.csv, args.resume, COLUMNS, CSV_KEYS)
     # lab and twin of one person next to each other: a partial run has whole pairs
     tasks = [(args.seed, row, k, args.people) for k in range(args.records) for row in args.rows
              if (args.seed, row, k, args.people) not in done]
@@ -630,7 +594,7 @@ def main(argv=None):
     started = time.perf_counter()
 
     def report(i, out):
-        append_row(args.csv, out)
+        append_row(args.csv, out, COLUMNS)
         est = f"{out['f_h_est']:.3f}" if out["f_h_est"] != "" else "-"
         print(f"[{i}/{len(tasks)} {time.perf_counter() - started:.0f} s] {out['row']} {out['record']}: f_h "
               f"{out['f_h_true']:.3f} -> {est} det={out['determined']} {out['seconds']} s {out['error']}"

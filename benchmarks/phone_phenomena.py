@@ -36,8 +36,6 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 import argparse  # noqa: E402
-import csv  # noqa: E402
-import io  # noqa: E402
 import json  # noqa: E402
 import shlex  # noqa: E402
 import sys  # noqa: E402
@@ -52,6 +50,7 @@ import pandas as pd  # noqa: E402
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import phone_vs_plate  # noqa: E402  (beside this script: the people's ranges, the answer's fields)
+from result_csv import append_row, open_csv  # noqa: E402  (beside this script: the resumable CSV)
 
 BASELINE = dict(bias=0.2, noise=0.05, fs=200.0)
 """The phone of ``phone_vs_plate.py`` (its other settings are simulate_phone's defaults: jitter 0.3 ms, drop 0.5 %,
@@ -103,6 +102,9 @@ COLUMNS = ("seed", "row", "row_index", "person", "held_out", "fs", "options", "f
            "direction_change_deg", "reading_rms", "reading_max", "reading_kurtosis", "blf_1_truth", "seconds",
            "error")
 """One CSV row per person and row."""
+
+CSV_KEYS = (("seed", int), ("row", str), ("person", int))
+"""The columns that name a fitted person in the CSV (``--resume`` skips those fitted without error)."""
 
 
 def row_options(name: str) -> dict:
@@ -198,41 +200,6 @@ def run_person(task) -> dict:
 
 # ---------------------------------------------------------------------------
 # the CSV
-
-
-def _line(values: dict) -> bytes:
-    buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerow([values[c] for c in COLUMNS])
-    return buffer.getvalue().encode("utf-8")
-
-
-def append_row(path: Path, values: dict):
-    """Append one person's row in a single ``write`` (O_APPEND), then fsync."""
-    fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
-    try:
-        os.write(fd, _line(values))
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def open_csv(path: Path, resume: bool) -> set:
-    """Make the CSV ready; the ``(seed, row, person)`` already fitted without error in it (``resume``)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if path.exists() and path.stat().st_size > 0:
-        if not resume:
-            raise SystemExit(f"{path} exists: give --resume to go on with it, or another --csv")
-        data = path.read_bytes()
-        if not data.endswith(b"\n"):  # a line cut by a kill
-            with open(path, "r+b") as handle:
-                handle.truncate(data.rfind(b"\n") + 1)
-        if tuple(data.split(b"\n", 1)[0].decode("utf-8").split(",")) != COLUMNS:
-            raise SystemExit(f"{path}: its columns are not this script's; give another --csv")
-        done = pd.read_csv(path, usecols=["seed", "row", "person", "error"], dtype={"error": str})
-        done = done[done["error"].isna()]
-        return {(int(s), str(r), int(k)) for s, r, k in done[["seed", "row", "person"]].itertuples(index=False)}
-    path.write_bytes(_line({c: c for c in COLUMNS}))
-    return set()
 
 
 def load(path: Path, seed: int, rows, n: int) -> pd.DataFrame:
@@ -350,7 +317,7 @@ def main(argv=None):
     if unknown:
         parser.error(f"unknown rows {unknown}")
     path = args.csv or REPO / "benchmarks" / "results" / f"phone_phenomena_seed{args.seed}.csv"
-    done = open_csv(path, args.resume)
+    done = open_csv(path, args.resume, COLUMNS, CSV_KEYS)
     tasks = [(args.seed, name, k) for name in rows for k in range(args.people) if (args.seed, name, k) not in done]
     print(f"{len(tasks)} people to fit ({len(done)} in {path}), {args.jobs} process(es)", file=sys.stderr)
     started = time.perf_counter()
@@ -358,7 +325,7 @@ def main(argv=None):
         futures = [pool.submit(run_person, task) for task in tasks]
         for i, future in enumerate(as_completed(futures), start=1):
             out = future.result()
-            append_row(path, out)
+            append_row(path, out, COLUMNS)
             phone = f"{100 * out['phone_f_h_error']:+.1f} %" if out["phone_f_h_error"] != "" else "-"
             print(f"[{i}/{len(tasks)} {time.perf_counter() - started:.0f} s] {out['row']} {out['person']}: phone "
                   f"{phone} {out['seconds']} s {out['error']}", file=sys.stderr, flush=True)
