@@ -21,9 +21,9 @@ function that can be inspected on its own:
    interpolation, and refuses a gap longer than :data:`MAX_GAP`.
 3. :func:`vertical_acceleration` estimates the direction of gravity from the record
    itself (a zero-phase low-pass at :data:`GRAVITY_CUTOFF`), projects the three axes
-   onto it and removes the record's own gravity magnitude; it refuses a record
-   in which the phone lay still for more than :data:`STILL_DURATION` between
-   stretches of bouncing.
+   onto it and removes the sensor's own reading of gravity in that direction
+   (bias and gains make it turn with the phone); it reports stretches in which the
+   phone lay still for more than :data:`STILL_DURATION` (standing, or put down).
 
 Together::
 
@@ -54,7 +54,15 @@ from .reading import (
 )
 from .record import UNKNOWN_MASS, accelerometer_record
 from .resampling import MAX_GAP, RATE_RANGE, RATE_TOLERANCE, resample_uniform
-from .vertical import GRAVITY_CUTOFF, GRAVITY_ORDER, STILL_DURATION, STILL_FRACTION, vertical_acceleration
+from .vertical import (
+    GRAVITY_CUTOFF,
+    GRAVITY_ORDER,
+    ORIENTATION_SPREAD,
+    STILL_DURATION,
+    STILL_FRACTION,
+    gravity_level,
+    vertical_acceleration,
+)
 
 __all__ = [
     "UNITS",
@@ -65,6 +73,7 @@ __all__ = [
     "GRAVITY_CUTOFF",
     "GRAVITY_ORDER",
     "GRAVITY_TOLERANCE",
+    "ORIENTATION_SPREAD",
     "LINEAR_ACCELERATION_LIMIT",
     "STILL_DURATION",
     "STILL_FRACTION",
@@ -73,6 +82,7 @@ __all__ = [
     "read_accelerometer",
     "resample_uniform",
     "vertical_acceleration",
+    "gravity_level",
     "UNKNOWN_MASS",
     "accelerometer_record",
 ]

@@ -67,11 +67,12 @@ def accelerometer_record(path, mass=None, units: str = "auto", fs=None):
     body = check_mass(mass) if mass_known else UNKNOWN_MASS
     raw = read_accelerometer(path, units=units)
     time, acc, clock = resample_uniform(raw.time, raw.acc, fs=fs, source=raw.source)
-    a_v, geometry = vertical_acceleration(time, acc, source=raw.source)
+    missing = unmeasured(raw.time, time, clock["fs_nominal"])
+    a_v, geometry = vertical_acceleration(time, acc, source=raw.source, measured=~missing)
     record = make_record(time - time[0], body * (G + a_v), body, source=raw.source)
     return replace(record, extra={"sensor": "accelerometer", "mass_known": mass_known, "format": raw.format,
                                   "units_read": raw.units_read, "clock": clock, "geometry": geometry,
-                                  "unmeasured": unmeasured(raw.time, time, clock["fs_nominal"])})
+                                  "unmeasured": missing})
 
 
 def unmeasured(stamps, grid, fs_nominal) -> np.ndarray:

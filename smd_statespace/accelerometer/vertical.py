@@ -10,23 +10,38 @@ phone's frame, following slow tilt and sway of the phone while removing the
 bouncing; its unit vector ``e(t) = g(t) / |g(t)|`` is "up" in the phone's frame.
 Then
 
-    a_v(t) = acc(t) . e(t) - |g|
+    a_v(t) = acc(t) . e(t) - |g|(e(t))
 
-with ``|g|`` the record's own gravity magnitude, the median of ``|g(t)|``, not
-9.81: a sensor's bias or scale error changes ``|g|`` and would otherwise leave
-a constant offset in ``a_v``. The low-pass is computed as the complement of
-:func:`smd_statespace.signals.highpass` (``acc - highpass(acc)``: for a
-zero-phase Butterworth pair the two responses add up to one), whose
-``"predict"`` padding keeps the record's ends free of start-up transients.
+with ``|g|(e)`` the sensor's own reading of gravity in the direction ``e``, not
+9.81 and not one number for the whole record: a sensor's bias and per-axis gain
+errors make it depend on the phone's orientation (``|g| + b . e + g sum_i d_i e_i^2``),
+so as the phone turns slowly its reading of gravity changes with it. It is fitted
+over the record (:func:`gravity_level`): the low-passed magnitude ``|g(t)|``
+regressed on the direction's turning. Until 2026-11-28 one number, the median of
+``|g(t)|``, was subtracted: a tilt wander of 5 deg, or per-axis gains of 3 % with a
+0.5 m/s^2 bias, left 0.015-0.06 m/s^2 rms below 0.5 Hz in ``a_v``, enough for the
+"smooth" variation model to absorb it and ``f_h`` to be +35 to +71 % off on single
+records (``benchmarks/phone_phenomena.py``, seed 4401). Subtracting ``|g(t)|``
+itself would remove that too, but also put into ``a_v`` every slow bump of the
+low-passed magnitude that is not gravity: the line interpolated across a gap of
+the phone's stamps is up to 5 m/s^2 off a bouncing signal, and the low-pass spreads
+it over seconds (0.38 m/s^2 at worst beside two 0.25 s gaps; a 0.25 s gap put
+``f_h`` at the search's bound). A fit over the whole record, which follows the
+orientation and leaves the gaps' samples out (``measured``), is moved by little.
+The low-pass is computed as the complement of
+:func:`smd_statespace.signals.highpass` (``acc - highpass(acc)``: for a zero-phase
+Butterworth pair the two responses add up to one), whose ``"predict"`` padding keeps
+the record's ends free of start-up transients.
 
 One vertical channel
 --------------------
 
 ``a_v = s acc - |g|`` with ``|g|`` the median of the channel's low-passed level and
-``s`` its sign (+1 for an axis pointing up, -1 for one pointing down). The median of
-the raw channel would not do: a bouncing acceleration is skewed (sharp peaks while
-the feet push, flat troughs), so its median differs from its mean (0.7 m/s^2 for the
-harmonics 3, 2, 0.8, 0.3 m/s^2 of a 2.2 Hz bounce).
+``s`` its sign (+1 for an axis pointing up, -1 for one pointing down): one channel
+cannot tell the phone's turning. The median of the raw channel would not do: a
+bouncing acceleration is skewed (sharp peaks while the feet push, flat troughs), so
+its median differs from its mean (0.7 m/s^2 for the harmonics 3, 2, 0.8, 0.3 m/s^2
+of a 2.2 Hz bounce).
 
 Why a sensor bias does not matter
 ---------------------------------
@@ -36,8 +51,8 @@ becomes ``g(t) + b``. Its component along ``e`` adds to both ``acc . e`` and ``|
 and cancels; its component across ``e`` tilts ``e`` by at most ``|b| / |g|`` (1.2
 deg for 0.2 m/s^2), which scales the vertical signal by ``cos`` of that (0.99978)
 and mixes in 2 % of the small horizontal acceleration. A constant has no content at
-any bouncing frequency; all it could do is move the mean, which the median ``|g|``
-removes. A common scale error of the sensor scales ``a_v`` by the same factor (a few
+any bouncing frequency; all it could do is move the mean, which the fitted
+``|g|(e)`` removes. A common scale error of the sensor scales ``a_v`` by the same factor (a few
 tenths of a percent for a phone): it is not corrected, ``info["gravity"] / 9.80665``
 shows it together with any bias.
 
@@ -76,8 +91,10 @@ from .resampling import _check_arrays
 __all__ = [
     "GRAVITY_CUTOFF",
     "GRAVITY_ORDER",
+    "ORIENTATION_SPREAD",
     "STILL_DURATION",
     "STILL_FRACTION",
+    "gravity_level",
     "vertical_acceleration",
 ]
 
@@ -89,6 +106,11 @@ Well below the slowest bouncing (1.5 Hz in the article, 1.2 Hz supported): with
 ``1 / (1 + (f / 0.3)^8)`` of a component at ``f``, i.e. 1.5e-5 at 1.2 Hz and
 2.6e-6 at 1.5 Hz, while it follows the slow tilt and sway of the phone (a 0.1 Hz
 sway is passed with a gain of 0.99985)."""
+
+ORIENTATION_SPREAD = 0.5
+"""Turning (degrees, sd over the record) of the gravity direction along an axis above which the sensor's gravity
+reading is followed along it (:func:`gravity_level`). A bias of 0.5 m/s^2 or a gain error of 3 % changes the reading
+by under 0.005 m/s^2 over a turn of 0.5 degrees."""
 
 GRAVITY_ORDER = 4
 """Butterworth order of one pass of the gravity low-pass (:data:`GRAVITY_CUTOFF`)."""
@@ -177,8 +199,31 @@ def _gravity_magnitude(gravity_t: np.ndarray, source: str) -> tuple:
     return magnitude, gravity
 
 
-def _project(acc: np.ndarray, gravity_t: np.ndarray, magnitude: np.ndarray, gravity: float) -> tuple:
-    """``(a_v, tilt_deg, direction_change_deg)``: ``acc`` along the gravity direction ``e(t)``, less ``|g|``.
+def gravity_level(direction: np.ndarray, magnitude: np.ndarray, measured=None) -> np.ndarray:
+    """The sensor's gravity reading ``|g|(e(t))`` (m/s^2) as the phone turns: :data:`ORIENTATION_SPREAD`.
+
+    ``|g(t)|`` (``magnitude``, the low-passed magnitude) regressed by least squares,
+    over the ``measured`` samples (default all), on a constant and the components
+    of the direction's change ``e(t) - mean(e)`` along which it turns by more than
+    :data:`ORIENTATION_SPREAD` (sd); the fitted values are returned. A bias ``b``
+    and per-axis gains ``1 + d_i`` make the reading ``|g| + b . e + g sum_i d_i
+    e_i^2``, to first order in the turn linear in it. Fitted over the whole record,
+    a burst of missing samples, whose interpolation bumps the low-passed magnitude
+    for a few seconds, moves the fit by little, where subtracting ``|g(t)|`` itself
+    would put the bump into ``a_v``.
+    """
+    measured = np.ones(magnitude.size, bool) if measured is None else np.asarray(measured, bool)
+    change = direction - direction[measured].mean(axis=0)
+    _, spread, axes = np.linalg.svd(change[measured], full_matrices=False)
+    turning = spread / math.sqrt(max(int(measured.sum()), 1)) > math.radians(ORIENTATION_SPREAD)
+    design = np.column_stack([np.ones(magnitude.size), change @ axes[turning].T])
+    coefficients = np.linalg.lstsq(design[measured], magnitude[measured], rcond=None)[0]
+    return design @ coefficients
+
+
+def _project(acc: np.ndarray, gravity_t: np.ndarray, magnitude: np.ndarray, gravity: float, measured) -> tuple:
+    """``(a_v, tilt_deg, direction_change_deg)``: ``acc`` along the gravity direction ``e(t)``, less the sensor's
+    gravity reading in that direction (:func:`gravity_level`).
 
     One channel: ``a_v = s acc - |g|`` with ``s`` the sign of its low-passed level,
     and no angles (None).
@@ -187,7 +232,7 @@ def _project(acc: np.ndarray, gravity_t: np.ndarray, magnitude: np.ndarray, grav
         sign = 1.0 if np.median(gravity_t[:, 0]) > 0 else -1.0
         return sign * acc[:, 0] - gravity, None, None
     direction = gravity_t / np.maximum(magnitude, 1e-12)[:, None]
-    a_v = np.einsum("ij,ij->i", acc, direction) - gravity
+    a_v = np.einsum("ij,ij->i", acc, direction) - gravity_level(direction, magnitude, measured)
     mean_direction = gravity_t.mean(axis=0)
     mean_direction /= np.linalg.norm(mean_direction)
     tilt = float(np.degrees(np.arccos(np.clip(mean_direction[2], -1.0, 1.0))))
@@ -211,17 +256,21 @@ def _still_parts(time: np.ndarray, acc: np.ndarray, gravity_t: np.ndarray, fs: f
     return still_start, still_end, still
 
 
-def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: str = "<arrays>") -> tuple:
+def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: str = "<arrays>",
+                          measured=None) -> tuple:
     """The vertical COM acceleration without gravity, ``a_v`` (m/s^2, up positive), from a uniform record.
 
     The direction of gravity ``e(t)`` is the unit vector of a zero-phase low-pass
     of the three axes at ``cutoff`` (Butterworth, order :data:`GRAVITY_ORDER`,
     forwards and backwards), and
 
-        a_v(t) = acc(t) . e(t) - |g|
+        a_v(t) = acc(t) . e(t) - |g|(e(t))
 
-    with ``|g|`` the record's own gravity magnitude (the median of the low-passed
-    magnitude); one vertical channel gives ``a_v = s acc - |g|``, ``s`` its sign.
+    with ``|g|(e)`` the sensor's reading of gravity in the direction ``e``, fitted
+    over the record (:func:`gravity_level`): a bias or gain error that differs
+    between the axes then leaves no slow drift in ``a_v`` as the phone turns. One
+    vertical channel gives ``a_v = s acc - |g|``, ``s`` its sign and ``|g|`` the
+    median of its low-passed level.
     The method, why a sensor's bias does not matter and how stillness is found are
     set out in the module's description (:mod:`smd_statespace.accelerometer.vertical`).
 
@@ -237,6 +286,10 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
         supported bouncing frequency (1.2 Hz), above the phone's slow sway.
     source : str, default "<arrays>"
         Name used in error messages (the file name).
+    measured : array_like of bool, shape (T,), optional
+        Which samples were measured (default all); the others (interpolated across a
+        gap of the phone's stamps, :func:`~smd_statespace.accelerometer.record.unmeasured`)
+        are left out of the fit of the sensor's gravity reading (:func:`gravity_level`).
 
     Returns
     -------
@@ -244,7 +297,7 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
         Vertical acceleration of the phone (~ the COM) without gravity (m/s^2),
         up positive; its mean over the record is about zero.
     info : dict
-        ``gravity`` (m/s^2, the record's ``|g|``); ``tilt_deg``, the angle between
+        ``gravity`` (m/s^2, the median of ``|g(t)|``); ``tilt_deg``, the angle between
         the mean gravity direction and the phone's z axis (0 = lying screen up,
         90 = upright, as in a pocket, 180 = screen down); ``direction_change_deg``,
         the largest angle between ``e(t)`` and its mean direction over the record
@@ -273,9 +326,13 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
         raise RecordError(f"{source}: acc has {acc2.shape[1]} columns; expected 3 axes or 1 vertical channel")
     _check_cutoff(cutoff, SUPPORTED_FB[0] / 2.0)
     fs = _uniform_rate(time, cutoff, source)
+    measured = np.ones(time.size, bool) if measured is None else np.asarray(measured, bool)
+    if measured.shape != time.shape or measured.sum() < 3:
+        raise OptionError(f"measured: {measured.shape} flags with {int(measured.sum())} set; expected one per "
+                          f"sample ({time.size}), at least 3 set")
     gravity_t = acc2 - highpass(acc2, fs, cutoff, GRAVITY_ORDER, axis=0)
     magnitude, gravity = _gravity_magnitude(gravity_t, source)
-    a_v, tilt, change = _project(acc2, gravity_t, magnitude, gravity)
+    a_v, tilt, change = _project(acc2, gravity_t, magnitude, gravity, measured)
     still_start, still_end, still = _still_parts(time, acc2, gravity_t, fs)
     info = {
         "gravity": gravity,
