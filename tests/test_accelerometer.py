@@ -471,6 +471,23 @@ def test_clock_reset_is_refused():
     assert_one_line(excinfo, "phone.csv", "time jumps back by 2.49", "row 601")
 
 
+def test_a_clock_that_runs_backwards_or_repeats_is_refused():
+    rec = synthetic(duration=6.0)
+    with pytest.raises(RecordError) as excinfo:
+        resample_uniform(rec.time[-1] - rec.time, rec.acc, source="phone.csv")  # counts down
+    assert_one_line(excinfo, "phone.csv", "time runs backwards", f"{rec.time.size - 1} of {rec.time.size - 1} steps")
+    pairs = rec.time.copy()
+    pairs[1::2] = pairs[0::2][: pairs[1::2].size]  # every stamp twice: a clock coarser than the samples
+    with pytest.raises(RecordError) as excinfo:
+        resample_uniform(pairs, rec.acc, source="phone.csv")
+    assert_one_line(excinfo, "phone.csv", "time stamps repeat", "50 %", "stuck or coarser")
+    # a phone's few duplicates (1 %) are merged, not refused
+    few = rec.time.copy()
+    few[1:-1:100] = few[0:-2:100]
+    _, _, info = resample_uniform(few, rec.acc)
+    assert info["n_duplicates"] == few[1:-1:100].size
+
+
 @pytest.mark.parametrize("fs", [20.0, 1000.0])
 def test_record_rate_out_of_range(fs):
     rec = synthetic(duration=6.0, fs=fs, jitter=0.0, drop=0.0)

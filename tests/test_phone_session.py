@@ -135,3 +135,49 @@ def test_the_samples_inside_a_gap_of_the_stamps_are_unmeasured():
     assert np.array_equal(np.flatnonzero(mask), np.arange(100, 140))
     short = np.r_[np.arange(0, 100), np.arange(100 + int(GAP_SAMPLES) - 1, 300)] / 200.0  # a gap of 3 intervals
     assert not unmeasured(short, grid, 200.0).any()
+
+
+def _turned(rotvec, acc):
+    """``acc`` (T, 3) seen by a phone turned by the rotation vectors ``rotvec`` (rad, (T, 3)), Rodrigues' formula."""
+    angle = np.linalg.norm(rotvec, axis=1, keepdims=True)
+    axis = rotvec / np.maximum(angle, 1e-12)
+    return (acc * np.cos(angle) + np.cross(axis, acc) * np.sin(angle)
+            + axis * np.einsum("ij,ij->i", axis, acc)[:, None] * (1.0 - np.cos(angle)))
+
+
+@pytest.mark.parametrize("kind, message", [
+    ("tumbling", "the phone turned over the record (loose in a bag or a hand)"),
+    ("turning", "the phone turned by"),
+    ("swinging", "the phone moved more across the vertical than along it"),
+    ("fixed", None),
+])
+def test_a_loose_phone_is_refused_in_one_line(tmp_path, capsys, kind, message):
+    """A phone in a bag: tumbling (180 degrees sd: the axes' mean is half of g), turning slowly (25 degrees sd), or
+    swinging 25 degrees at the bouncing frequency; the same record with the phone fixed is identified."""
+    from smd_statespace.accelerometer import accelerometer_record
+    from smd_statespace.signals import prepare_record
+    from smd_statespace.simulation.phone import simulate_phone
+
+    phone = simulate_phone(mass=70, f_b=2.2, f_h=2.9, xi_h=0.3, duration=20, seed=5)
+    path, _ = phone.write(tmp_path / "phone.csv")
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    time, acc = table[:, 0], table[:, 1:4]
+    rng = np.random.default_rng(2)
+    slow = np.cumsum(rng.normal(size=acc.shape), axis=0)
+    slow = np.apply_along_axis(lambda x: np.convolve(x, np.ones(400) / 400, mode="same"), 0, slow)
+    slow -= slow.mean(axis=0)
+    rock = np.radians(25.0) * np.sin(2 * np.pi * 2.2 * time + 0.5)
+    rotvec = {"tumbling": slow * np.radians(180.0) / slow.std(axis=0), "turning": slow * np.radians(25.0) / slow.std(axis=0),
+              "swinging": np.column_stack([rock, 0.3 * rock, 0 * rock]), "fixed": np.zeros_like(acc)}[kind]
+    table[:, 1:4] = _turned(rotvec, acc)
+    table[:, 4] = np.linalg.norm(table[:, 1:4], axis=1)
+    bag = tmp_path / "bag.csv"
+    np.savetxt(bag, table, delimiter=",", header=path.read_text().splitlines()[0], comments="")
+    if message is None:
+        prepared = prepare_record(accelerometer_record(bag))  # the front end takes it; the fit is tested elsewhere
+        assert prepared.record.time[-1] - prepared.record.time[0] > 15.0
+        return
+    assert main(["identify", str(bag), "--accelerometer", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "bag.csv" in err and message in err, err
+    assert not (tmp_path / "out" / "person.json").exists()

@@ -158,7 +158,7 @@ def _gravity_level(acc: np.ndarray) -> float:
     return float(np.linalg.norm(acc.mean(axis=0)))
 
 
-def _units(path, units: str, level: float, fmt: str) -> str:
+def _units(path, units: str, level: float, fmt: str, acc: np.ndarray) -> str:
     """The units of the file, from the option and the data's gravity level (in the file's units)."""
     if fmt == "phyphox":
         if units == "g":
@@ -170,6 +170,8 @@ def _units(path, units: str, level: float, fmt: str) -> str:
         return "g"
     if abs(level / G - 1.0) <= GRAVITY_TOLERANCE:
         return "m/s^2"
+    for unit in (1.0, G):
+        _refuse_turning(path, acc, level, unit)
     if level < LINEAR_ACCELERATION_LIMIT:
         return "m/s^2"  # no gravity in either unit: the check in read_accelerometer says so
     raise RecordError(
@@ -214,8 +216,24 @@ def _read_columns(source: str, header: list, body: list, delimiter: str, columns
     return numbers[0], np.column_stack(numbers[1:])
 
 
+def _refuse_turning(path, acc: np.ndarray, level: float, unit: float) -> None:
+    """Refuse a record whose axes' mean is off 1 g while each sample reads about 1 g (in ``unit``): the phone turned.
+
+    A phone fixed to the body keeps its orientation: the mean of its axes is gravity. In a bag or a hand it
+    turns, the mean shrinks (0.5 g for a tumble of 80 degrees sd) while every sample's magnitude still reads
+    gravity plus the movement."""
+    sample = float(np.median(np.linalg.norm(acc, axis=1))) / unit
+    if abs(level / unit - 1.0) > GRAVITY_TOLERANCE and abs(sample - 1.0) <= GRAVITY_TOLERANCE:
+        raise RecordError(
+            f"{path}: the axes' mean reads {level / unit:.2f} g while each sample reads {sample:.2f} g: the phone "
+            "turned over the record (loose in a bag or a hand); fix it to the body at the waist and record again"
+        )
+
+
 def _check_gravity(path, acc: np.ndarray, units_read: str, fmt: str) -> None:
-    """Refuse a record (``acc`` in m/s^2) whose gravity level says it is in g, never saw gravity, or is off 1 g."""
+    """Refuse a record (``acc`` in m/s^2) whose gravity level says it is in g, never saw gravity, is off 1 g, or
+    whose orientation was not fixed."""
+    _refuse_turning(path, acc, _gravity_level(acc), G)
     level = _gravity_level(acc) / G
     if fmt != "phyphox" and units_read == "m/s^2" and abs(level * G - 1.0) <= GRAVITY_TOLERANCE:
         raise RecordError(
@@ -299,7 +317,7 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
     fmt, columns = _layout(path, header)
     _check_rows(path, header, body, delimiter)
     time, acc = _read_columns(source, header, body, delimiter, columns)
-    units_read = _units(path, units, _gravity_level(acc), fmt)
+    units_read = _units(path, units, _gravity_level(acc), fmt, acc)
     if units_read == "g":
         acc = acc * G
     _check_gravity(path, acc, units_read, fmt)

@@ -8,7 +8,7 @@ import numpy as np
 from ..io import G
 from .reading import read_accelerometer
 from .resampling import resample_uniform
-from .vertical import vertical_acceleration
+from .vertical import across_vertical, gravity_track, vertical_acceleration
 
 __all__ = ["GAP_SAMPLES", "UNKNOWN_MASS", "accelerometer_record", "unmeasured"]
 
@@ -56,8 +56,13 @@ def accelerometer_record(path, mass=None, units: str = "auto", fs=None):
     -------
     Record
         With ``extra``: ``sensor`` ("accelerometer"), ``mass_known``, ``format``,
-        ``units_read``, ``clock`` (:func:`resample_uniform`'s info) and ``geometry``
-        (:func:`vertical_acceleration`'s info).
+        ``units_read``, ``clock`` (:func:`resample_uniform`'s info), ``geometry``
+        (:func:`vertical_acceleration`'s info), and per sample ``unmeasured`` (bool,
+        inside a gap of the stamps, :func:`unmeasured`), ``direction`` (the unit
+        vector of gravity ``e(t)`` in the phone's frame, shape (T, 3)) and ``across``
+        (m/s^2, :func:`~smd_statespace.accelerometer.vertical.across_vertical`), from
+        which the person model's front end tells a phone fixed to the body from a
+        loose one over the part it fits.
     """
     from dataclasses import replace
 
@@ -70,9 +75,12 @@ def accelerometer_record(path, mass=None, units: str = "auto", fs=None):
     missing = unmeasured(raw.time, time, clock["fs_nominal"])
     a_v, geometry = vertical_acceleration(time, acc, source=raw.source, measured=~missing)
     record = make_record(time - time[0], body * (G + a_v), body, source=raw.source)
+    gravity_t = gravity_track(acc, clock["fs"])
     return replace(record, extra={"sensor": "accelerometer", "mass_known": mass_known, "format": raw.format,
                                   "units_read": raw.units_read, "clock": clock, "geometry": geometry,
-                                  "unmeasured": missing})
+                                  "unmeasured": missing,
+                                  "direction": gravity_t / np.linalg.norm(gravity_t, axis=1, keepdims=True),
+                                  "across": across_vertical(acc, gravity_t)})
 
 
 def unmeasured(stamps, grid, fs_nominal) -> np.ndarray:

@@ -12,8 +12,10 @@ The steps
 
 1. **Order**: the samples are sorted by time (stable sort); a step backwards
    larger than ``max_gap`` is refused (the clock was reset, or two records
-   were concatenated), smaller ones are counted in ``n_backwards``.
-2. **Duplicates**: samples with the same time stamp are merged into their mean.
+   were concatenated), smaller ones are counted in ``n_backwards``; a clock
+   whose steps go back more often than forwards (a reversed file) is refused.
+2. **Duplicates**: samples with the same time stamp are merged into their mean;
+   more than :data:`REPEATED_STAMPS` of them (a stuck or coarse clock) is refused.
 3. **Rate**: the nominal interval is first the median of the intervals,
    robust to jitter and to dropped samples, then refined by a least-squares
    line through the time stamps against their sample numbers (dropped
@@ -83,6 +85,7 @@ __all__ = [
     "RATE_RANGE",
     "RATE_TOLERANCE",
     "MAX_GAP",
+    "REPEATED_STAMPS",
     "resample_uniform",
 ]
 
@@ -104,6 +107,13 @@ MAX_GAP = 0.3
 
 About half of the slowest bouncing cycle (1/1.5 Hz = 0.67 s): a longer gap would
 replace the better part of a cycle by a straight line."""
+
+REPEATED_STAMPS = 0.1
+"""Largest share of a record's rows that may repeat another row's time stamp (merged into their mean).
+
+A phone delivers a duplicate now and then (batched delivery); a clock stuck for several samples, or one
+coarser than the sampling (each stamp twice), repeats most of them, and merging would halve the rate and
+average away the signal. Above this share the record is refused."""
 
 
 def _check_rate_option(name: str, value) -> float:
@@ -184,6 +194,23 @@ def _count_backwards(time: np.ndarray, max_gap: float, source: str) -> int:
             "a record must come from one clock without resets"
         )
     return int(np.count_nonzero(steps < 0))
+
+
+def _check_clock_runs(time: np.ndarray, n_backwards: int, source: str) -> None:
+    """Refuse a clock that runs backwards (most steps back) or repeats its stamps (over :data:`REPEATED_STAMPS`)."""
+    steps = time.size - 1
+    if n_backwards > steps / 2:
+        raise RecordError(
+            f"{source}: time runs backwards ({n_backwards} of {steps} steps go back; a phone's samples out of order "
+            "are a few in a thousand): the time column must increase (is the file's order reversed?)"
+        )
+    repeated = time.size - np.unique(time).size
+    if repeated > REPEATED_STAMPS * time.size:
+        raise RecordError(
+            f"{source}: time stamps repeat ({repeated} of {time.size} rows, {100 * repeated / time.size:.0f} %, "
+            f"share the stamp of another; over {100 * REPEATED_STAMPS:g} % is not a phone's clock): the clock is "
+            "stuck or coarser than the samples; export the sensor's own time stamps"
+        )
 
 
 def _merge_duplicates(time: np.ndarray, acc: np.ndarray) -> tuple:
@@ -284,8 +311,9 @@ def resample_uniform(time, acc, fs=None, *, max_gap: float = MAX_GAP, source: st
     RecordError
         Arrays of mismatched shapes or with non-finite values, fewer than 3
         distinct time stamps, a record rate outside :data:`RATE_RANGE`, a gap
-        longer than ``max_gap`` (naming its time and length) or a jump back in
-        time longer than ``max_gap``.
+        longer than ``max_gap`` (naming its time and length), a jump back in
+        time longer than ``max_gap``, a clock that runs backwards (most steps
+        back) or repeats its stamps (over :data:`REPEATED_STAMPS` of the rows).
     OptionError
         ``fs`` outside :data:`RATE_RANGE` or ``max_gap`` not a positive number.
     """
@@ -295,6 +323,7 @@ def resample_uniform(time, acc, fs=None, *, max_gap: float = MAX_GAP, source: st
     squeeze = np.ndim(acc) == 1
     time, acc2 = _check_arrays(time, acc, source)
     n_backwards = _count_backwards(time, max_gap, source)
+    _check_clock_runs(time, n_backwards, source)
     stamps, merged = _merge_duplicates(time, acc2)
     steps, dt = _median_interval(stamps, source)
     k = _largest_gap(stamps, steps, max_gap, source)

@@ -94,7 +94,9 @@ __all__ = [
     "ORIENTATION_SPREAD",
     "STILL_DURATION",
     "STILL_FRACTION",
+    "across_vertical",
     "gravity_level",
+    "gravity_track",
     "vertical_acceleration",
 ]
 
@@ -197,6 +199,24 @@ def _gravity_magnitude(gravity_t: np.ndarray, source: str) -> tuple:
             "include gravity"
         )
     return magnitude, gravity
+
+
+def gravity_track(acc: np.ndarray, fs: float, cutoff: float = GRAVITY_CUTOFF) -> np.ndarray:
+    """``g(t)``, shape (T, k): the zero-phase low-pass of the axes ``acc`` (m/s^2, shape (T, k)) at ``cutoff`` (Hz),
+    computed as ``acc - highpass(acc)`` (the module's description)."""
+    from ..signals import highpass  # here: signals imports pandas and scipy (not needed to read)
+
+    return acc - highpass(acc, fs, cutoff, GRAVITY_ORDER, axis=0)
+
+
+def across_vertical(acc: np.ndarray, gravity_t: np.ndarray) -> np.ndarray:
+    """The magnitude (m/s^2) of the movement across the vertical: ``acc - g(t)`` less its component along ``e(t)``.
+
+    A phone fixed at the waist of a bouncing person moves mostly along the vertical (the horizontal COM
+    acceleration is a tenth of the vertical's); one that swings loose, or rocks, reads gravity across it."""
+    direction = gravity_t / np.linalg.norm(gravity_t, axis=1, keepdims=True)
+    dynamic = acc - gravity_t
+    return np.linalg.norm(dynamic - np.einsum("ij,ij->i", dynamic, direction)[:, None] * direction, axis=1)
 
 
 def gravity_level(direction: np.ndarray, magnitude: np.ndarray, measured=None) -> np.ndarray:
@@ -319,7 +339,7 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
     OptionError
         ``cutoff`` is not in (0, 0.6] Hz.
     """
-    from ..signals import SUPPORTED_FB, highpass  # here: signals imports pandas and scipy (not needed to read)
+    from ..signals import SUPPORTED_FB  # here: signals imports pandas and scipy (not needed to read)
 
     time, acc2 = _check_arrays(time, acc, source)
     if acc2.shape[1] not in (1, 3):
@@ -330,7 +350,7 @@ def vertical_acceleration(time, acc, *, cutoff: float = GRAVITY_CUTOFF, source: 
     if measured.shape != time.shape or measured.sum() < 3:
         raise OptionError(f"measured: {measured.shape} flags with {int(measured.sum())} set; expected one per "
                           f"sample ({time.size}), at least 3 set")
-    gravity_t = acc2 - highpass(acc2, fs, cutoff, GRAVITY_ORDER, axis=0)
+    gravity_t = gravity_track(acc2, fs, cutoff)
     magnitude, gravity = _gravity_magnitude(gravity_t, source)
     a_v, tilt, change = _project(acc2, gravity_t, magnitude, gravity, measured)
     still_start, still_end, still = _still_parts(time, acc2, gravity_t, fs)

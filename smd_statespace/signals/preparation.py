@@ -34,7 +34,8 @@ from ..io import G, Record
 from .decimation import RECORD_RATE, check_rate, decimate_record, decimation_note
 from .frontend import Bouts, Hum, find_bouts, mains_hum, remove_hum, trim_record
 
-__all__ = ["HUM_MARGIN", "MASS_TOLERANCE", "OFF_PLATE", "WEIGHT_RATIO", "PreparedRecord", "safe_factor", "prepare_record", "parse_span"]
+__all__ = ["ACROSS_LIMIT", "HUM_MARGIN", "MASS_TOLERANCE", "OFF_PLATE", "TURN_LIMIT", "WEIGHT_RATIO", "PreparedRecord",
+           "safe_factor", "prepare_record", "parse_span"]
 
 HUM_MARGIN = 3.0
 """Least distance (Hz) between the fitting rate's Nyquist frequency and a multiple of the mains hum."""
@@ -47,6 +48,18 @@ WEIGHT_RATIO = (0.6, 1.6)
 
 OFF_PLATE = 1.0
 """No contact this long (s) with contact before and after is stepping off mid-record (a jump's flight is shorter)."""
+
+TURN_LIMIT = 30.0
+"""Largest turn (degrees) of a phone's gravity direction over the part fitted: more is a loose phone, refused.
+
+Fixed at the waist, a phone turns with the pelvis's slow sway: 3 degrees in the simulator's baseline, at most
+18 with a wander of 5 degrees (sd) added (``benchmarks/phone_phenomena.py``, 720 records)."""
+
+ACROSS_LIMIT = 1.0
+"""Largest ratio of a phone's movement across the vertical to its movement along it (rms) over the part fitted.
+
+Bouncing is vertical: the horizontal COM acceleration is a tenth of the vertical's, a rocking of 5 degrees at the
+bouncing frequency reads 0.85 m/s^2 across (a third); a phone swinging loose reads gravity across the vertical."""
 
 _OTHER_PARTS = ("standing", "movement", "no_contact")
 
@@ -179,6 +192,7 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
     if isinstance(span, str):
         span = parse_span(span, "span")  # "auto", None ("all") or a pair
     if span is None:
+        _refuse_a_loose_phone(record, None)
         decimated, factor, moved = decimate_record(record, rate, extra)
         return PreparedRecord(decimated, record, None, factor, notes=_rate_notes(record, decimated, factor, rate),
                               extra=moved)
@@ -197,6 +211,7 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
         warnings += _weight_warnings(bouts, record)
     else:
         notes.append(f"span {span[0]:g}-{span[1]:g} s fitted, as given")
+    _refuse_a_loose_phone(record, span)
     factor = safe_factor(record.fs, rate, hum)
     decimated, factor, moved = decimate_record(clean, None if factor < 2 else record.fs / factor, extra)
     notes += _rate_notes(record, decimated, factor, rate, hum)
@@ -224,6 +239,28 @@ def _refuse_what_is_not_one_person(bouts: Bouts, record: Record):
             raise RecordError(f"{record.source}: the person leaves the plate at {part.start:.1f}-{part.end:.1f} s "
                               f"and comes back (stepped off mid-record); bouncing {bouncing}: identify one part "
                               "with --span START:END (span=(start, end))")
+
+
+def _refuse_a_loose_phone(record: Record, span) -> None:
+    """A one-line :class:`RecordError` for a phone that turned (:data:`TURN_LIMIT`) or moved across the vertical
+    (:data:`ACROSS_LIMIT`) over ``span`` (s; None: the whole record): not fixed to the body. Records without
+    ``extra["direction"]`` (a plate's) pass."""
+    direction, across = record.extra.get("direction"), record.extra.get("across")
+    if direction is None or across is None:
+        return
+    inside = np.ones(record.time.size, bool) if span is None else (record.time >= span[0]) & (record.time <= span[1])
+    mean = direction[inside].mean(axis=0)
+    turn = float(np.degrees(np.arccos(np.clip(direction[inside] @ (mean / np.linalg.norm(mean)), -1.0, 1.0))).max())
+    along = record.force[inside] / record.mass - G
+    along_rms, across_rms = float(np.std(along)), float(np.sqrt(np.mean(across[inside] ** 2)))
+    where = f"{record.time[inside][0]:.1f}-{record.time[inside][-1]:.1f} s"
+    if turn > TURN_LIMIT:
+        raise RecordError(f"{record.source}: the phone turned by {turn:.0f} degrees over {where} (fixed at the waist "
+                          f"it turns by under {TURN_LIMIT:g}): loose in a bag or a hand; fix it to the body")
+    if across_rms > ACROSS_LIMIT * along_rms:
+        raise RecordError(f"{record.source}: the phone moved more across the vertical than along it over {where} "
+                          f"(rms {across_rms:.2f} against {along_rms:.2f} m/s^2): swinging loose (a bag, a hand) or "
+                          "not bouncing; fix it to the body at the waist")
 
 
 def _bouncing_span(record: Record, bouts: Bouts) -> tuple:
