@@ -83,13 +83,18 @@ ROWS = (
     ("all_400", dict(ALL, fs=400.0, rocking=4.0, stamp_jitter=0.5e-3, gaps=(6, 0.15), drop=0.02)),
     ("all_but_gaps_200", {k: v for k, v in ALL.items() if k != "gaps"}),
     ("gaps_4x0.1s", dict(gaps=(4, 0.1))),
+    ("session_handling", dict(session=True)),
 )
 """``(name, options of simulate_phone over BASELINE)``; ``body_sway`` rows draw its frequency per person, 0.2-1 Hz;
 ``variation`` is the person's force generator (default ``jumps``). The last two were added after a first look at 12
 people per row (every ``all`` row broken, and so was ``gaps_4x0.25s``): everything but the gaps, and shorter gaps.
-New rows go at the end: a row's index seeds its people."""
+``session_handling`` (held out) is a phone record as people make one
+(:func:`~smd_statespace.simulation.phone_session.simulate_phone_session` with the baseline's rate, bias and noise:
+on the table, picked up, worn standing 5 s, ramps, 30 s of bouncing, standing, taken off) against the plate's record
+of the same person (standing before and after, ramps): both through the front end. New rows go at the end: a row's
+index seeds its people."""
 
-HELD_OUT = {"all_100_smooth", "all_400"}
+HELD_OUT = {"all_100_smooth", "all_400", "session_handling"}
 """Combinations not used to decide which phenomenon breaks the answer."""
 
 COLUMNS = ("seed", "row", "row_index", "person", "held_out", "fs", "options", "f_b", "f_h", "xi_h", "mass", "tilt",
@@ -150,11 +155,24 @@ def reading_error(phone, record, anti_alias: bool) -> dict:
             "reading_kurtosis": float(np.mean(centred**4) / np.mean(centred**2) ** 2)}
 
 
+def _simulate(p: dict, options: dict):
+    """The phone's record of person ``p``: :func:`simulate_phone` (30 s of bouncing), or with ``session`` in the
+    options :func:`simulate_phone_session` (handling, standing, ramps, 30 s of bouncing)."""
+    from smd_statespace.simulation.phone import simulate_phone
+    from smd_statespace.simulation.phone_session import simulate_phone_session
+
+    person = dict(mass=p["mass"], f_b=p["f_b"], f_h=p["f_h"], xi_h=p["xi_h"], blf=p["blf"], tilt=p["tilt"],
+                  seed=p["seed"])
+    if options.get("session"):
+        return simulate_phone_session(**person, bout=30.0, fs=options["fs"], bias=options["bias"],
+                                      noise=options["noise"])
+    return simulate_phone(**person, duration=30.0, **options)
+
+
 def run_person(task) -> dict:
     """Simulate person ``k`` of a row, identify plate and phone; never raises (the failure is ``error``)."""
     from smd_statespace.accelerometer import accelerometer_record
     from smd_statespace.person import identify_person
-    from smd_statespace.simulation.phone import simulate_phone
 
     seed, name, k = task
     index = [r for r, _ in ROWS].index(name)
@@ -170,8 +188,7 @@ def run_person(task) -> dict:
     stage = "simulate"
     try:
         truth = {"f_h": p["f_h"], "xi_h": p["xi_h"]}
-        phone = simulate_phone(mass=p["mass"], f_b=p["f_b"], f_h=p["f_h"], xi_h=p["xi_h"], duration=30.0,
-                               blf=p["blf"], tilt=p["tilt"], seed=p["seed"], **options)
+        phone = _simulate(p, options)
         stage = "plate"
         plate = identify_person(phone.plate_record(fs=PLATE["fs"], noise=PLATE["noise"], seed=p["seed"] + 1))
         out.update({f"plate_{key}": v for key, v in phone_vs_plate._answer(plate, truth).items()})
@@ -183,7 +200,8 @@ def run_person(task) -> dict:
             record = accelerometer_record(path)
             result = identify_person(record)
             out["phone_seconds"] = round(time.perf_counter() - moment, 3)
-        out.update(reading_error(phone, record, options.get("anti_alias", True)))
+        if not options.get("session"):  # the session's phone clock starts before the person's (pick-up)
+            out.update(reading_error(phone, record, options.get("anti_alias", True)))
         out.update({f"phone_{key}": v for key, v in phone_vs_plate._answer(result, truth).items()})
         out.update(_tests(result, "phone"))
         low, high = (float(v) for v in result.intervals["f_h"])
