@@ -60,7 +60,9 @@ from .vertical import (
     ORIENTATION_SPREAD,
     STILL_DURATION,
     STILL_FRACTION,
+    across_vertical,
     gravity_level,
+    gravity_track,
     vertical_acceleration,
 )
 
@@ -83,6 +85,8 @@ __all__ = [
     "resample_uniform",
     "vertical_acceleration",
     "gravity_level",
+    "gravity_track",
+    "across_vertical",
     "UNKNOWN_MASS",
     "accelerometer_record",
 ]
