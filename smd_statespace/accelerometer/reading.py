@@ -221,8 +221,7 @@ def _refuse_turning(path, acc: np.ndarray, level: float, unit: float) -> None:
 
     A phone fixed to the body keeps its orientation: the mean of its axes is gravity. In a bag or a hand it
     turns, the mean shrinks (0.63 g for a slow tumble of 80 degrees sd about each axis, 0.46 g for 180) while every
-    sample's magnitude still reads
-    gravity plus the movement."""
+    sample's magnitude still reads gravity plus the movement."""
     sample = float(np.median(np.linalg.norm(acc, axis=1))) / unit
     if abs(level / unit - 1.0) > GRAVITY_TOLERANCE and abs(sample - 1.0) <= GRAVITY_TOLERANCE:
         raise RecordError(
