@@ -86,8 +86,11 @@ class PersonDynamics:
     parameters : list of Slot
         The effects' parameter slots estimated by the likelihood search.
     linear : bool
-        Whether the rates are linear in the dynamic states (then ``A`` is
-        the same at every sample and the discretisation is exact).
+        Whether the rates are linear in the dynamic states and their Jacobian
+        does not change in time (then ``A`` is the same at every sample and the
+        discretisation is exact). An effect that changes in time (a parameter
+        that drifts with ``t``, the record's time in s from its first sample)
+        is expanded at every sample like a nonlinear one.
     """
 
     def __init__(self, model: SMDModel, time, signals=None):
@@ -146,7 +149,22 @@ class PersonDynamics:
                               "force enters the acceleration; the record-level model takes the force of Eq. 4 "
                               "as it is")
         first, second = (jac[np.ix_(self.dynamic, self.dynamic)] for jac in (first, second))
-        return bool(np.max(np.abs(first - second)) <= LINEARITY_TOLERANCE * max(np.max(np.abs(first)), 1.0))
+        scale = LINEARITY_TOLERANCE * max(np.max(np.abs(first)), 1.0)
+        if np.max(np.abs(first - second)) > scale:
+            return False
+        # an effect whose terms change in time (a parameter that drifts, f_h (1 + k t)) is linear in the state
+        # but its Jacobian is not the one of the first sample: it is linearised at every sample (the path's
+        # expansion is then exact); until 2026-11-28 it was frozen at the first sample and k was lost
+        # (checked with the parameters at their nominals and between their bounds: a drift's nominal may be 0)
+        between = {slot.name: slot.low + 0.37 * (slot.high - slot.low) if np.isfinite(slot.high - slot.low)
+                   else slot.nominal + 1.0 for slot in self.parameters}
+        times = self.time[np.linspace(0, self.time.size - 1, 5).astype(int)]
+        for state in (rest, self._states(2.5, 0.3, between, np.zeros((1, self.n_dynamic)), 1)):
+            jacobians = [self.model.rate_jacobian(state, t[None], self.inputs)[0] for t in times]
+            start = jacobians[0][np.ix_(self.dynamic, self.dynamic)]
+            if any(np.max(np.abs(j[np.ix_(self.dynamic, self.dynamic)] - start)) > scale for j in jacobians[1:]):
+                return False
+        return True
 
     def _path_jacobian(self, at) -> np.ndarray:
         """Central differences of the rates along a path in the dynamic slots only, shape (N, n, n).
