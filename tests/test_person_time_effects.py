@@ -55,3 +55,30 @@ def test_a_stiffness_growing_in_time_is_recovered():
     k_t = fitted.effect_estimates().loc["k_t"]
     assert abs(k_t["value"] - 3.0) < 3 * k_t["sd"] and k_t["value"] > 5 * k_t["sd"], k_t
     assert fitted.effect_test()["lr"] > 20.0
+
+
+class ExtraStiffness(Effect):
+    """A constant extra stiffness per unit mass ``-k_s u``: the same as a higher ``f_h``, on any record."""
+
+    name = "extra_stiffness"
+
+    def slots(self, model):
+        return (Slot("k_s", "parameter", "1/s^2", -100.0, 100.0, nominal=0.0, description="extra stiffness"),)
+
+    def acceleration(self, model, x, t, inputs):
+        return -model.value(x, "k_s") * x[..., U]
+
+
+def test_an_effect_that_cannot_be_told_from_f_h_is_said_so_in_words():
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.extend import fit_effects
+    from smd_statespace.simulation import simulate_bouncing
+
+    sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=8, seed=3)
+    base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
+    said = [w for w in fit_effects(base, [ExtraStiffness()], intervals="wald").warnings
+            if w.startswith("k_s is not determined")]
+    assert len(said) == 1 and "cannot be told from f_h (correlation -" in said[0], said
+    # an effect the record does tell apart (the growing stiffness above) is not said to be confounded
+    growing = fit_effects(base, [GrowingStiffness()], intervals="wald").warnings
+    assert not any("cannot be told" in w for w in growing)

@@ -12,7 +12,30 @@ from ..io import G
 from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
 from .phone_report import phone_words
 
-__all__ = ["change_words", "person_warnings", "result_dict", "summary_text", "table_row"]
+__all__ = ["CONFOUNDED", "change_words", "person_warnings", "result_dict", "summary_text", "table_row"]
+
+
+CONFOUNDED = 0.9
+"""An effect's parameter not determined and correlated beyond this with ``f_h`` or ``xi_h`` (in the estimates'
+covariance) is said to be indistinguishable from it on the record."""
+
+
+def _told_from(result, name) -> str:
+    """``": on this record it cannot be told from f_h (correlation -0.999)"``, or "" when neither ``f_h`` nor
+    ``xi_h`` is correlated with the parameter ``name`` beyond :data:`CONFOUNDED`."""
+    cov = np.asarray(result.cov, dtype=float)
+    i = result.model.position(name)
+    best, partner = 0.0, ""
+    for other in ("f_h", "xi_h"):
+        j = result.model.position(other)
+        scale = np.sqrt(cov[i, i] * cov[j, j])
+        correlation = cov[i, j] / scale if scale > 0 else 0.0
+        if np.isfinite(correlation) and abs(correlation) > abs(best):
+            best, partner = float(correlation), other
+    if abs(best) <= CONFOUNDED:
+        return ""
+    return (f": on this record it cannot be told from {partner} (correlation {best:.3f}): the two change the "
+            "prediction alike, and its likelihood ratio says nothing about it")
 
 
 def person_warnings(result) -> list:
@@ -60,7 +83,7 @@ def person_warnings(result) -> list:
                        "modelled")
         elif not np.isfinite(row["sd"]) or row["sd"] > 0.25 * (row["range_high"] - row["range_low"]):
             out.append(f"{name} is not determined by this record (sd {row['sd']:.3g}{unit} against its "
-                       f"range {row['range_low']:g}-{row['range_high']:g})")
+                       f"range {row['range_low']:g}-{row['range_high']:g}){_told_from(result, name)}")
     phone = phone_words(result)
     if phone:
         out.append(phone)
