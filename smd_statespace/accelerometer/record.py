@@ -10,7 +10,7 @@ from .reading import read_accelerometer
 from .resampling import resample_uniform
 from .vertical import across_vertical, gravity_track, vertical_acceleration
 
-__all__ = ["GAP_SAMPLES", "UNKNOWN_MASS", "accelerometer_record", "unmeasured"]
+__all__ = ["GAP_SAMPLES", "UNKNOWN_MASS", "accelerometer_record", "fill_gaps", "unmeasured"]
 
 GAP_SAMPLES = 3.0
 """An interval between time stamps longer than this many of the phone's nominal intervals is a gap: the samples of
@@ -73,6 +73,7 @@ def accelerometer_record(path, mass=None, units: str = "auto", fs=None):
     raw = read_accelerometer(path, units=units)
     time, acc, clock = resample_uniform(raw.time, raw.acc, fs=fs, source=raw.source)
     missing = unmeasured(raw.time, time, clock["fs_nominal"])
+    acc = fill_gaps(acc, missing, clock["fs"])
     a_v, geometry = vertical_acceleration(time, acc, source=raw.source, measured=~missing)
     record = make_record(time - time[0], body * (G + a_v), body, source=raw.source)
     gravity_t = gravity_track(acc, clock["fs"])
@@ -94,3 +95,57 @@ def unmeasured(stamps, grid, fs_nominal) -> np.ndarray:
     before = stamps[after - 1]
     inside = (grid - before > 0.5 * dt) & (stamps[after] - grid > 0.5 * dt)
     return inside & (stamps[after] - before > (GAP_SAMPLES + 1e-6) * dt)
+
+
+def _period_samples(acc: np.ndarray, measured: np.ndarray, fs: float) -> int:
+    """The bouncing period in samples: the highest autocorrelation of the measured samples' specific-force
+    magnitude at lags of one cycle of the supported bouncing frequencies (normalised by the number of measured
+    pairs at each lag, so the gaps do not bias it)."""
+    from ..signals import SUPPORTED_FB  # here: signals imports pandas and scipy (not needed to read)
+
+    magnitude = np.linalg.norm(acc, axis=1)
+    centred = np.where(measured, magnitude - magnitude[measured].mean(), 0.0)
+    n = centred.size
+    products = np.fft.irfft(np.abs(np.fft.rfft(centred, 2 * n)) ** 2)[:n]
+    pairs = np.fft.irfft(np.abs(np.fft.rfft(measured.astype(float), 2 * n)) ** 2)[:n]
+    shortest, longest = int(fs / SUPPORTED_FB[1]), min(int(np.ceil(fs / SUPPORTED_FB[0])), n // 2)
+    if longest <= shortest:
+        return 0
+    correlation = products[shortest:longest + 1] / np.maximum(pairs[shortest:longest + 1], 1.0)
+    return shortest + int(np.argmax(correlation))
+
+
+def fill_gaps(acc, missing, fs: float) -> np.ndarray:
+    """``acc`` (m/s^2, shape (T, k)) with the samples inside the stamps' gaps (``missing``) taken one bouncing
+    period earlier (later at the record's start), shifted to meet the measured samples at both ends.
+
+    The samples stay unmeasured (the person model's likelihood leaves them out); the fill is what the filters
+    downstream (the gravity low-pass, the decimation's low-pass, the cycle timing's peaks) see there instead of
+    a straight line across the gap, which is up to 5 m/s^2 off a bouncing signal and which an ideal low-pass
+    spreads over the measured samples around it. On a phone with every artefact of ``benchmarks/phone_phenomena.py``
+    (four gaps of up to 0.25 s among them; seed 4460) the line took ``smooth`` and ``f_h`` +56 to +82 % off on six
+    of eight people checked, the fill +0.4 to +8.7 % (``independent``)."""
+    acc = np.array(acc, dtype=float)
+    missing = np.asarray(missing, dtype=bool)
+    if not missing.any() or missing.all():
+        return acc
+    values = acc if acc.ndim == 2 else acc[:, None]
+    lag = _period_samples(values, ~missing, fs)
+    if lag == 0:
+        return acc
+    n = values.shape[0]
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(np.int8), [0]])))
+    for start, stop in zip(edges[::2], edges[1::2]):  # a few gaps per record, each filled at once
+        inside = np.arange(start, stop)
+        source = inside - lag if start - lag >= 0 else inside + lag
+        source = np.clip(source, 0, n - 1)
+        chained = missing[source] & (source >= start) & (source < stop)  # a gap longer than the period
+        source[chained] = np.clip(source[chained] - lag, 0, n - 1)
+        fill = values[source]
+        left = values[start - 1] - values[max(source[0] - 1, 0)] if start > 0 else None
+        right = values[stop] - values[min(source[-1] + 1, n - 1)] if stop < n else None
+        left = right if left is None else left
+        right = left if right is None else right
+        weight = (np.arange(1, stop - start + 1) / (stop - start + 1))[:, None]
+        values[start:stop] = fill + left + (right - left) * weight
+    return acc
