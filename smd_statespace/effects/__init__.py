@@ -13,6 +13,8 @@ name                     what it adds                                       modu
 ``cubic_stiffness``      a hardening (``beta_3 > 0``) or softening spring   :mod:`.cubic_stiffness`
 ``floor_mode``           a vibrating floor under the person (Section 6):    :mod:`.floor_mode`
                          measured floor motion, or one floor mode
+``term``                 one generic restoring, damping or time term        :mod:`.generic`
+                         (``kind=abs_u``, ``u3``, ``v_abs_v``, ``f_drift``...)
 ======================== ================================================== ===========================
 
 :mod:`.registry` names them (:data:`EFFECTS`), parses the command-line form
@@ -23,9 +25,10 @@ effect join with one call (:func:`register_effect`) or from a file
 
 from .cubic_stiffness import CubicStiffness
 from .floor_mode import FloorMode
+from .generic import TERMS, GenericTerm
 from .harmonics import Harmonics
 from .registry import (EFFECTS, build_effect, load_effects_file, load_installed_effects, make_effect, parse_spec,
                        register_effect)
 
-__all__ = ["Harmonics", "CubicStiffness", "FloorMode", "EFFECTS", "register_effect", "load_effects_file",
+__all__ = ["Harmonics", "CubicStiffness", "FloorMode", "GenericTerm", "TERMS", "EFFECTS", "register_effect", "load_effects_file",
            "load_installed_effects", "parse_spec", "make_effect", "build_effect"]

@@ -14,6 +14,7 @@ name                what it adds
 ``cubic_stiffness`` a hardening (``beta_3 > 0``) or softening leg spring
 ``floor_mode``      a vibrating floor under the person (Section 6): measured
                     floor motion, or one estimated floor mode
+``term``            one generic restoring, damping or time term (``kind=``)
 =================== ==========================================================
 
 Effects are looked up by name with :func:`make_effect`, which also parses the
@@ -28,13 +29,14 @@ from ..errors import OptionError
 from ..model.effect import Effect
 from .cubic_stiffness import CubicStiffness
 from .floor_mode import FloorMode
+from .generic import GenericTerm
 from .harmonics import Harmonics
 
 __all__ = ["EFFECTS", "register_effect", "load_effects_file", "load_installed_effects", "parse_spec", "make_effect",
            "build_effect"]
 
 
-EFFECTS = {effect.name: effect for effect in (Harmonics, CubicStiffness, FloorMode)}
+EFFECTS = {effect.name: effect for effect in (Harmonics, CubicStiffness, FloorMode, GenericTerm)}
 """Registry of effects by name; :func:`register_effect` adds user-written ones."""
 
 

@@ -1,0 +1,129 @@
+"""The ``term`` effect: one generic restoring, damping or time term, each a one-parameter effect with a physical name.
+
+A research user's missing effect is rarely on a short list of named effects. As SINDy and SysIdentPy users
+expect, :data:`TERMS` is a library of simple terms in the leg's compression ``r = u - z`` (``z`` the floor's
+displacement when a ``floor_mode`` effect is present, else 0; ``u`` the COM displacement, m, up positive), its rate
+``r'`` and the time ``t``; each adds one dimensionless coefficient ``c`` to the COM acceleration (Eq. 2):
+
+======== ============================================ =====================================================
+kind     acceleration term                            the physics it stands for
+======== ============================================ =====================================================
+abs_u    ``-w_h^2 c |r|``                             a spring stiffer on one side of its rest position
+u2       ``-w_h^2 c r^2 / r_0``                       a spring that stiffens on one side the further it moves
+u_abs_u  ``-w_h^2 c r |r| / r_0``                     a spring that hardens (softens) with amplitude
+u3       ``-w_h^2 c r^3 / r_0^2``                     a spring that hardens (softens) with amplitude, cubic
+v2       ``-2 xi_h w_h c r'^2 / v_0``                 damping that differs between moving up and down
+v_abs_v  ``-2 xi_h w_h c r' |r'| / v_0``              damping that grows with speed (turbulent-like)
+u_v      ``-2 xi_h w_h c r r' / r_0``                 damping that changes with the leg's compression
+f_drift  ``-w_h^2 c r (t - t_0) / T``                 a leg stiffness (``f_h``) that drifts over the record
+xi_drift ``-2 xi_h w_h c r' (t - t_0) / T``           a leg damping (``xi_h``) that drifts over the record
+======== ============================================ =====================================================
+
+with ``w_h = 2 pi f_h``. ``r_0`` and ``v_0`` (the option ``scale``: m, or m/s for the damping terms) are the
+record's RMS compression and compression rate, so that ``c`` is the term's size at the record's own motion
+relative to the spring's (or the damper's) linear force: ``c = 0.1`` is 10 % of it. For the time terms ``t_0``
+is the middle of the record and ``T`` its length (``scale`` = ``T``, ``start``): ``c = 0.2`` changes ``w_h^2``
+(or ``xi_h w_h``) by 20 % from the record's start to its end. :func:`~smd_statespace.person.screen.generic_library`
+builds every term scaled to a fitted person's record.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import OptionError
+from ..model.core import F_H, TWO_PI, U, U_DOT, XI_H, Slot
+from ..model.effect import Effect
+
+__all__ = ["TERMS", "GenericTerm"]
+
+TERMS = {
+    "abs_u": ("restoring", "a spring stiffer on one side of its rest position (in compression or in extension)"),
+    "u2": ("restoring", "a spring that stiffens on one side the further it is compressed (or extended)"),
+    "u_abs_u": ("restoring", "a spring that hardens (or softens) with amplitude"),
+    "u3": ("restoring", "a spring that hardens (or softens) with amplitude, as a cube"),
+    "v2": ("damping", "damping that differs between moving up and moving down"),
+    "v_abs_v": ("damping", "damping that grows with speed (turbulent-like)"),
+    "u_v": ("damping", "damping that changes with the leg's compression"),
+    "f_drift": ("time", "a leg stiffness (f_h) that drifts over the record"),
+    "xi_drift": ("time", "a leg damping (xi_h) that drifts over the record"),
+}
+"""``kind: (family, physical name)`` of the generic terms; the family says what ``scale`` is (m, m/s or s)."""
+
+COEFFICIENT_RANGE = (-2.0, 2.0)
+"""Search range of the coefficient ``c``: the term at most twice the linear force at the record's own motion."""
+
+
+class GenericTerm(Effect):
+    """One generic term of :data:`TERMS`: one dimensionless coefficient ``c_<kind>``.
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`TERMS` (required: ``term:kind=abs_u,scale=0.012``).
+    scale : float
+        ``r_0`` (m) for the restoring terms, ``v_0`` (m/s) for the damping terms, ``T`` (s) for the time terms:
+        the record's RMS compression, compression rate, or length. Must be positive.
+    start : float
+        For the time terms, the record's first time (s, on its own time axis); ``t_0 = start + T / 2``.
+
+    Examples
+    --------
+    >>> effect = GenericTerm("abs_u", scale=0.012).with_values(c_abs_u=-0.2)
+    >>> effect.spec, effect.physics
+    ('term:kind=abs_u,scale=0.012,c_abs_u=-0.2', 'a spring stiffer on one side of its rest position (in compression or in extension)')
+    """
+
+    name = "term"
+
+    def __init__(self, kind: str, scale: float, start: float = 0.0):
+        if kind not in TERMS:
+            raise OptionError(f"term: kind={kind!r}; give one of {', '.join(TERMS)}")
+        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not (math.isfinite(scale) and scale > 0):
+            raise OptionError(f"term: scale={scale!r}; give the record's RMS motion (m, m/s) or length (s), > 0")
+        if isinstance(start, bool) or not isinstance(start, (int, float)) or not math.isfinite(start):
+            raise OptionError(f"term: start={start!r}; give the record's first time in s")
+        self.kind, self.scale, self.start = kind, float(scale), float(start)
+        self.family, self.physics = TERMS[kind]
+
+    @property
+    def coefficient(self) -> str:
+        """The name of the term's parameter slot, ``c_<kind>``."""
+        return f"c_{self.kind}"
+
+    def slots(self, model):
+        low, high = COEFFICIENT_RANGE
+        return (Slot(self.coefficient, "parameter", "-", low, high, nominal=0.1,
+                     description=f"relative size of {self.physics}", linear=self.family == "time"),)
+
+    def acceleration(self, model, x, t, inputs):
+        c = model.value(x, self.coefficient)
+        omega = TWO_PI * x[..., F_H]
+        displacement, velocity = model.floor_motion(x, t, inputs)
+        r, rate = x[..., U] - displacement, x[..., U_DOT] - velocity
+        spring, damper = omega**2, 2.0 * x[..., XI_H] * omega
+        kind, s = self.kind, self.scale
+        if self.family == "time":
+            moment = (np.asarray(t, dtype=float) - self.start - s / 2.0) / s
+            return -c * moment * (spring * r if kind == "f_drift" else damper * rate)
+        terms = {"abs_u": lambda: spring * np.abs(r), "u2": lambda: spring * r**2 / s,
+                 "u_abs_u": lambda: spring * r * np.abs(r) / s, "u3": lambda: spring * r**3 / s**2,
+                 "v2": lambda: damper * rate**2 / s, "v_abs_v": lambda: damper * rate * np.abs(rate) / s,
+                 "u_v": lambda: damper * r * rate / s}
+        return -c * terms[kind]()
+
+    @classmethod
+    def record_default(cls, result):
+        """None: a generic term is not one of ``diagnose``'s default candidates (there are nine, one per kind;
+        :func:`~smd_statespace.person.screen.generic_library` builds them for a record)."""
+        return None
+
+    @classmethod
+    def candidate(cls, check):
+        """None: nor one of the per-cycle diagnosis's candidates."""
+        return None
+
+    def __repr__(self):
+        return f"GenericTerm(kind={self.kind!r}, scale={self.scale:g}, start={self.start:g})"

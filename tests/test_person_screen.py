@@ -1,0 +1,54 @@
+"""Score tests of candidate effects at the fitted person (person.screen): exact at c = 0, the gradient the
+likelihood's slope, a drift found and ranked first, no alarm on a clean record over the whole library."""
+
+import numpy as np
+import pytest
+
+from smd_statespace.effects import TERMS, GenericTerm, make_effect
+from smd_statespace.errors import OptionError
+from smd_statespace.person import identify_person
+from smd_statespace.person.extend import effect_model
+from smd_statespace.person.screen import generic_library, holm, score_test, screen
+from smd_statespace.simulation import simulate_bouncing
+
+PERSON = dict(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=20)
+
+
+@pytest.fixture(scope="module")
+def clean():
+    return identify_person(simulate_bouncing(**PERSON, seed=5).record)
+
+
+def test_at_zero_the_candidate_is_the_fitted_person_and_its_gradient_the_likelihood_slope(clean):
+    effect = generic_library(clean, ["u_abs_u"])[0]
+    test = score_test(clean, effect)
+    assert test["loglike"] == pytest.approx(clean.loglike, abs=1e-6)
+    model = effect_model(clean, [effect])
+    named = clean.model.unpack(clean.params)
+    params = np.array([named.get(name, 0.0) for name in model.param_names])
+    j, h = model.position("c_u_abs_u"), 1e-4
+    up, down = params.copy(), params.copy()
+    up[j], down[j] = h, -h
+    slope = (model.loglike(up) - model.loglike(down)) / (2 * h)
+    assert test["gradient"] == pytest.approx(slope, rel=1e-3, abs=1e-3)
+
+
+def test_a_drifting_f_h_is_ranked_first_and_a_clean_record_raises_no_alarm(clean):
+    table = screen(clean)
+    assert len(table) == len(TERMS) and table["p_holm"].min() > 0.01  # no false alarm over 9 candidates
+    library = {effect.kind: effect for effect in generic_library(clean)}
+    drift = library["f_drift"].with_values(c_f_drift=0.3)  # w_h^2 rises by 30 % over the 20 s
+    drifting = identify_person(simulate_bouncing(**PERSON, seed=5, effects=[drift]).record)
+    table = screen(drifting)
+    assert table.index[0].startswith("term:kind=f_drift") and table["p_holm"].iloc[0] < 1e-3
+    assert table.loc[table.index[0], "physics"] == TERMS["f_drift"][1]
+
+
+def test_holm_and_the_term_options():
+    np.testing.assert_allclose(holm([0.01, 0.04, 0.03, 0.5]), [0.04, 0.09, 0.09, 0.5])
+    assert make_effect("term:kind=v_abs_v,scale=0.15").spec == "term:kind=v_abs_v,scale=0.15"
+    for spec, fragment in [("term:kind=u9,scale=1", "give one of abs_u"), ("term:kind=u3,scale=0", "scale=0"),
+                           ("term", "kind")]:
+        with pytest.raises(OptionError, match=fragment):
+            make_effect(spec)
+    assert GenericTerm("f_drift", scale=20.0, start=4.0).physics == TERMS["f_drift"][1]
