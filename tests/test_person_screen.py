@@ -52,3 +52,17 @@ def test_holm_and_the_term_options():
         with pytest.raises(OptionError, match=fragment):
             make_effect(spec)
     assert GenericTerm("f_drift", scale=20.0, start=4.0).physics == TERMS["f_drift"][1]
+
+
+@pytest.mark.slow
+def test_diagnose_fits_the_screened_term_and_names_its_physics(clean, tmp_path, capsys):
+    """The record's f_h drifts: ``diagnose`` screens the library, fits the flagged term and proposes it, in words."""
+    from smd_statespace.cli.main import main
+
+    path = tmp_path / "drift.csv"
+    assert main(["simulate", "--out", str(path), "--mass", "70", "--fb", "2.2", "--fh", "2.7", "--xi", "0.3",
+                 "--duration", "20", "--seed", "5", "--effect", "term:kind=f_drift,scale=20,c_f_drift=0.3"]) == 0
+    assert main(["diagnose", str(path), "--mass", "70", "--out", str(tmp_path / "d"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "verdict: missing effect 'term:f_drift' = a leg stiffness (f_h) that drifts over the record" in out
+    assert "--effect term:kind=f_drift,scale=20" in out and "score-tested at the fitted person" in out

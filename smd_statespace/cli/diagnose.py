@@ -94,7 +94,7 @@ def _effects_and_candidates(args) -> tuple:
 def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..person import identify_person
-    from ..person.diagnose import diagnose_person
+    from ..person.diagnose import SCREENED, diagnose_person
     from ..person.extend import check_effects
 
     added, candidates = _effects_and_candidates(args)  # a bad --effect or --candidate: one line, nothing read
@@ -116,13 +116,22 @@ def run_person_diagnose(args) -> int:
         with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 200,
                                "display.max_colwidth", 60):
             print(table[columns].to_string())
-    level = args.alpha / max(len(result.rows) + len(result.failed), 1)
+    if len(result.screened):
+        print(f"\ngeneric terms, each score-tested at the fitted person (no fit; the {SCREENED} most significant "
+              "over the library, Holm, are fitted above):")
+        shown = result.screened.head(5)
+        for spec, row in shown.iterrows():
+            name = spec.split(",")[0].replace("kind=", "")
+            print(f"  {name:<15} robust LM {row['lm_robust']:7.1f}  Holm p {row['p_holm']:.2g}  {row['physics']}")
+    tests = result.tests or len(result.rows) + len(result.failed)
+    level = args.alpha / max(tests, 1)
     if result.adequate:
         print(f"\nverdict: no candidate effect is a significant improvement at alpha {args.alpha:g} "
-              f"(Bonferroni over {len(result.rows) + len(result.failed)}: each at {level:.2g})")
+              f"(Bonferroni over {tests}: each at {level:.2g})")
     else:
         best = table.loc[result.missing[0]]
-        print(f"\nverdict: missing effect '{result.missing[0]}' (LR {best['lr']:.1f} on {int(best['df'])} "
+        physics = f" = {best['physics']}" if best.get("physics") else ""
+        print(f"\nverdict: missing effect '{result.missing[0]}'{physics} (LR {best['lr']:.1f} on {int(best['df'])} "
               f"parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} "
               f"Hz, xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
         extra = "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))

@@ -26,6 +26,14 @@ is tried only when asked for (``--effect floor_mode:source=modal``): its
 frequency is searched over a fine grid of about 230 trials, which costs
 seconds, and its test counts them (Bonferroni).
 
+Generic terms: besides those, every generic term of the library
+(:data:`~smd_statespace.effects.generic.TERMS`: a spring stiffer on one side, one that hardens with amplitude,
+damping that grows with speed or differs up and down, a stiffness or damping that drifts over the record) is
+screened by a score test at the fitted person (:func:`~smd_statespace.person.screen.screen`: no fit, about a
+second for the nine), and the :data:`SCREENED` most significant over the library (Holm, at ``alpha``) are fitted
+as candidates like the others. The Bonferroni level counts every term screened, so the chance of a false alarm
+does not grow with the library.
+
 A candidate that passes the test is also validated on held-out data
 (:func:`~smd_statespace.person.validation.cross_validated_loglike`): the
 person with and without it fitted on each half of the record and scored on the
@@ -52,11 +60,17 @@ from scipy import stats
 from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
+from ..effects.generic import TERMS, GenericTerm
 from .extend import configured_for_record, fit_effects
+from .screen import generic_library, screen
 from .validation import cross_validated_loglike
 
-__all__ = ["LESS_WHITE", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
-           "indistinguishable_from_zero"]
+__all__ = ["LESS_WHITE", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
+           "label", "indistinguishable_from_zero"]
+
+SCREENED = 2
+"""How many generic terms (:mod:`~smd_statespace.person.screen`) whose score test is significant over the library
+(Holm) are fitted as candidates, the most significant first."""
 
 ZERO_Z = 2.0
 """A candidate whose added parameters and harmonics are all within this many sds of zero is not proposed."""
@@ -64,6 +78,11 @@ ZERO_Z = 2.0
 LESS_WHITE = 0.1
 """A candidate with which the innovations' Ljung-Box p falls below this fraction of its value without it is not
 proposed (less white: it does not take what the model misses; the fraction leaves the p-values' own noise)."""
+
+
+def label(effect) -> str:
+    """How the table names a candidate: its registry name, with the kind for a generic term (``term:abs_u``)."""
+    return f"{effect.name}:{effect.kind}" if isinstance(effect, GenericTerm) else effect.name
 
 
 def candidate_row(base, fitted, level: float) -> dict:
@@ -79,7 +98,8 @@ def candidate_row(base, fitted, level: float) -> dict:
     before_tests, after_tests = base.test_pvalues(), fitted.test_pvalues()
     person_on_bound = fitted.model.person_at_bound(fitted.params)
     effect_on_bound = bool(estimates["on_bound"].any()) if len(estimates) else False
-    row = {"effect": "+".join(e.name for e in added),
+    row = {"effect": "+".join(label(e) for e in added),
+           "physics": "; ".join(getattr(e, "physics", "") for e in added),
            "spec": " ".join(e.spec for e in fitted.effects), "df": df, "lr": lr, "p_value": math.exp(log_p),
            "log_p": log_p, "trials": trials, "f_h_before": base.f_h, "f_h": fitted.f_h, "xi_h_before": base.xi_h,
            "xi_h": fitted.xi_h, "noise_change_%": 100.0 * (fitted.sigma / base.sigma - 1.0),
@@ -153,6 +173,11 @@ class PersonDiagnosis:
     joint : dict
         When two candidates were significant: ``effects`` (the two names), ``loglike`` of the joint
         fit and, per name, ``lr`` and ``p_value`` of that effect on top of the other.
+    screened : pandas.DataFrame
+        The generic terms' score tests (:func:`~smd_statespace.person.screen.screen`), empty when candidates
+        were given.
+    tests : int
+        How many tests the Bonferroni level counts: the candidates fitted and every generic term screened.
     """
 
     base: object
@@ -161,6 +186,8 @@ class PersonDiagnosis:
     failed: dict
     alpha: float
     joint: dict = field(default_factory=dict)
+    screened: pd.DataFrame = field(default_factory=pd.DataFrame)
+    tests: int = 0
 
     def table(self) -> pd.DataFrame:
         """The candidates, most significant first (by the log p-value of the likelihood ratio)."""
@@ -239,9 +266,10 @@ class PersonDiagnosis:
     def report(self) -> dict:
         """JSON-able report: base person, candidates, verdict, notes."""
         table = self.table()
+        screened = self.screened.reset_index().to_dict(orient="records") if len(self.screened) else []
         return {"base": self.base.to_dict(), "candidates": table.reset_index().to_dict(orient="records"),
                 "missing": self.missing, "adequate": self.adequate, "alpha": self.alpha, "notes": self.notes(),
-                "joint": self.joint}
+                "joint": self.joint, "screened": screened, "tests": self.tests}
 
 
 def _joint(base, fits: dict, names: list, level: float) -> dict:
@@ -292,32 +320,44 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     """
     from ..progress import tqdm
 
-    present = {effect.name for effect in result.effects}
+    present = {label(effect) for effect in result.effects}
+    screened, failed = pd.DataFrame(), {}
     if candidates is None:
         effects = [effect for name, cls in EFFECTS.items() if name not in present
                    for effect in [record_default(cls, result)] if effect is not None]
+        library = generic_library(result, [kind for kind in TERMS if f"term:{kind}" not in present])
+        tests = len(effects) + len(library)  # Bonferroni counts every term screened, fitted or not
+        try:
+            screened = screen(result, library)
+        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            failed["generic terms (score tests)"] = " ".join(str(exc).split())
+        else:
+            flagged = set(screened.index[screened["p_holm"] < alpha][:SCREENED])
+            effects += [effect for effect in library if effect.spec in flagged]
     else:
         effects = [configured_for_record(candidate, result) for candidate in candidates]
-        already = [effect.name for effect in effects if effect.name in present]
+        already = [label(effect) for effect in effects if label(effect) in present]
         if already:
             raise OptionError(f"candidate {already[0]!r} is in the model already; candidates are effects to try on "
                               f"top of it ({', '.join(sorted(present))})")
-    level = alpha / max(len(effects), 1)
-    fits, rows, failed = {}, [], {}
+        tests = len(effects)
+    level = alpha / max(tests, 1)
+    fits, rows = {}, []
     for effect in tqdm(effects, desc="diagnose (record)", unit="effect", disable=not progress, leave=False):
         started = time.perf_counter()
         try:
             fitted = fit_effects(result, [effect], timing=False)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            failed[effect.name] = " ".join(str(exc).split())
+            failed[label(effect)] = " ".join(str(exc).split())
             continue
-        fits[effect.name] = fitted
+        fits[label(effect)] = fitted
         rows.append({**candidate_row(result, fitted, level), "seconds": time.perf_counter() - started})
     passed = [i for i, row in enumerate(rows) if row["significant"]]
     base_loglike = cross_validated_loglike(result.model, result.params) if passed else None
     for i in passed:  # the held-out check only where the test is passed (one half-fit pair each)
         rows[i] = held_out(rows[i], base_loglike, fits[rows[i]["effect"]])
-    diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha)
+    diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha, screened=screened,
+                                tests=tests)
     significant = diagnosis.missing
     if len(significant) >= 2:
         try:
