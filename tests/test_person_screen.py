@@ -66,3 +66,5 @@ def test_diagnose_fits_the_screened_term_and_names_its_physics(clean, tmp_path, 
     out = capsys.readouterr().out
     assert "verdict: missing effect 'term:f_drift' = a leg stiffness (f_h) that drifts over the record" in out
     assert "--effect term:kind=f_drift,scale=20" in out and "score-tested at the fitted person" in out
+    for figure in ("person_candidates.png", "person_spectrum.png", "person_compare.png"):  # what it found, drawn
+        assert (tmp_path / "d" / figure).stat().st_size > 10_000

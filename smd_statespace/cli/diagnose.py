@@ -95,6 +95,7 @@ def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..person import identify_person
     from ..person.diagnose import SCREENED, diagnose_person
+    from ..plotting.person import plot_candidates, plot_compare, plot_spectrum
     from ..person.extend import check_effects
 
     added, candidates = _effects_and_candidates(args)  # a bad --effect or --candidate: one line, nothing read
@@ -138,8 +139,14 @@ def run_person_diagnose(args) -> int:
         print("next: " + result.command(args.record, args.mass, extra))
     for note in result.notes():
         print(f"note: {note}")
-    written = [directory / "person_diagnostics.png"]
+    written = [directory / "person_diagnostics.png", directory / "person_candidates.png"]
     base.plot_diagnostics(written[0])
+    plot_candidates(result, written[1])
+    if not result.adequate:  # the proposed effect: the innovations' spectrum and the free run, without and with it
+        proposed = result.fits[result.missing[0]]
+        written += [directory / "person_spectrum.png", directory / "person_compare.png"]
+        plot_spectrum(proposed, written[-2])
+        plot_compare(proposed, written[-1])
     if args.json:
         with open(args.json, "w", encoding="utf-8") as handle:
             json.dump(result.report(), handle, indent=2, default=float)

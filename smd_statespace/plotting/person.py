@@ -9,7 +9,9 @@
 - :func:`plot_compare`: measured against free-run simulated COM acceleration
   with a fit percentage (MATLAB's ``compare``), without and with the effects;
 - :func:`plot_floor_correlation`: the innovations' cross-correlation with the
-  measured floor acceleration, when the record has one.
+  measured floor acceleration, when the record has one;
+- :func:`plot_candidates`: what ``diagnose`` found, the generic terms' score tests and the
+  candidates' likelihood ratios against their levels.
 
 Every function builds a :class:`matplotlib.figure.Figure` without pyplot,
 saves it when given a ``path`` and returns it. Times are in seconds.
@@ -24,7 +26,7 @@ from matplotlib.figure import Figure
 from scipy import signal
 
 __all__ = ["free_run", "fit_percent", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
-           "plot_floor_correlation"]
+           "plot_floor_correlation", "plot_candidates"]
 
 COLORS = {"without": "tab:red", "with": "tab:blue"}
 
@@ -40,7 +42,8 @@ def _name(result) -> str:
 
 
 def _label(result) -> str:
-    return ("with " + ", ".join(e.name for e in result.effects)) if result.effects else "without effects"
+    names = [f"{e.name}:{e.kind}" if hasattr(e, "kind") else e.name for e in result.effects]  # a generic term's kind
+    return ("with " + ", ".join(names)) if names else "without effects"
 
 
 def _pairs(result) -> list:
@@ -248,4 +251,42 @@ def plot_person_diagnostics(result, path=None, lags=None) -> Figure:
     series.set(xlabel="time (s)", title="standardised innovations")
     correlogram.set(xlabel=f"lag (samples of {1.0 / result.record.fs:g} s)")
     fig.subplots_adjust(hspace=0.35)  # room for the time axis' label above the Q-Q panel's title
+    return _save(fig, path)
+
+
+def plot_candidates(diagnosis, path=None) -> Figure:
+    """What ``diagnose`` found: the generic terms' score tests and the fitted candidates' likelihood ratios.
+
+    Left: every generic term's robust score statistic (chi-square(1) under "absent"), with the level a term
+    must pass over the library (Holm's first step, ``alpha / terms``); right: each fitted candidate's likelihood
+    ratio against the level of its own test (Bonferroni over every test), proposed ones in blue.
+    """
+    from scipy import stats
+
+    fig = Figure(figsize=(11, 4.4), layout="constrained")
+    left, right = fig.subplots(1, 2, width_ratios=(1.15, 1))
+    screened = diagnosis.screened
+    if len(screened):
+        names = [spec.split(",")[0].replace("term:kind=", "") for spec in screened.index][::-1]
+        values = screened["lm_robust"].to_numpy()[::-1]
+        flagged = (screened["p_holm"] < diagnosis.alpha).to_numpy()[::-1]
+        left.barh(names, values, color=np.where(flagged, "tab:blue", "0.6"))
+        left.axvline(stats.chi2.isf(diagnosis.alpha / len(screened), 1), color="k", ls="--", lw=0.8,
+                     label=f"Holm's first level (alpha {diagnosis.alpha:g} over {len(screened)})")
+        left.set_xscale("symlog", linthresh=10.0)
+        left.legend(fontsize=8, loc="lower right")
+    left.set(xlabel="robust score statistic (no fit)", title="generic terms at the fitted person")
+    table = diagnosis.table()
+    if not table.empty:
+        level = diagnosis.alpha / max(diagnosis.tests or len(table), 1)
+        names = list(table.index)[::-1]
+        ratios = np.maximum(table["lr"].to_numpy(dtype=float), 0.0)[::-1]
+        proposed = table["significant"].to_numpy(dtype=bool)[::-1]
+        right.barh(names, ratios, color=np.where(proposed, "tab:blue", "0.6"))
+        degrees = table["df"].to_numpy(dtype=int)[::-1]
+        for y, (ratio, df) in enumerate(zip(ratios, degrees)):
+            right.plot([stats.chi2.isf(level, max(df, 1))] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
+        right.set_xscale("symlog", linthresh=10.0)
+    right.set(xlabel="likelihood ratio (black: its test's level)", title="candidates fitted with the person")
+    fig.suptitle(f"{_name(diagnosis.base)}: is an effect missing? blue: proposed", fontsize=10)
     return _save(fig, path)
