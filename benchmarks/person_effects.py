@@ -27,7 +27,10 @@ Effects (:data:`KINDS`): extra harmonics 5-6 (``harmonics``), a cubic spring
 (``cubic_stiffness``), a floor mode with the floor acceleration measured
 (``floor_measured``: the record's ``floor_acc`` kept) and without it
 (``floor_unmeasured``: dropped, the candidate ``floor_mode:source=modal``),
-the user's quadratic damper (``quadratic_damping``). The effect's size is
+the user's quadratic damper (``quadratic_damping``), and three generic terms of the library that ``diagnose``
+screens by score tests (``term_abs_u``: a spring stiffer in compression, ``term_v_abs_v``: damping that grows with
+speed, ``term_f_drift``: ``f_h`` drifting over the record; simulated with fixed scales, 1 cm, 0.15 m/s and the
+record's length, which the library rescales to each record's motion). The effect's size is
 measured on every record as the RMS of the GRF difference it makes (same
 seed, noise-free, with and without the effect) over the noise sd.
 
@@ -55,7 +58,7 @@ from tqdm.auto import tqdm
 from smd_statespace.effects import EFFECTS, load_effects_file
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
-from smd_statespace.person.diagnose import diagnose_person
+from smd_statespace.person.diagnose import diagnose_person, label
 from smd_statespace.person.effect_adapter import record_default
 from smd_statespace.person.extend import configured_for_record, fit_effects
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
@@ -72,19 +75,29 @@ KINDS = {
     "floor_measured": [{"floor_mode": {"modal_mass": 2000.0}}, {"floor_mode": {"modal_mass": 700.0}}],
     "floor_unmeasured": [{"floor_mode": {"modal_mass": 2000.0}}, {"floor_mode": {"modal_mass": 700.0}}],
     "quadratic_damping": [{"quadratic_damping": {"c_q": 4.0}}, {"quadratic_damping": {"c_q": 12.0}}],
+    "term_abs_u": [{"term": {"kind": "abs_u", "scale": 0.01, "c_abs_u": -0.1}},
+                   {"term": {"kind": "abs_u", "scale": 0.01, "c_abs_u": -0.3}}],
+    "term_v_abs_v": [{"term": {"kind": "v_abs_v", "scale": 0.15, "c_v_abs_v": 0.2}},
+                     {"term": {"kind": "v_abs_v", "scale": 0.15, "c_v_abs_v": 0.5}}],
+    "term_f_drift": [{"term": {"kind": "f_drift", "scale": DURATION, "c_f_drift": 0.1}},
+                     {"term": {"kind": "f_drift", "scale": DURATION, "c_f_drift": 0.3}}],
 }
 """Hidden effects at a small and a large size (about 2x and 5x the noise on a typical record)."""
 
 EXPECTED = {"clean": None, "harmonics": "harmonics", "cubic_stiffness": "cubic_stiffness",
-            "floor_measured": "floor_mode", "floor_unmeasured": "floor_mode", "quadratic_damping": "quadratic_damping"}
+            "floor_measured": "floor_mode", "floor_unmeasured": "floor_mode", "quadratic_damping": "quadratic_damping",
+            "term_abs_u": "term:abs_u", "term_v_abs_v": "term:v_abs_v", "term_f_drift": "term:f_drift"}
 """The right answer of ``diagnose`` per kind (None: nothing proposed)."""
 
 FITTED = {"harmonics": "harmonics:count=2", "cubic_stiffness": "cubic_stiffness", "floor_measured": "floor_mode",
-          "floor_unmeasured": "floor_mode:source=modal", "quadratic_damping": "quadratic_damping"}
+          "floor_unmeasured": "floor_mode:source=modal", "quadratic_damping": "quadratic_damping",
+          "term_abs_u": "term:kind=abs_u,scale=0.01", "term_v_abs_v": "term:kind=v_abs_v,scale=0.15",
+          "term_f_drift": f"term:kind=f_drift,scale={DURATION:g}"}
 """The true effect as ``identify --effect`` adds it."""
 
 TRUE_PARAMETER = {"cubic_stiffness": ("beta_3", "beta_3"), "quadratic_damping": ("c_q", "c_q"),
-                  "floor_unmeasured": ("f_f", "frequency")}
+                  "floor_unmeasured": ("f_f", "frequency"), "term_abs_u": ("c_abs_u", "c_abs_u"),
+                  "term_v_abs_v": ("c_v_abs_v", "c_v_abs_v"), "term_f_drift": ("c_f_drift", "c_f_drift")}
 """The effect parameter whose error is counted: ``(estimated name, key of the simulation's truth)``."""
 
 GENERATORS = ("jumps", "smooth")
@@ -133,10 +146,10 @@ def _with_true_effect(base, diagnosis, spec) -> tuple:
     the same spec; the others diagnose only screened, and the effect is fitted here.
     """
     effect = configured_for_record(spec, base)  # as identify_person takes it: a bare name configured for the record
-    fitted = diagnosis.fits.get(effect.name)
-    proposed = bool(diagnosis.missing) and diagnosis.missing[0] == effect.name
+    fitted = diagnosis.fits.get(label(effect))
+    proposed = bool(diagnosis.missing) and diagnosis.missing[0] == label(effect)
     if proposed and [e.spec for e in fitted.effects] == [effect.spec]:
-        return fitted, float(next(row["seconds"] for row in diagnosis.rows if row["effect"] == effect.name))
+        return fitted, float(next(row["seconds"] for row in diagnosis.rows if row["effect"] == label(effect)))
     moment = time.perf_counter()
     fitted = fit_effects(base, [spec])
     return fitted, time.perf_counter() - moment
@@ -169,7 +182,7 @@ def one(task) -> dict:
         candidates = [c for c in candidates if c is not None]
         if record.floor_acc is None:
             candidates.append("floor_mode:source=modal")
-        diagnosis = diagnose_person(base, candidates=candidates)
+        diagnosis = diagnose_person(base, candidates=candidates, library=True)
         row["diagnose_seconds"] = time.perf_counter() - started
         top = diagnosis.missing[0] if diagnosis.missing else None
         table = diagnosis.table()

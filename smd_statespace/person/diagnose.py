@@ -295,7 +295,7 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     return out
 
 
-def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> PersonDiagnosis:
+def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library=None) -> PersonDiagnosis:
     """Identify the person with each candidate effect and test it by likelihood ratio.
 
     Parameters
@@ -313,6 +313,9 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
         ``alpha / len(candidates)``.
     progress : bool
         A progress bar over the candidates.
+    library : bool, optional
+        Also screen the generic terms by score tests and fit the :data:`SCREENED` most significant
+        (default: when ``candidates`` is None; given candidates are what the user asked for).
 
     Returns
     -------
@@ -325,22 +328,24 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False) -> Pers
     if candidates is None:
         effects = [effect for name, cls in EFFECTS.items() if name not in present
                    for effect in [record_default(cls, result)] if effect is not None]
-        library = generic_library(result, [kind for kind in TERMS if f"term:{kind}" not in present])
-        tests = len(effects) + len(library)  # Bonferroni counts every term screened, fitted or not
-        try:
-            screened = screen(result, library)
-        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            failed["generic terms (score tests)"] = " ".join(str(exc).split())
-        else:
-            flagged = set(screened.index[screened["p_holm"] < alpha][:SCREENED])
-            effects += [effect for effect in library if effect.spec in flagged]
     else:
         effects = [configured_for_record(candidate, result) for candidate in candidates]
         already = [label(effect) for effect in effects if label(effect) in present]
         if already:
             raise OptionError(f"candidate {already[0]!r} is in the model already; candidates are effects to try on "
                               f"top of it ({', '.join(sorted(present))})")
-        tests = len(effects)
+    tests = len(effects)
+    if candidates is None if library is None else library:
+        terms = generic_library(result, [kind for kind in TERMS if f"term:{kind}" not in present | {
+            label(effect) for effect in effects}])
+        tests += len(terms)  # Bonferroni counts every term screened, fitted or not
+        try:
+            screened = screen(result, terms)
+        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            failed["generic terms (score tests)"] = " ".join(str(exc).split())
+        else:
+            flagged = set(screened.index[screened["p_holm"] < alpha][:SCREENED])
+            effects += [effect for effect in terms if effect.spec in flagged]
     level = alpha / max(tests, 1)
     fits, rows = {}, []
     for effect in tqdm(effects, desc="diagnose (record)", unit="effect", disable=not progress, leave=False):
