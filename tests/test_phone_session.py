@@ -181,3 +181,22 @@ def test_a_loose_phone_is_refused_in_one_line(tmp_path, capsys, kind, message):
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "bag.csv" in err and message in err, err
     assert not (tmp_path / "out" / "person.json").exists()
+
+
+def test_a_gap_as_long_as_a_cycle_is_refused_in_one_line(tmp_path, capsys):
+    """Bouncing at 3.8 Hz (cycles of 0.26 s), a gap of 0.28 s is under the resampler's 0.3 s but leaves a whole
+    cycle unmeasured: refused, naming the gap and the cycle; a gap of 0.15 s is read across."""
+    from smd_statespace.accelerometer import accelerometer_record
+    from smd_statespace.simulation.phone import simulate_phone
+
+    phone = simulate_phone(mass=70, f_b=3.8, f_h=4.0, xi_h=0.3, duration=20, seed=3)
+    path, _ = phone.write(tmp_path / "phone.csv")
+    lines = path.read_text().splitlines()
+    times = np.array([float(line.split(",")[0]) for line in lines[1:]])
+    for name, end in (("long.csv", 10.28), ("short.csv", 10.15)):
+        kept = [lines[0]] + [line for line, t in zip(lines[1:], times) if not 10.0 < t < end]
+        (tmp_path / name).write_text("\n".join(kept) + "\n")
+    assert main(["identify", str(tmp_path / "long.csv"), "--accelerometer", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "long.csv: no samples for 0.28" in err and "as long as a bouncing cycle (0.26 s)" in err
+    assert accelerometer_record(tmp_path / "short.csv").extra["unmeasured"].sum() > 20

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import RecordError
 from ..io import G
 from .reading import read_accelerometer
 from .resampling import resample_uniform
@@ -73,6 +74,7 @@ def accelerometer_record(path, mass=None, units: str = "auto", fs=None):
     raw = read_accelerometer(path, units=units)
     time, acc, clock = resample_uniform(raw.time, raw.acc, fs=fs, source=raw.source)
     missing = unmeasured(raw.time, time, clock["fs_nominal"])
+    _refuse_a_gap_over_a_cycle(missing, acc, clock, raw.source)
     acc = fill_gaps(acc, missing, clock["fs"])
     a_v, geometry = vertical_acceleration(time, acc, source=raw.source, measured=~missing)
     record = make_record(time - time[0], body * (G + a_v), body, source=raw.source)
@@ -113,6 +115,21 @@ def _period_samples(acc: np.ndarray, measured: np.ndarray, fs: float) -> int:
         return 0
     correlation = products[shortest:longest + 1] / np.maximum(pairs[shortest:longest + 1], 1.0)
     return shortest + int(np.argmax(correlation))
+
+
+def _refuse_a_gap_over_a_cycle(missing: np.ndarray, acc: np.ndarray, clock: dict, source: str) -> None:
+    """A one-line :class:`RecordError` when the longest gap of the stamps is as long as a bouncing cycle or longer:
+    nothing of that cycle was measured (gaps up to :data:`~smd_statespace.accelerometer.MAX_GAP` are otherwise
+    read across)."""
+    if not missing.any():
+        return
+    lag = _period_samples(acc if acc.ndim == 2 else acc[:, None], ~missing, clock["fs"])
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(np.int8), [0]])))
+    longest = int((edges[1::2] - edges[::2]).max())
+    if lag and longest >= lag:
+        raise RecordError(f"{source}: no samples for {clock['largest_gap']:.3g} s after t = "
+                          f"{clock['largest_gap_at']:.4g} s, as long as a bouncing cycle ({lag / clock['fs']:.3g} s) "
+                          "or longer: a whole cycle is missing; use the record on either side")
 
 
 def fill_gaps(acc, missing, fs: float) -> np.ndarray:
