@@ -72,8 +72,10 @@ class GenericTerm(Effect):
     Examples
     --------
     >>> effect = GenericTerm("abs_u", scale=0.012).with_values(c_abs_u=-0.2)
-    >>> effect.spec, effect.physics
-    ('term:kind=abs_u,scale=0.012,c_abs_u=-0.2', 'a spring stiffer on one side of its rest position (in compression or in extension)')
+    >>> effect.spec
+    'term:kind=abs_u,scale=0.012,c_abs_u=-0.2'
+    >>> effect.physics
+    'a spring stiffer on one side of its rest position (in compression or in extension)'
     """
 
     name = "term"

@@ -39,7 +39,8 @@ def generic_library(result, kinds=None) -> list:
     record of the fitted ``result``: the RMS compression and rate its person predicts, and its fitted span's
     start and length."""
     path = result.predicted_path()
-    scales = {"restoring": float(np.sqrt(np.mean(path[:, 0] ** 2))), "damping": float(np.sqrt(np.mean(path[:, 1] ** 2)))}
+    rms = np.sqrt(np.mean(path[:, :2] ** 2, axis=0))
+    scales = {"restoring": float(rms[0]), "damping": float(rms[1])}
     time = result.model.time
     length, start = float(time[-1] - time[0]), float(time[0])
     out = []
