@@ -74,8 +74,9 @@ def accelerometer_record(path, mass=None, units: str = "auto", fs=None):
     raw = read_accelerometer(path, units=units)
     time, acc, clock = resample_uniform(raw.time, raw.acc, fs=fs, source=raw.source)
     missing = unmeasured(raw.time, time, clock["fs_nominal"])
-    _refuse_a_gap_over_a_cycle(missing, acc, clock, raw.source)
-    acc = fill_gaps(acc, missing, clock["fs"])
+    lag = _period_samples(acc, ~missing, clock["fs"]) if missing.any() else 0
+    _refuse_a_gap_over_a_cycle(missing, lag, clock, raw.source)
+    acc = fill_gaps(acc, missing, clock["fs"], lag=lag)
     a_v, geometry = vertical_acceleration(time, acc, source=raw.source, measured=~missing)
     record = make_record(time - time[0], body * (G + a_v), body, source=raw.source)
     gravity_t = gravity_track(acc, clock["fs"])
@@ -105,7 +106,7 @@ def _period_samples(acc: np.ndarray, measured: np.ndarray, fs: float) -> int:
     pairs at each lag, so the gaps do not bias it)."""
     from ..signals import SUPPORTED_FB  # here: signals imports pandas and scipy (not needed to read)
 
-    magnitude = np.linalg.norm(acc, axis=1)
+    magnitude = np.linalg.norm(acc.reshape(acc.shape[0], -1), axis=1)
     centred = np.where(measured, magnitude - magnitude[measured].mean(), 0.0)
     n = centred.size
     products = np.fft.irfft(np.abs(np.fft.rfft(centred, 2 * n)) ** 2)[:n]
@@ -117,22 +118,26 @@ def _period_samples(acc: np.ndarray, measured: np.ndarray, fs: float) -> int:
     return shortest + int(np.argmax(correlation))
 
 
-def _refuse_a_gap_over_a_cycle(missing: np.ndarray, acc: np.ndarray, clock: dict, source: str) -> None:
-    """A one-line :class:`RecordError` when the longest gap of the stamps is as long as a bouncing cycle or longer:
-    nothing of that cycle was measured (gaps up to :data:`~smd_statespace.accelerometer.MAX_GAP` are otherwise
-    read across)."""
-    if not missing.any():
-        return
-    lag = _period_samples(acc if acc.ndim == 2 else acc[:, None], ~missing, clock["fs"])
+def _gaps(missing: np.ndarray) -> tuple:
+    """``(starts, stops)``: the sample ranges of the runs of ``missing``."""
     edges = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(np.int8), [0]])))
-    longest = int((edges[1::2] - edges[::2]).max())
-    if lag and longest >= lag:
+    return edges[::2], edges[1::2]
+
+
+def _refuse_a_gap_over_a_cycle(missing: np.ndarray, lag: int, clock: dict, source: str) -> None:
+    """A one-line :class:`RecordError` when the longest gap of the stamps is as long as a bouncing cycle (``lag``
+    samples, 0: unknown) or longer: nothing of that cycle was measured (gaps up to
+    :data:`~smd_statespace.accelerometer.MAX_GAP` are otherwise read across)."""
+    if not missing.any() or not lag:
+        return
+    starts, stops = _gaps(missing)
+    if int((stops - starts).max()) >= lag:
         raise RecordError(f"{source}: no samples for {clock['largest_gap']:.3g} s after t = "
                           f"{clock['largest_gap_at']:.4g} s, as long as a bouncing cycle ({lag / clock['fs']:.3g} s) "
                           "or longer: a whole cycle is missing; use the record on either side")
 
 
-def fill_gaps(acc, missing, fs: float) -> np.ndarray:
+def fill_gaps(acc, missing, fs: float, lag=None) -> np.ndarray:
     """``acc`` (m/s^2, shape (T, k)) with the samples inside the stamps' gaps (``missing``) taken one bouncing
     period earlier (later at the record's start), shifted to meet the measured samples at both ends.
 
@@ -141,18 +146,18 @@ def fill_gaps(acc, missing, fs: float) -> np.ndarray:
     a straight line across the gap, which is up to 5 m/s^2 off a bouncing signal and which an ideal low-pass
     spreads over the measured samples around it. On a phone with every artefact of ``benchmarks/phone_phenomena.py``
     (four gaps of up to 0.25 s among them; seed 4460) the line took ``smooth`` and ``f_h`` +56 to +82 % off on six
-    of eight people checked, the fill +0.4 to +8.7 % (``independent``)."""
+    of eight people checked, the fill +0.4 to +8.7 % (``independent``). ``lag``: the period in samples when
+    already found (default: found here from the measured samples)."""
     acc = np.array(acc, dtype=float)
     missing = np.asarray(missing, dtype=bool)
     if not missing.any() or missing.all():
         return acc
     values = acc if acc.ndim == 2 else acc[:, None]
-    lag = _period_samples(values, ~missing, fs)
+    lag = _period_samples(values, ~missing, fs) if lag is None else int(lag)
     if lag == 0:
         return acc
     n = values.shape[0]
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(np.int8), [0]])))
-    for start, stop in zip(edges[::2], edges[1::2]):  # a few gaps per record, each filled at once
+    for start, stop in zip(*_gaps(missing)):  # a few gaps per record, each filled at once
         inside = np.arange(start, stop)
         source = inside - lag if start - lag >= 0 else inside + lag
         source = np.clip(source, 0, n - 1)

@@ -86,7 +86,7 @@ import numpy as np
 from .model import RecordModel
 from .sensitivity import sensitivity_pass
 
-__all__ = ["DYNAMICS_STEP", "score", "system_derivatives", "sensitivity_pass"]
+__all__ = ["DYNAMICS_STEP", "cycle_sums", "profile_out", "score", "system_derivatives", "sensitivity_pass"]
 
 DYNAMICS_STEP = 1e-6
 """Relative step of the central differences of :meth:`RecordModel.system` in ``f_h``, ``xi_h`` and the effects'
@@ -428,3 +428,31 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
             "profile_information": 0.5 * (profile + profile.T),
             "innovations": v, "variances": variance, "d_innovations": dv, "d_log_variances": relative,
             "delta": delta, "sigma2": sigma2}
+
+
+def cycle_sums(model: RecordModel, per_sample) -> np.ndarray:
+    """Sums of per-sample scores ``per_sample`` (shape (N, ...)) over each force cycle of ``model``: the clusters
+    of the cycle-robust statistics (the sandwich of :mod:`~smd_statespace.person.search`, the robust score test of
+    :mod:`~smd_statespace.person.screen`), shape (J, ...)."""
+    per_sample = np.asarray(per_sample, dtype=float)
+    cycle = model._phase[0]
+    out = np.zeros((cycle.max() + 1,) + per_sample.shape[1:])
+    np.add.at(out, cycle, per_sample)
+    return out
+
+
+def profile_out(info, scores, keep, nuisance, floor: float) -> tuple:
+    """Effective information and scores of the parameters ``keep`` with those in ``nuisance`` profiled out.
+
+    ``I* = I_kk - I_kn I_nn^-1 I_nk`` and ``s* = s_k - I_kn I_nn^-1 s_n`` (``scores``: rows of per-sample or
+    per-cycle scores, columns as ``info``'s), the inverse of ``I_nn`` with its eigenvalues floored at ``floor``
+    times the largest. Returns ``(I*, s*)``.
+    """
+    keep, nuisance = list(keep), list(nuisance)
+    if not nuisance:
+        return info[np.ix_(keep, keep)], scores[:, keep]
+    w, v = np.linalg.eigh(info[np.ix_(nuisance, nuisance)])
+    w = np.maximum(w, w.max() * floor)
+    coupling = info[np.ix_(keep, nuisance)] @ ((v / w) @ v.T)
+    return (info[np.ix_(keep, keep)] - coupling @ info[np.ix_(nuisance, keep)],
+            scores[:, keep] - scores[:, nuisance] @ coupling.T)

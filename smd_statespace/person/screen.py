@@ -29,7 +29,7 @@ from scipy import stats
 
 from ..effects.generic import TERMS, GenericTerm
 from .extend import effect_model
-from .score import score
+from .score import cycle_sums, profile_out, score
 
 __all__ = ["generic_library", "score_test", "screen", "holm"]
 
@@ -72,17 +72,10 @@ def score_test(result, effect) -> dict:
     params[j] = 0.0
     out = score(model, params)
     free = [i for i in range(params.size) if i != j and not model.at_bound(params, i)]
-    info = out["profile_information"]
-    nuisance = info[np.ix_(free, free)]
-    w, v = np.linalg.eigh(nuisance)
-    w = np.maximum(w, w.max() * 1e-10)
-    coupling = info[j, free] @ ((v / w) @ v.T)  # I_jt I_tt^-1
-    efficient_info = float(info[j, j] - coupling @ info[free, j])
+    info, scores = profile_out(out["profile_information"], out["efficient_per_sample"], [j], free, 1e-10)
+    efficient_info, scores = float(info[0, 0]), scores[:, 0]
     gradient = float(out["gradient"][j])
-    scores = out["efficient_per_sample"][:, j] - out["efficient_per_sample"][:, free] @ coupling
-    cycle = model._phase[0]
-    per_cycle = np.zeros(cycle.max() + 1)
-    np.add.at(per_cycle, cycle, scores)
+    per_cycle = cycle_sums(model, scores)
     lm = gradient**2 / efficient_info if efficient_info > 0 else float("nan")
     spread = float(per_cycle @ per_cycle)
     lm_robust = float(scores.sum()) ** 2 / spread if spread > 0 else float("nan")

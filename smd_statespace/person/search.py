@@ -326,16 +326,10 @@ def _robust_core(model, params, index, info):
     scores ``s* = s_f - I_fn I_nn^-1 s_n`` summed per force cycle;
     ``cov = I*^-1 (sum_j s*_j s*_j') I*^-1``.
     """
+    from .score import profile_out
+
     per_cycle = _cluster_scores(model, params, index)
-    if index.size > 2:
-        nuisance = info[2:, 2:]
-        w, v = np.linalg.eigh(nuisance)
-        w = np.maximum(w, w.max() * 1e-8)
-        coupling = info[:2, 2:] @ ((v / w) @ v.T)
-        effective_info = info[:2, :2] - coupling @ info[2:, :2]
-        effective_scores = per_cycle[:, :2] - per_cycle[:, 2:] @ coupling.T
-    else:
-        effective_info, effective_scores = info[:2, :2], per_cycle
+    effective_info, effective_scores = profile_out(info, per_cycle, range(2), range(2, index.size), 1e-8)
     bread = np.linalg.inv(effective_info)
     return bread @ (effective_scores.T @ effective_scores) @ bread
 
@@ -343,13 +337,9 @@ def _robust_core(model, params, index, info):
 def _cluster_scores(model, params, index):
     """Per-cycle sums of the exact efficient scores (:func:`score.score`: ``delta`` and ``sigma^2`` profiled
     out), shape (J, len(index))."""
-    from .score import score
+    from .score import cycle_sums, score
 
-    scores = score(model, params)["efficient_per_sample"][:, index]
-    cycle = model._phase[0]
-    per_cycle = np.zeros((cycle.max() + 1, index.size))
-    np.add.at(per_cycle, cycle, scores)
-    return per_cycle
+    return cycle_sums(model, score(model, params)["efficient_per_sample"][:, index])
 
 
 def profile_interval(model: RecordModel, params, loglike, which, se, level=0.9):
