@@ -121,9 +121,9 @@ def run_person_diagnose(args) -> int:
         print(f"\ngeneric terms, each score-tested at the fitted person (no fit; the {SCREENED} most significant "
               "over the library, Holm, are fitted above):")
         shown = result.screened.head(5)
-        for spec, row in shown.iterrows():
-            name = spec.split(",")[0].replace("kind=", "")
-            print(f"  {name:<15} robust LM {row['lm_robust']:7.1f}  Holm p {row['p_holm']:.2g}  {row['physics']}")
+        for _, row in shown.iterrows():
+            print(f"  {row['label']:<15} robust LM {row['lm_robust']:7.1f}  Holm p {row['p_holm']:.2g}  "
+                  f"{row['physics']}")
     tests = result.tests or len(result.rows) + len(result.failed)
     level = args.alpha / max(tests, 1)
     if result.adequate:

@@ -37,7 +37,7 @@ from ..errors import OptionError
 from ..model.core import F_H, TWO_PI, U, U_DOT, XI_H, Slot
 from ..model.effect import Effect
 
-__all__ = ["TERMS", "GenericTerm"]
+__all__ = ["TERMS", "GenericTerm", "label"]
 
 TERMS = {
     "abs_u": ("restoring", "a spring stiffer on one side of its rest position (in compression or in extension)"),
@@ -129,3 +129,9 @@ class GenericTerm(Effect):
 
     def __repr__(self):
         return f"GenericTerm(kind={self.kind!r}, scale={self.scale:g}, start={self.start:g})"
+
+
+def label(effect) -> str:
+    """How tables and figures name an effect: its registry name, with the kind for a generic term
+    (``term:abs_u``)."""
+    return f"{effect.name}:{effect.kind}" if isinstance(effect, GenericTerm) else effect.name

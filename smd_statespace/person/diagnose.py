@@ -60,7 +60,7 @@ from scipy import stats
 from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
-from ..effects.generic import TERMS, GenericTerm
+from ..effects.generic import TERMS, label
 from .extend import configured_for_record, fit_effects
 from .screen import generic_library, screen
 from .validation import cross_validated_loglike
@@ -78,11 +78,6 @@ ZERO_Z = 2.0
 LESS_WHITE = 0.1
 """A candidate with which the innovations' Ljung-Box p falls below this fraction of its value without it is not
 proposed (less white: it does not take what the model misses; the fraction leaves the p-values' own noise)."""
-
-
-def label(effect) -> str:
-    """How the table names a candidate: its registry name, with the kind for a generic term (``term:abs_u``)."""
-    return f"{effect.name}:{effect.kind}" if isinstance(effect, GenericTerm) else effect.name
 
 
 def candidate_row(base, fitted, level: float) -> dict:

@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..effects.generic import TERMS, GenericTerm
+from ..effects.generic import TERMS, GenericTerm, label
 from .extend import effect_model
 from .score import cycle_sums, profile_out, score
 
@@ -105,7 +105,8 @@ def screen(result, effects=None) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Indexed by the effect's spec: ``physics`` (its physical name, where it has one), ``parameter``,
+        Indexed by the effect's spec: ``label`` (``term:abs_u``), ``physics`` (its physical name, where it has
+        one), ``parameter``,
         ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` and ``p_holm`` (the robust p-values adjusted
         over the library by :func:`holm`), sorted by ``p_robust``.
     """
@@ -113,7 +114,8 @@ def screen(result, effects=None) -> pd.DataFrame:
     rows = []
     for effect in effects:
         row = score_test(result, effect)
-        rows.append({"effect": effect.spec, "physics": getattr(effect, "physics", effect.name), **row})
+        rows.append({"effect": effect.spec, "label": label(effect), "physics": getattr(effect, "physics", effect.name),
+                     **row})
     table = pd.DataFrame(rows).set_index("effect")
     table["p_holm"] = holm(table["p_robust"].to_numpy())
     return table.sort_values("p_robust")

@@ -42,8 +42,9 @@ def _name(result) -> str:
 
 
 def _label(result) -> str:
-    names = [f"{e.name}:{e.kind}" if hasattr(e, "kind") else e.name for e in result.effects]  # a generic term's kind
-    return ("with " + ", ".join(names)) if names else "without effects"
+    from ..effects.generic import label
+
+    return ("with " + ", ".join(label(e) for e in result.effects)) if result.effects else "without effects"
 
 
 def _pairs(result) -> list:
@@ -267,7 +268,7 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     left, right = fig.subplots(1, 2, width_ratios=(1.15, 1))
     screened = diagnosis.screened
     if len(screened):
-        names = [spec.split(",")[0].replace("term:kind=", "") for spec in screened.index][::-1]
+        names = [name.replace("term:", "") for name in screened["label"]][::-1]
         values = screened["lm_robust"].to_numpy()[::-1]
         flagged = (screened["p_holm"] < diagnosis.alpha).to_numpy()[::-1]
         left.barh(names, values, color=np.where(flagged, "tab:blue", "0.6"))
