@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shlex
 
+import numpy as np
 import pandas as pd
 
 from ..diagnostics.check import INITIAL_STATES
@@ -95,7 +96,7 @@ def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..person import identify_person
     from ..person.diagnose import SCREENED, diagnose_person
-    from ..plotting.person import plot_candidates, plot_compare, plot_spectrum
+    from ..plotting.person import plot_candidates, plot_compare, plot_held_out, plot_spectrum
     from ..person.extend import check_effects
 
     added, candidates = _effects_and_candidates(args)  # a bad --effect or --candidate: one line, nothing read
@@ -113,16 +114,18 @@ def run_person_diagnose(args) -> int:
     if table.empty:
         print("  none could be fitted")
     else:
-        columns = list(SHARED_COLUMNS[:-1]) + ["noise_change_%", "parameters"]
+        columns = list(SHARED_COLUMNS[:-1]) + ["noise_change_%", "held_out_before", "held_out",
+                                               "held_out_free_run_fit_before", "held_out_free_run_fit", "parameters"]
         with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 200,
                                "display.max_colwidth", 60):
             print(table[columns].to_string())
     if len(result.screened):
-        print(f"\ngeneric terms, each score-tested at the fitted person (no fit; the {SCREENED} most significant "
-              "over the library, Holm, are fitted above):")
+        print(f"\ngeneric terms, each score-tested at the fitted person; those significant over the library "
+              f"(Holm) ranked by a quick fit, the {SCREENED} first fitted above:")
         shown = result.screened.head(5)
         for _, row in shown.iterrows():
-            print(f"  {row['label']:<15} robust LM {row['lm_robust']:7.1f}  Holm p {row['p_holm']:.2g}  "
+            quick = f"quick LR {row['lr_quick']:7.1f}" if np.isfinite(row.get("lr_quick", np.nan)) else " " * 16
+            print(f"  {row['label']:<15} robust LM {row['lm_robust']:7.1f}  Holm p {row['p_holm']:<8.2g} {quick}  "
                   f"{row['physics']}")
     tests = result.tests or len(result.rows) + len(result.failed)
     level = args.alpha / max(tests, 1)
@@ -147,6 +150,10 @@ def run_person_diagnose(args) -> int:
         written += [directory / "person_spectrum.png", directory / "person_compare.png"]
         plot_spectrum(proposed, written[-2])
         plot_compare(proposed, written[-1])
+    validated = [name for name in result.table().index if name in result.validation]
+    if validated:  # the proposed one, else the best that was judged on held-out data
+        written.append(directory / "person_held_out.png")
+        plot_held_out(result, (result.missing or validated)[0], written[-1])
     if args.json:
         with open(args.json, "w", encoding="utf-8") as handle:
             json.dump(result.report(), handle, indent=2, default=float)

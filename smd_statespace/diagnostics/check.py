@@ -35,7 +35,7 @@ from ..io import G
 from .correlation import cross_correlation_table
 from .cycles import absorbable_bases, checked_series, cycle_harmonic, identified_runner, state_over_record
 from .effect_adapter import candidate, score_terms
-from .fit import fit_percent, rms
+from ..measures import fit_percent, rms
 from .free_simulation import path_sensitivity
 from .phase import phase_locked, phase_profile
 from .report import summary_text

@@ -66,7 +66,15 @@ from .screen import generic_library, screen
 from .validation import cross_validated_loglike
 
 __all__ = ["LESS_WHITE", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
-           "label", "indistinguishable_from_zero"]
+           "HELD_OUT", "label", "indistinguishable_from_zero"]
+
+HELD_OUT = ("held_out_before", "held_out", "held_out_one_step_fit_before", "held_out_one_step_fit",
+            "held_out_free_run_fit_before", "held_out_free_run_fit")
+"""A candidate row's held-out validation (:func:`held_out`): the held-out log-likelihood and the one-step and
+free-run fits (%) on the held-out halves, without and with it; NaN when not validated."""
+
+FREE_RUN_POINTS = 0.05
+"""A held-out free run's fit lower by more than this many points with a candidate is told in a note."""
 
 SCREENED = 2
 """How many generic terms (:mod:`~smd_statespace.person.screen`) whose score test is significant over the library
@@ -112,22 +120,25 @@ def candidate_row(base, fitted, level: float) -> dict:
     row["less_white"] = bool(after_tests["ljung_box_p"] < LESS_WHITE * before_tests["ljung_box_p"])
     row["significant"] = (bool(log_p < math.log(level)) and not row["on_bound"] and row["settled"] and lr > 0
                           and not row["zero"] and not row["less_white"])
-    row.update(held_out_before=math.nan, held_out=math.nan, held_out_worse=False)
+    row.update({key: math.nan for key in HELD_OUT}, held_out_worse=False)
     return row
 
 
-def held_out(row: dict, base_loglike, fitted) -> dict:
-    """``row`` with its held-out log-likelihoods (without, with the candidate) and whether it predicts worse.
+def held_out(row: dict, before, after) -> dict:
+    """``row`` with the held-out validation without and with the candidate, and whether it predicts worse.
 
-    ``base_loglike``: :func:`~smd_statespace.person.validation.cross_validated_loglike` of the person
-    without the candidate (None when the record cannot be halved: nothing is judged). A candidate that
-    predicts the held-out halves worse than the person without it is not significant.
+    ``before``, ``after``: :func:`~smd_statespace.person.validation.cross_validated_loglike` of the person
+    without and with the candidate (None when the record cannot be halved or a half does not converge:
+    nothing is judged). A candidate whose one-step prediction of the held-out halves is less likely than
+    the person's without it is not significant; the free run's fit on them is shown, not judged (a
+    harmonic whose phase varies from cycle to cycle is in the person and still lowers a template's free run).
     """
-    with_it = cross_validated_loglike(fitted.model, fitted.params) if base_loglike is not None else None
-    if with_it is None:
+    if before is None or after is None:
         return row
-    worse = bool(with_it["loglike"] < base_loglike["loglike"])
-    return {**row, "held_out_before": base_loglike["loglike"], "held_out": with_it["loglike"],
+    worse = bool(after["loglike"] < before["loglike"])
+    return {**row, "held_out_before": before["loglike"], "held_out": after["loglike"],
+            "held_out_one_step_fit_before": before["one_step_fit"], "held_out_one_step_fit": after["one_step_fit"],
+            "held_out_free_run_fit_before": before["free_run_fit"], "held_out_free_run_fit": after["free_run_fit"],
             "held_out_worse": worse, "significant": row["significant"] and not worse}
 
 
@@ -173,6 +184,9 @@ class PersonDiagnosis:
         were given.
     tests : int
         How many tests the Bonferroni level counts: the candidates fitted and every generic term screened.
+    validation : dict
+        Held-out validation (:func:`~smd_statespace.person.validation.cross_validated_loglike`) of the person
+        without any candidate (``"without"``) and with each candidate that passed its test (by name).
     """
 
     base: object
@@ -183,13 +197,18 @@ class PersonDiagnosis:
     joint: dict = field(default_factory=dict)
     screened: pd.DataFrame = field(default_factory=pd.DataFrame)
     tests: int = 0
+    validation: dict = field(default_factory=dict)
 
     def table(self) -> pd.DataFrame:
         """The candidates, most significant first (by the log p-value of the likelihood ratio)."""
         if not self.rows:
             return pd.DataFrame()
         table = pd.DataFrame(self.rows).set_index("effect")
-        order = list(table.sort_values(["significant", "log_p"], ascending=[False, True]).index)
+        # the significant ones by how well they predict the held-out halves, the others by their test
+        gain = np.where(table["significant"], table["held_out"] - table["held_out_before"], np.nan)
+        table = table.assign(_gain=np.nan_to_num(gain, nan=-np.inf))
+        order = list(table.sort_values(["significant", "_gain", "log_p"], ascending=[False, False, True]).index)
+        table = table.drop(columns="_gain")
         if self.joint.get("first") in order:  # the joint fit decided between the two best
             order.remove(self.joint["first"])
             order.insert(0, self.joint["first"])
@@ -248,6 +267,7 @@ class PersonDiagnosis:
             if approximate:
                 out.append(f"{', '.join(approximate)}: nonlinear, so its likelihood is approximate (linearised about "
                            "the one-step predicted path until it settles: an extended Kalman filter)")
+        out += self._held_out_notes(table)
         for name, why in self.failed.items():
             out.append(f"{name}: not fitted ({why})")
         if self.joint:
@@ -256,6 +276,26 @@ class PersonDiagnosis:
                        f"{self.joint[first]['lr']:.1f} (p {self.joint[first]['p_value']:.2g}) on top of {second}, "
                        f"and {second} adds LR {self.joint[second]['lr']:.1f} (p {self.joint[second]['p_value']:.2g}) "
                        f"on top of {first}: {self.joint['verdict']}")
+        return out
+
+    @staticmethod
+    def _held_out_notes(table) -> list:
+        """Notes on the held-out validation: the person with each candidate that passed, and a worse free run."""
+        if table.empty:
+            return []
+        out = []
+        significant = table[table["significant"].astype(bool)]
+        if len(significant) >= 2:
+            out.append("candidates that pass, by how well they predict the held-out halves (held-out "
+                       "log-likelihood gain; f_h, xi_h with each): " + "; ".join(
+                           f"{name} {row['held_out'] - row['held_out_before']:+.1f} (f_h {row['f_h']:.3f} Hz, "
+                           f"xi_h {row['xi_h']:.3f})" for name, row in significant.iterrows()))
+        for name, row in significant.iterrows():
+            if row["held_out_free_run_fit"] < row["held_out_free_run_fit_before"] - FREE_RUN_POINTS:
+                out.append(f"{name}: it predicts the held-out halves one step ahead better, but their free run "
+                           f"(the template in every cycle) fits {row['held_out_free_run_fit_before']:.1f} -> "
+                           f"{row['held_out_free_run_fit']:.1f} %: what it adds varies from cycle to cycle (a "
+                           "harmonic's phase), which a free run cannot follow")
         return out
 
     def report(self) -> dict:
@@ -284,9 +324,11 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
         out["first"] = keeps[0]
         out["verdict"] = f"only {keeps[0]} still adds to the other, so it is ranked first"
     elif keeps:
-        out["verdict"] = "each adds to the other: both may be present (identify with both)"
+        out["verdict"] = ("each adds to the other: both may be present (identify with both); the one that predicts "
+                          "the held-out halves better is ranked first")
     else:
-        out["verdict"] = "neither adds to the other: the record cannot tell them apart"
+        out["verdict"] = ("neither adds to the other: the likelihood cannot tell them apart, so the one that "
+                          "predicts the held-out halves better is ranked first")
     return out
 
 
@@ -335,7 +377,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
             label(effect) for effect in effects}])
         tests += len(terms)  # Bonferroni counts every term screened, fitted or not
         try:
-            screened = screen(result, terms)
+            screened = screen(result, terms, alpha=alpha)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed["generic terms (score tests)"] = " ".join(str(exc).split())
         else:
@@ -352,12 +394,15 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
             continue
         fits[label(effect)] = fitted
         rows.append({**candidate_row(result, fitted, level), "seconds": time.perf_counter() - started})
-    passed = [i for i, row in enumerate(rows) if row["significant"]]
-    base_loglike = cross_validated_loglike(result.model, result.params) if passed else None
-    for i in passed:  # the held-out check only where the test is passed (one half-fit pair each)
-        rows[i] = held_out(rows[i], base_loglike, fits[rows[i]["effect"]])
+    validation = {}
+    for i in [i for i, row in enumerate(rows) if row["significant"]]:  # the held-out check where the test passed
+        name = rows[i]["effect"]
+        if "without" not in validation:
+            validation["without"] = cross_validated_loglike(result.model, result.params)
+        validation[name] = cross_validated_loglike(fits[name].model, fits[name].params)
+        rows[i] = held_out(rows[i], validation["without"], validation[name])
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha, screened=screened,
-                                tests=tests)
+                                tests=tests, validation=validation)
     significant = diagnosis.missing
     if len(significant) >= 2:
         try:
@@ -374,7 +419,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
         else:
             index = next(i for i, row in enumerate(rows) if row["effect"] == name)
             fits[name] = fitted
-            screened = {key: rows[index][key] for key in ("held_out_before", "held_out", "held_out_worse")}
+            screened = {key: rows[index][key] for key in HELD_OUT + ("held_out_worse",)}
             rows[index] = {**candidate_row(result, fitted, level), **screened,
                            "seconds": rows[index]["seconds"] + time.perf_counter() - started}
     return diagnosis

@@ -27,7 +27,8 @@ How an effect enters:
 - nonlinear (a cubic spring, quadratic damping, asymmetric stiffness, any
   user's effect): linearised about the one-step predicted path of the
   previous fit (:func:`~smd_statespace.person.statespace.nominal_path`) and fitted again about the new path
-  until the log-likelihood changes by less than :data:`NOMINAL_TOLERANCE` (at
+  until the log-likelihood changes by less than :data:`NOMINAL_TOLERANCE`, or by less than
+  :data:`NOMINAL_RELATIVE` of its gain over the fit without the effects (at
   most :data:`NOMINAL_ITERATIONS` times): at the fixed point, an extended
   Kalman filter inside the likelihood. Its likelihood is then approximate,
   and the result says so.
@@ -48,7 +49,7 @@ from .effect_adapter import record_default, record_harmonics, record_starts
 from .model import RecordModel
 from .search import WIDER_SANDWICH
 
-__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "check_effects", "record_effects", "configured_for_record",
+__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects", "configured_for_record",
            "split_effects", "record_signals", "effect_model", "fit_effects"]
 
 NOMINAL_ITERATIONS = 6
@@ -56,6 +57,12 @@ NOMINAL_ITERATIONS = 6
 
 NOMINAL_TOLERANCE = 0.05
 """Change of the log-likelihood between two linearisations below which the path has settled."""
+
+NOMINAL_RELATIVE = 1e-3
+"""Or a change below this fraction of the log-likelihood's gain over the fit without the effects: a path that
+moves the likelihood by 0.2 of a gain of 510 (a spring stiffer on one side, its likelihood ratio 1021 steady to
+0.05 %) has settled for the test; a runaway that keeps rising (a cubic spring on a clean record, by units per
+linearisation) has not."""
 
 
 def check_effects(effects, record) -> tuple:
@@ -273,14 +280,14 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
     model = effect_model(root, effects, path=result)
     fitted = max((fit_model(model, start, quick=model.approximate) for start in _starts(model, result, root, added)),
                  key=lambda fit: fit["loglike"])
-    model, fitted, linearisations, settled = _settle_path(model, fitted, progress)
+    model, fitted, linearisations, settled = _settle_path(model, fitted, result.loglike, progress)
     # the test is made here, at result's starts and variation model: its statistic and its count of added unknowns
     comparison, tested = result.comparison, fitted["loglike"]
     tested_df = model.unknowns(fitted["params"]) - result.model.unknowns(result.params)
     if timing and any(row.get("timing") == "re-placed" for row in result.comparison):
         model, fitted, comparison = _with_own_timing(model, fitted, result, effects, progress)
         if model.approximate:  # the starts moved: the path is predicted again about them
-            model, fitted, more, settled = _settle_path(model, fitted, progress)
+            model, fitted, more, settled = _settle_path(model, fitted, result.loglike, progress)
             linearisations += more
     if not fitted["converged"]:
         raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
@@ -300,8 +307,10 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
                          prepared=root.prepared)
 
 
-def _settle_path(model: RecordModel, fitted, progress=False) -> tuple:
+def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -> tuple:
     """A nonlinear effect's model linearised again about each new fit's predicted path until it settles.
+
+    ``reference``: the log-likelihood of the fit without the effects (:data:`NOMINAL_RELATIVE`).
 
     Returns ``(model, fitted, linearisations, settled)``; a linear model comes back as it is (0, True).
     """
@@ -316,7 +325,8 @@ def _settle_path(model: RecordModel, fitted, progress=False) -> tuple:
             moved = replace(model, nominal=nominal_path(model, fitted["params"]))
             again = fit_model(moved, fitted["params"], quick=True)
             bar.update()
-            settled = abs(again["loglike"] - fitted["loglike"]) < NOMINAL_TOLERANCE
+            tolerance = max(NOMINAL_TOLERANCE, NOMINAL_RELATIVE * abs(again["loglike"] - reference))
+            settled = abs(again["loglike"] - fitted["loglike"]) < tolerance
             model, fitted = moved, again
             if settled:
                 break

@@ -518,3 +518,44 @@ class RecordModel:
         raw = fitted["innovations_raw"] - fitted["innovation_regression"] @ fitted["delta"]
         standard = raw / np.sqrt(fitted["innovation_variance_unscaled"] * fitted["sigma2"])
         return standard, raw
+
+    def free_run(self, params, delta) -> np.ndarray:
+        """The output ``GRF / M_h - g`` (m/s^2) simulated freely over the record, without the measurement.
+
+        The force is the template of ``delta`` in every cycle (the cycles' own variation is what the model
+        leaves to chance), on the model's cycle timing; the dynamics start from ``delta``'s initial state and
+        are never corrected by the measurement (MATLAB's ``sim``/``compare``). A nonlinear effect runs
+        linearised about its fitted path.
+
+        Parameters
+        ----------
+        params : ndarray
+            The searched parameters.
+        delta : ndarray, shape (q,) or (q, m)
+            Linear unknowns ``[initial state, template, regressor coefficients]`` (``delta_names``); with
+            ``m`` columns, ``m`` runs at once.
+
+        Returns
+        -------
+        ndarray, shape (T,) or (T, m)
+        """
+        delta = np.asarray(delta, dtype=float)
+        columns = delta.reshape(delta.shape[0], -1)
+        system = self.system(params)
+        nx, p, n = self.n_dynamic, self.n_coefficients, self.y.size
+        force = np.zeros((system.H.shape[1], columns.shape[1]))
+        force[:p] = columns[nx:nx + p]  # the template; phase errors 0
+        beta = columns[nx + p:]
+        phi = np.broadcast_to(system.Phi, (n, nx, nx))
+        drive = np.einsum("kij,jm->kim", system.Gam, force) + system.offset[:, :, None]
+        if beta.size:
+            drive = drive + np.einsum("kir,rm->kim", system.X_tr, beta)
+        states = np.empty((n, nx, columns.shape[1]))
+        states[0] = columns[:nx]
+        for k in range(1, n):
+            states[k] = phi[k - 1] @ states[k - 1] + drive[k - 1]
+        out = (np.einsum("ki,kim->km", np.broadcast_to(system.hx, (n, nx)), states)
+               + system.H @ force + system.y_known[:, None])
+        if beta.size:
+            out = out + system.X_obs @ beta
+        return out.reshape((n,) + delta.shape[1:])

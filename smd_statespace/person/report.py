@@ -221,7 +221,7 @@ def summary_text(result, verbose=False) -> str:
         lines[0] = lines[0][:-1] + f" with {', '.join(e.spec for e in result.effects)}:"
         for name, row in result.effect_estimates().iterrows():
             lines.append(f"  {name} = {row['value']:.4g}{_unit(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
-                         f"interval {row['low']:.4g}-{row['high']:.4g})")
+                         f"interval {row['low']:.4g} to {row['high']:.4g})")
         before, test = d["before"], result.effect_test()
         p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
         moved = result.tested_loglike not in (None, result.loglike)

@@ -10,7 +10,9 @@ record's estimate) and scores the *other* half with the one-step prediction dens
 half's parameters, force template and noise scale (two folds, summed). Only what is the other half's
 own is estimated there: the initial state (the person's motion when the half begins) and the
 measurement's offset and zero drift (the plate's). An effect that helps only where it was fitted
-lowers the held-out log-likelihood.
+lowers the held-out log-likelihood. The held-out half is also simulated freely
+(:func:`held_out_free_run`: the template in every cycle, never corrected by the measurement), and both
+predictions are scored by MATLAB's fit % (``compare`` on validation data).
 
 The halves are the ones :func:`~smd_statespace.person.change.change_test` compares
 (:func:`part`: the same options, the cycle timing and regressors cut with the samples; a nonlinear
@@ -23,11 +25,13 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..measures import fit_percent
 from .dynamics import PersonDynamics
 from .search import fit_model
 from .timing import CycleTiming
 
-__all__ = ["MIN_HALF_CYCLES", "halves", "part", "held_out_loglike", "cross_validated_loglike"]
+__all__ = ["MIN_HALF_CYCLES", "halves", "part", "held_out_prediction", "held_out_loglike", "held_out_free_run",
+           "cross_validated_loglike"]
 
 MIN_HALF_CYCLES = 8
 """Fewest whole force cycles in each half (the record-level model needs as many to estimate the variation)."""
@@ -65,8 +69,14 @@ def part(model, keep, kept):
                    dynamics=dynamics, nominal=nominal, observed=model.observed[keep])
 
 
-def held_out_loglike(model, params, delta, sigma2) -> float:
-    """Log-likelihood of ``model``'s record (a held-out part) at parameters fitted elsewhere.
+def _own(model, size: int) -> np.ndarray:
+    """Indices of the linear unknowns that are a held-out part's own: its initial state and regressor coefficients."""
+    n_x, p = model.n_dynamic, model.n_coefficients
+    return np.setdiff1d(np.r_[np.arange(n_x), np.arange(n_x + p, size)], model.held_delta).astype(int)
+
+
+def held_out_prediction(model, params, delta, sigma2) -> dict:
+    """One-step prediction of ``model``'s record (a held-out part) at parameters fitted elsewhere.
 
     Parameters
     ----------
@@ -83,30 +93,54 @@ def held_out_loglike(model, params, delta, sigma2) -> float:
 
     Returns
     -------
-    float
-        The sum of the one-step prediction log-densities over the held-out samples (-inf when the
-        pass breaks down at these parameters).
+    dict
+        ``loglike``: the sum of the one-step prediction log-densities over the held-out samples (-inf
+        when the pass breaks down at these parameters); ``one_step``: the one-step predicted output
+        (m/s^2, NaN when it breaks down).
     """
     out = model.filter(params)
     raw, regression = out["innovations_raw"], out["innovation_regression"]
     variance = out["innovation_variance_unscaled"]
     if not (np.all(np.isfinite(raw)) and np.all(np.isfinite(variance))):
-        return -np.inf
-    n_x, p = model.n_dynamic, model.n_coefficients
-    own = np.r_[np.arange(n_x), np.arange(n_x + p, len(delta))]
-    own = np.setdiff1d(own, model.held_delta)
-    template = np.arange(n_x, n_x + p)
+        return {"loglike": -np.inf, "one_step": np.full(model.y.size, np.nan)}
+    own = _own(model, len(delta))
+    template = np.arange(model.n_dynamic, model.n_dynamic + model.n_coefficients)
     residual = raw - regression[:, template] @ np.asarray(delta)[template]
     weight = 1.0 / np.sqrt(variance)
     columns = regression[:, own] * weight[:, None]
     estimate, *_ = np.linalg.lstsq(columns, residual * weight, rcond=None)
     residual = residual - regression[:, own] @ estimate
     scaled = variance * sigma2
-    return float(-0.5 * np.sum((np.log(2.0 * np.pi * scaled) + residual**2 / scaled)[model.observed]))
+    loglike = float(-0.5 * np.sum((np.log(2.0 * np.pi * scaled) + residual**2 / scaled)[model.observed]))
+    return {"loglike": loglike, "one_step": model.y - residual}
+
+
+def held_out_loglike(model, params, delta, sigma2) -> float:
+    """The held-out log-likelihood of :func:`held_out_prediction` (its ``loglike``)."""
+    return held_out_prediction(model, params, delta, sigma2)["loglike"]
+
+
+def held_out_free_run(model, params, delta) -> np.ndarray:
+    """Free run of ``model``'s record (a held-out part) at parameters and template fitted elsewhere (m/s^2).
+
+    :meth:`~smd_statespace.person.model.RecordModel.free_run` with ``delta``'s template; the part's own
+    initial state and regressor coefficients are estimated by least squares on the run, as MATLAB's
+    ``compare`` estimates the initial condition of validation data.
+    """
+    own = _own(model, len(delta))
+    base = np.array(delta, dtype=float)
+    base[own] = 0.0
+    columns = np.repeat(base[:, None], 1 + own.size, axis=1)
+    columns[own, 1 + np.arange(own.size)] = 1.0
+    runs = model.free_run(params, columns)
+    response = runs[:, 1:] - runs[:, :1]  # the run is affine in the part's own unknowns
+    observed = model.observed
+    estimate, *_ = np.linalg.lstsq(response[observed], (model.y - runs[:, 0])[observed], rcond=None)
+    return runs[:, 0] + response @ estimate
 
 
 def cross_validated_loglike(model, params) -> dict | None:
-    """Two-fold held-out log-likelihood of ``model``: each half fitted, the other half scored.
+    """Two-fold held-out validation of ``model``: each half fitted, the other half predicted.
 
     Parameters
     ----------
@@ -118,21 +152,32 @@ def cross_validated_loglike(model, params) -> dict | None:
     Returns
     -------
     dict or None
-        ``loglike``: the sum over both folds; ``folds``: per fold the fitted half's ``start``,
-        ``end`` (s), its parameters and the held-out log-likelihood of the other half. None when the
-        record is too short to halve (:func:`halves`) or a half's fit does not converge.
+        ``loglike``: the held-out log-likelihood summed over both folds; ``one_step_fit`` and
+        ``free_run_fit``: :func:`~smd_statespace.measures.fit_percent` (%) of the one-step prediction
+        and of the free run over both held-out halves; ``time``, ``measured``, ``one_step``,
+        ``free_run``: those over the record, each half as predicted from the other (arrays, s and
+        m/s^2); ``cut``: where the second half begins (s); ``folds``: per fold the fitted half's
+        ``start``, ``end`` (s), its parameters and the held-out log-likelihood of the other half. None when the record is too short to halve
+        (:func:`halves`) or a half's fit does not converge.
     """
     cut = halves(model)
     if cut is None:
         return None
     parts = [part(model, keep, kept) for keep, kept in cut]
-    folds = []
-    for fitted_part, held_part in (parts, parts[::-1]):
+    folds, one_step, free = [], np.empty(model.y.size), np.empty(model.y.size)
+    for (fitted_part, held_part), (held, _) in zip((parts, parts[::-1]), cut[::-1]):
         fitted = fit_model(fitted_part, params, quick=True)
         if not fitted["converged"]:
             return None
         filtered = fitted_part.filter(fitted["params"])
-        score = held_out_loglike(held_part, fitted["params"], filtered["delta"], filtered["sigma2"])
+        predicted = held_out_prediction(held_part, fitted["params"], filtered["delta"], filtered["sigma2"])
+        one_step[held] = predicted["one_step"]
+        free[held] = held_out_free_run(held_part, fitted["params"], filtered["delta"])
         folds.append({"start": float(fitted_part.time[0]), "end": float(fitted_part.time[-1]),
-                      "params": fitted["params"], "held_out_loglike": score})
-    return {"loglike": float(sum(f["held_out_loglike"] for f in folds)), "folds": folds}
+                      "params": fitted["params"], "held_out_loglike": predicted["loglike"]})
+    observed = model.observed
+    return {"loglike": float(sum(f["held_out_loglike"] for f in folds)), "folds": folds,
+            "one_step_fit": fit_percent(model.y[observed], one_step[observed]),
+            "free_run_fit": fit_percent(model.y[observed], free[observed]),
+            "time": model.time, "measured": model.y, "one_step": one_step, "free_run": free,
+            "cut": float(model.time[cut[1][0]][0])}

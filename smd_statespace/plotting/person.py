@@ -25,8 +25,10 @@ import numpy as np
 from matplotlib.figure import Figure
 from scipy import signal
 
-__all__ = ["free_run", "fit_percent", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
-           "plot_floor_correlation", "plot_candidates"]
+from ..measures import fit_percent
+
+__all__ = ["free_run", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
+           "plot_held_out", "plot_floor_correlation", "plot_candidates"]
 
 COLORS = {"without": "tab:red", "with": "tab:blue"}
 
@@ -57,38 +59,11 @@ def _pairs(result) -> list:
 def free_run(result) -> np.ndarray:
     """The COM acceleration ``GRF / M_h - g`` (m/s^2) the model gives when simulated freely over the record.
 
-    The force is the record's template in every cycle (the cycles' own
-    variation is what the model leaves to chance; a smoothed per-cycle force
-    would absorb the model's misfit too), on the model's cycle timing; the
-    dynamics start from the estimated initial state and run without any
-    correction by the measurement. For a nonlinear effect the run uses the
-    model linearised about its fitted path.
+    :meth:`~smd_statespace.person.model.RecordModel.free_run` at the fit: the record's template in every cycle
+    (the cycles' own variation is what the model leaves to chance; a smoothed per-cycle force would absorb the
+    model's misfit too), from the estimated initial state, without any correction by the measurement.
     """
-    model = result.model
-    system = model.system(result.params)
-    nx, p = model.n_dynamic, system.H.shape[1]
-    delta = result.filtered["delta"]
-    force = np.zeros((model.y.size, p))
-    force[:, :model.n_coefficients] = delta[nx:nx + model.n_coefficients]  # the template (phase errors 0)
-    beta = delta[nx + model.n_coefficients:]
-    n = model.y.size
-    phi = np.broadcast_to(system.Phi, (n, nx, nx))
-    hx = np.broadcast_to(system.hx, (n, nx))
-    drive = np.einsum("kij,kj->ki", system.Gam, force) + system.offset
-    if beta.size:
-        drive = drive + system.X_tr @ beta
-    states = np.empty((n, nx))
-    states[0] = delta[:nx]
-    for k in range(1, n):
-        states[k] = phi[k - 1] @ states[k - 1] + drive[k - 1]
-    out = np.einsum("ki,ki->k", hx, states) + np.einsum("kj,kj->k", system.H, force) + system.y_known
-    return out + (system.X_obs @ beta if beta.size else 0.0)
-
-
-def fit_percent(measured, predicted) -> float:
-    """MATLAB's ``compare`` fit: ``100 (1 - |y - y_hat| / |y - mean(y)|)`` (%)."""
-    measured = np.asarray(measured, dtype=float)
-    return float(100.0 * (1.0 - np.linalg.norm(measured - predicted) / np.linalg.norm(measured - measured.mean())))
+    return result.model.free_run(result.params, result.filtered["delta"])
 
 
 def plot_spectrum(result, path=None) -> Figure:
@@ -125,6 +100,38 @@ def _worst_window(time, residual, seconds) -> float:
     return float(time[int(np.argmax(energy))])
 
 
+def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None) -> Figure:
+    """Measured against simulated runs ``[(color key, label, run)]``: the residuals, the worst window, the middle.
+
+    ``one_step``: one-step predictions ``[(color key, label, prediction)]`` drawn as their errors in a first panel.
+    """
+    fig = Figure(figsize=(10.0, 7.5 if one_step is None else 9.6), layout="constrained")
+    axes = list(fig.subplots(3 if one_step is None else 4, 1))
+    panels = [(axes.pop(0), one_step, "one-step prediction error (m/s$^2$)")] if one_step is not None else []
+    panels.append((axes[0], runs, "measured - simulated (m/s$^2$)"))
+    for ax, series, ylabel in panels:
+        for key, label, predicted in series:
+            ax.plot(time, y - predicted, color=COLORS.get(key, "tab:blue"), lw=0.6, alpha=0.85,
+                    label=f"{label}: fit {fit_percent(y, predicted):.1f} %")
+        if cut is not None:
+            ax.axvline(cut, color="k", lw=1.0, ls="--", label="halves' boundary")
+        ax.set(xlabel="time (s)", ylabel=ylabel)
+        ax.legend(fontsize=8, loc="upper right")
+    panels[0][0].set_title(title, fontsize=10)
+    worst, middle = axes[1:]
+    starts = (_worst_window(time, y - runs[0][2], seconds), time[0] + 0.5 * (time[-1] - time[0]) - seconds / 2)
+    for ax, start, what in ((worst, starts[0], "free run, where the model without misses most"),
+                            (middle, starts[1], "free run, middle")):
+        shown = (time >= start) & (time <= start + seconds)
+        ax.plot(time[shown], y[shown], color="k", lw=1.4, label="measured")
+        for key, label, run in runs:
+            ax.plot(time[shown], run[shown], color=COLORS.get(key, "tab:blue"), lw=1.0, label=label)
+        ax.set(xlabel="time (s)", ylabel="GRF/M - g (m/s$^2$)")
+        ax.set_title(what, fontsize=9, loc="left")
+        ax.legend(fontsize=8, loc="upper right", ncol=3)
+    return fig
+
+
 def plot_compare(result, path=None, seconds: float = 3.0) -> Figure:
     """Measured against free-run simulated ``GRF / M_h - g``, with the fit % (MATLAB ``compare``).
 
@@ -135,27 +142,28 @@ def plot_compare(result, path=None, seconds: float = 3.0) -> Figure:
     with the effects. Below: the window of ``seconds`` where the model without
     the effects misses most, and the middle of the record.
     """
-    time, y = result.model.time, result.model.y
-    pairs = [(label, fitted, free_run(fitted)) for label, fitted in _pairs(result)]
-    fig = Figure(figsize=(10.0, 7.5), layout="constrained")
-    top, worst, middle = fig.subplots(3, 1)
-    for label, fitted, run in pairs:
-        top.plot(time, y - run, color=COLORS.get(label, "tab:blue"), lw=0.6, alpha=0.85,
-                 label=f"{_label(fitted)}: fit {fit_percent(y, run):.1f} %")
-    top.set(xlabel="time (s)", ylabel="measured - simulated (m/s$^2$)")
-    top.legend(fontsize=8, loc="upper right")
-    top.set_title(f"{_name(result)}: free-run simulation against the measurement", fontsize=10)
-    first = pairs[0]
-    starts = (_worst_window(time, y - first[2], seconds), time[0] + 0.5 * (time[-1] - time[0]) - seconds / 2)
-    for ax, start, what in ((worst, starts[0], "where the model misses most"), (middle, starts[1], "middle")):
-        shown = (time >= start) & (time <= start + seconds)
-        ax.plot(time[shown], y[shown], color="k", lw=1.4, label="measured")
-        for label, fitted, run in pairs:
-            ax.plot(time[shown], run[shown], color=COLORS.get(label, "tab:blue"), lw=1.0, label=_label(fitted))
-        ax.set(xlabel="time (s)", ylabel="GRF/M - g (m/s$^2$)")
-        ax.set_title(what, fontsize=9, loc="left")
-        ax.legend(fontsize=8, loc="upper right", ncol=3)
-    return _save(fig, path)
+    runs = [(key, _label(fitted), free_run(fitted)) for key, fitted in _pairs(result)]
+    title = f"{_name(result)}: free-run simulation against the measurement"
+    return _save(_compare_figure(result.model.time, result.model.y, runs, title, seconds), path)
+
+
+def plot_held_out(diagnosis, name, path=None, seconds: float = 3.0) -> Figure:
+    """The held-out free run without and with the candidate ``name`` (MATLAB ``compare`` on validation data).
+
+    Each half of the record is simulated by the person fitted on the other half
+    (:func:`~smd_statespace.person.validation.cross_validated_loglike`: its template in every cycle, the
+    half's own initial state estimated), so every sample drawn was held out of the fit that predicts it. First
+    panel: the one-step prediction errors, with the held-out log-likelihood (what ``diagnose`` judges by); then
+    the free run as :func:`plot_compare` draws it. Each legend gives the fit %.
+    """
+    before, after = diagnosis.validation["without"], diagnosis.validation[name]
+    pairs = (("without", "without", before), ("with", f"with {name}", after))
+    runs = [(key, label, check["free_run"]) for key, label, check in pairs]
+    one_step = [(key, f"{label} (held-out log-likelihood {check['loglike']:.1f})", check["one_step"])
+                for key, label, check in pairs]
+    title = f"{_name(diagnosis.base)}: each half predicted by the person fitted on the other half"
+    return _save(_compare_figure(before["time"], before["measured"], runs, title, seconds, cut=before["cut"],
+                                 one_step=one_step), path)
 
 
 def plot_floor_correlation(result, path=None, max_lag: float = 1.0) -> Figure:

@@ -1,4 +1,4 @@
-"""How well a prediction fits a measurement: normalised root-mean-square fit and RMS."""
+"""How well a prediction fits a measurement: normalised root-mean-square fit (MATLAB's ``compare``) and RMS."""
 
 from __future__ import annotations
 
