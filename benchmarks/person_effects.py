@@ -189,6 +189,8 @@ def one(task) -> dict:
         row["candidates"] = json.dumps({name: {"lr": round(float(r["lr"]), 3), "df": int(r["df"]),
                                                "p": float(r["p_value"]), "significant": bool(r["significant"])}
                                         for name, r in table.iterrows()} if not table.empty else {})
+        suggested = diagnosis.fits[top] if top else base  # what following diagnose's verdict gives
+        row.update(f_h_suggested=suggested.f_h, f_h_sd_suggested=float(suggested.se[0]))
         row.update(proposed=top or "", variation=base.model.variation, f_h_before=base.f_h, xi_h_before=base.xi_h,
                    ljung_box_before=base.test_pvalues()["ljung_box_p"], misfit_share_before=base.misfit_share,
                    f_h_determined_before=base.determined("f_h"),
@@ -220,8 +222,9 @@ def summary(frame: pd.DataFrame) -> list:
     lines = ["| hidden effect | size | generator | records (failed) | effect / noise | ranked first | "
              "what came first | \\|f_h error\\| without -> with the true effect | f_h worse with it (by > 1 sd) | "
              "\\|xi_h error\\| without -> with | effect parameter error, covered | Ljung-Box passes before -> after | "
-             "f_h determined before -> after; covered | s per record (diagnose, identify --effect) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "f_h determined before -> after; covered | s per record (diagnose, identify --effect) | "
+             "after diagnose's suggestion: \\|f_h error\\| median, within 3 %, worse by > 1 sd |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (kind, size, generator), rows in frame.groupby(["kind", "size", "generator"], sort=False):
         ok = rows[rows["error"] == ""]
         n = len(ok)
@@ -260,8 +263,21 @@ def summary(frame: pd.DataFrame) -> list:
             seconds += f", {ok['identify_effect_seconds'].median():.0f}"
         lines.append(f"| {kind} | {size} | {generator} | {len(rows)} ({len(rows) - n}) | {effect} | "
                      f"{int(ok['correct'].sum())}/{n} ({EXPECTED[kind] or 'nothing'}) | {firsts} | {f_text} | "
-                     f"{worse} | {x_text} | {parameter} | {passes} | {determined} | {seconds} |")
+                     f"{worse} | {x_text} | {parameter} | {passes} | {determined} | {seconds} | "
+                     f"{_suggested(ok)} |")
     return lines
+
+
+def _suggested(ok: pd.DataFrame) -> str:
+    """|f_h error| after following diagnose's verdict (its proposed effect, or the person as it is): the median,
+    the share within 3 %, and how many are worse than without it by more than their sd."""
+    if "f_h_suggested" not in ok or ok["f_h_suggested"].isna().all():
+        return "-"
+    n = len(ok)
+    before = (100 * (ok["f_h_before"] / ok["f_h"] - 1)).abs()
+    after = (100 * (ok["f_h_suggested"] / ok["f_h"] - 1)).abs()
+    beyond = (after - before) > 100 * ok["f_h_sd_suggested"] / ok["f_h"]
+    return f"{after.median():.1f} %, {int((after <= 3.0).sum())}/{n}, {int(beyond.sum())}/{n}"
 
 
 def code_version() -> str:
