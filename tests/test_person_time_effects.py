@@ -32,6 +32,9 @@ def test_an_effect_that_changes_in_time_is_expanded_at_every_sample():
     time = np.arange(1000) / FS
     growing = PersonDynamics(SMDModel(n_harmonics=1, effects=[GrowingStiffness()]), time)
     assert not growing.linear  # its nominal k_t = 0 would hide the change; the check moves k_t off it
+    assert growing.in_state  # linear in the state at every time: its likelihood is exact, and says so
+    from smd_statespace.effects import make_effect
+    assert not PersonDynamics(SMDModel(n_harmonics=1, effects=[make_effect("cubic_stiffness")]), time).in_state
     lin = growing.linearise(2.5, 0.3, {"k_t": 3.0}, nominal=np.zeros((time.size, 2)))
     w2 = (2 * np.pi * 2.5) ** 2
     np.testing.assert_allclose(lin.A[:, 1, 0], -(w2 + 3.0 * time), rtol=1e-6)  # the stiffness at each sample
@@ -55,6 +58,7 @@ def test_a_stiffness_growing_in_time_is_recovered():
     k_t = fitted.effect_estimates().loc["k_t"]
     assert abs(k_t["value"] - 3.0) < 3 * k_t["sd"] and k_t["value"] > 5 * k_t["sd"], k_t
     assert fitted.effect_test()["lr"] > 20.0
+    assert fitted.to_dict()["likelihood"] == "exact" and any("likelihood is exact" in n for n in fitted.notes)
 
 
 class ExtraStiffness(Effect):

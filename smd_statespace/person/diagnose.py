@@ -108,7 +108,7 @@ def candidate_row(base, fitted, level: float) -> dict:
            "xi_h": fitted.xi_h, "noise_change_%": 100.0 * (fitted.sigma / base.sigma - 1.0),
            "ljung_box_p_before": before_tests["ljung_box_p"], "ljung_box_p": after_tests["ljung_box_p"],
            "parameters": _parameters_text(base, fitted, estimates),
-           "likelihood": "approximate" if fitted.model.approximate else "exact",
+           "likelihood": "exact" if fitted.model.exact else "approximate",
            "on_bound": person_on_bound or effect_on_bound, "settled": bool(fitted.settled)}
     # a refit that runs f_h, xi_h or the effect's parameter to a search bound has not found the effect:
     # the term and the person's resonance together imitate the residual

@@ -91,6 +91,10 @@ class PersonDynamics:
         discretisation is exact). An effect that changes in time (a parameter
         that drifts with ``t``, the record's time in s from its first sample)
         is expanded at every sample like a nonlinear one.
+    in_state : bool
+        Whether the rates are linear in the dynamic states, at every time (``linear``, or an effect that
+        changes in time): the expansion about any path is then the dynamics themselves, and the likelihood
+        is exact even where it is computed along a path.
     """
 
     def __init__(self, model: SMDModel, time, signals=None):
@@ -108,7 +112,7 @@ class PersonDynamics:
                            if slot.kind == "parameter" and slot.name not in coefficients
                            and model.index(slot.name) not in (F_H, XI_H)]
         self._a0 = model.index("a0")
-        self.linear = self._is_linear()
+        self.linear, self.in_state = self._linearity()
 
     @property
     def n_dynamic(self) -> int:
@@ -129,14 +133,15 @@ class PersonDynamics:
             x[:, self.dynamic] = nominal
         return x
 
-    def _is_linear(self) -> bool:
-        """Compare the state Jacobian at rest and at a displaced state (effects' parameters at their nominals).
+    def _linearity(self) -> tuple:
+        """``(linear, in_state)``: compare the state Jacobian at rest and at a displaced state (effects' parameters
+        at their nominals), then at five times.
 
         Checks on the way that the force enters the acceleration as in Eq. 2 (a gain of 1 on ``g F``) at
         both states: the record-level model takes the force of Eq. 4 as it is.
         """
         if not self.model.effects:
-            return True
+            return True, True
         values = {slot.name: slot.nominal for slot in self.parameters}
         scales = np.array([0.02 if i == 0 else 0.2 for i in range(self.n_dynamic)])
         rest = self._states(2.5, 0.3, values, np.zeros((1, self.n_dynamic)), 1)
@@ -151,7 +156,7 @@ class PersonDynamics:
         first, second = (jac[np.ix_(self.dynamic, self.dynamic)] for jac in (first, second))
         scale = LINEARITY_TOLERANCE * max(np.max(np.abs(first)), 1.0)
         if np.max(np.abs(first - second)) > scale:
-            return False
+            return False, False
         # an effect whose terms change in time (a parameter that drifts, f_h (1 + k t)) is linear in the state
         # but its Jacobian is not the one of the first sample: it is linearised at every sample (the path's
         # expansion is then exact); until 2026-11-28 it was frozen at the first sample and k was lost
@@ -163,8 +168,8 @@ class PersonDynamics:
             jacobians = [self.model.rate_jacobian(state, t[None], self.inputs)[0] for t in times]
             start = jacobians[0][np.ix_(self.dynamic, self.dynamic)]
             if any(np.max(np.abs(j[np.ix_(self.dynamic, self.dynamic)] - start)) > scale for j in jacobians[1:]):
-                return False
-        return True
+                return False, True
+        return True, True
 
     def _path_jacobian(self, at) -> np.ndarray:
         """Central differences of the rates along a path in the dynamic slots only, shape (N, n, n).
@@ -209,14 +214,14 @@ class PersonDynamics:
             A_full = jac[:, dyn][:, :, dyn]
             c = model.rate(at, self.time, self.inputs)[:, dyn] - np.einsum("kij,kj->ki", A_full, nominal)
             d = c[:, dyn.index(U_DOT)]
-            # the force enters linearly with a gain that does not depend on the state (checked in _is_linear):
+            # the force enters linearly with a gain that does not depend on the state (checked in _linearity):
             # its column from the rest state, exact, where differences along a far path lose it to rounding
             rest = self._states(f_h, xi_h, values, None, 1)
             jac[:, :, self._a0] = model.rate_jacobian(rest, self.time[:1], self.inputs)[:, :, self._a0]
         A = jac[:, dyn][:, :, dyn]
         b = jac[:, dyn, self._a0] / G
         hx = jac[:, U_DOT, dyn]
-        # the force's gain of 1 was checked once (_is_linear); along a path the differences' rounding grows with
+        # the force's gain of 1 was checked once (_linearity); along a path the differences' rounding grows with
         # the rates (a nonlinear term on a far path), so it is not checked again here
         return LinearisedSystem(A, b, c, hx, d)
 

@@ -293,10 +293,13 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
                        f"did not converge ({fitted['message']})")
     notes, warnings = list(root.notes), list(root.record_warnings)
-    if model.approximate:
+    if model.approximate and not model.exact:
         notes.append(f"the likelihood is approximate: {', '.join(e.name for e in effects)} linearised about the "
                      f"one-step predicted path, {linearisations} time(s) (an extended Kalman filter at the fixed "
                      "point)")
+    elif model.approximate:
+        notes.append(f"the likelihood is exact: {', '.join(e.name for e in effects)} changes in time but is linear "
+                     "in the state, so its expansion about the path at every sample is the dynamics themselves")
         if not settled:
             warnings.append(f"the path of {', '.join(e.name for e in effects)} had not settled after "
                             f"{NOMINAL_ITERATIONS} linearisations: its estimates are approximate")

@@ -231,8 +231,19 @@ class RecordModel:
 
     @property
     def approximate(self) -> bool:
-        """True when a nonlinear effect is linearised about a path (the likelihood is then approximate)."""
+        """True when an effect is expanded about a path: a nonlinear one, or one that changes in time.
+
+        The path is then settled by re-linearisation and the force's constant is held at 0
+        (:attr:`held_delta`). Whether the likelihood is exact is :attr:`exact`.
+        """
         return not self.dynamics.linear
+
+    @property
+    def exact(self) -> bool:
+        """True when the likelihood is exact: the rates are linear in the state (an effect that changes in time,
+        ``f_h (1 + k t)``, is expanded about a path, exactly); False for a nonlinear effect (an extended Kalman
+        filter about the one-step predicted path)."""
+        return self.dynamics.in_state
 
     @property
     def effect_parameters(self) -> list:

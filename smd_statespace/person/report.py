@@ -156,7 +156,7 @@ def result_dict(result) -> dict:
             out[f"{name}_low"], out[f"{name}_high"] = row["low"], row["high"]
             out[f"{name}_on_bound"] = bool(row["on_bound"])
         out.update(result.effect_test())
-        out["likelihood"] = "approximate" if result.model.approximate else "exact"
+        out["likelihood"] = "exact" if result.model.exact else "approximate"
         out["linearisations"] = result.linearisations
         out["settled"] = result.settled
         before = result.before.to_dict()
