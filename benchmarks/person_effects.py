@@ -81,23 +81,27 @@ KINDS = {
                      {"term": {"kind": "v_abs_v", "scale": 0.15, "c_v_abs_v": 0.5}}],
     "term_f_drift": [{"term": {"kind": "f_drift", "scale": DURATION, "c_f_drift": 0.1}},
                      {"term": {"kind": "f_drift", "scale": DURATION, "c_f_drift": 0.3}}],
+    "term_f_step": [{"term": {"kind": "f_step", "scale": DURATION, "c_f_step": 0.1}},
+                    {"term": {"kind": "f_step", "scale": DURATION, "c_f_step": 0.3}}],
 }
 """Hidden effects at a small and a large size (about 2x and 5x the noise on a typical record)."""
 
 EXPECTED = {"clean": None, "harmonics": "harmonics", "cubic_stiffness": "cubic_stiffness",
             "floor_measured": "floor_mode", "floor_unmeasured": "floor_mode", "quadratic_damping": "quadratic_damping",
-            "term_abs_u": "term:abs_u", "term_v_abs_v": "term:v_abs_v", "term_f_drift": "term:f_drift"}
+            "term_abs_u": "term:abs_u", "term_v_abs_v": "term:v_abs_v", "term_f_drift": "term:f_drift",
+            "term_f_step": "term:f_step@0.5"}
 """The right answer of ``diagnose`` per kind (None: nothing proposed)."""
 
 FITTED = {"harmonics": "harmonics:count=2", "cubic_stiffness": "cubic_stiffness", "floor_measured": "floor_mode",
           "floor_unmeasured": "floor_mode:source=modal", "quadratic_damping": "quadratic_damping",
           "term_abs_u": "term:kind=abs_u,scale=0.01", "term_v_abs_v": "term:kind=v_abs_v,scale=0.15",
-          "term_f_drift": f"term:kind=f_drift,scale={DURATION:g}"}
+          "term_f_drift": f"term:kind=f_drift,scale={DURATION:g}", "term_f_step": f"term:kind=f_step,scale={DURATION:g}"}
 """The true effect as ``identify --effect`` adds it."""
 
 TRUE_PARAMETER = {"cubic_stiffness": ("beta_3", "beta_3"), "quadratic_damping": ("c_q", "c_q"),
                   "floor_unmeasured": ("f_f", "frequency"), "term_abs_u": ("c_abs_u", "c_abs_u"),
-                  "term_v_abs_v": ("c_v_abs_v", "c_v_abs_v"), "term_f_drift": ("c_f_drift", "c_f_drift")}
+                  "term_v_abs_v": ("c_v_abs_v", "c_v_abs_v"), "term_f_drift": ("c_f_drift", "c_f_drift"),
+                  "term_f_step": ("c_f_step", "c_f_step")}
 """The effect parameter whose error is counted: ``(estimated name, key of the simulation's truth)``."""
 
 GENERATORS = ("jumps", "smooth")

@@ -120,13 +120,12 @@ def run_person_diagnose(args) -> int:
                                "display.max_colwidth", 60):
             print(table[columns].to_string())
     if len(result.screened):
-        print(f"\ngeneric terms, each score-tested at the fitted person; those significant over the library "
-              f"(Holm) ranked by a quick fit, the {SCREENED} first fitted above:")
-        shown = result.screened.head(5)
-        for _, row in shown.iterrows():
-            quick = f"quick LR {row['lr_quick']:7.1f}" if np.isfinite(row.get("lr_quick", np.nan)) else " " * 16
-            print(f"  {row['label']:<15} robust LM {row['lm_robust']:7.1f}  Holm p {row['p_holm']:<8.2g} {quick}  "
-                  f"{row['physics']}")
+        print(f"\ngeneric terms, each score-tested at the fitted person, those not ruled out fitted quickly; the "
+              f"{SCREENED} largest quick likelihood ratios significant over the library (Holm) are fitted above:")
+        for _, row in result.screened.head(5).iterrows():
+            quick = (f"quick LR {row['lr_quick']:7.1f} (Holm p {row['p_quick_holm']:<7.2g})"
+                     if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 21)
+            print(f"  {row['label']:<17} robust LM {row['lm_robust']:7.1f}  {quick}  {row['physics']}")
     tests = result.tests or len(result.rows) + len(result.failed)
     level = args.alpha / max(tests, 1)
     if result.adequate:

@@ -17,13 +17,18 @@ v_abs_v  ``-2 xi_h w_h c r' |r'| / v_0``              damping that grows with sp
 u_v      ``-2 xi_h w_h c r r' / r_0``                 damping that changes with the leg's compression
 f_drift  ``-w_h^2 c r (t - t_0) / T``                 a leg stiffness (``f_h``) that drifts over the record
 xi_drift ``-2 xi_h w_h c r' (t - t_0) / T``           a leg damping (``xi_h``) that drifts over the record
+f_step   ``-w_h^2 c r (H(t - t_s) - 1/2)``            a leg stiffness (``f_h``) that steps to another value
+xi_step  ``-2 xi_h w_h c r' (H(t - t_s) - 1/2)``      a leg damping (``xi_h``) that steps to another value
 ======== ============================================ =====================================================
 
 with ``w_h = 2 pi f_h``. ``r_0`` and ``v_0`` (the option ``scale``: m, or m/s for the damping terms) are the
 record's RMS compression and compression rate, so that ``c`` is the term's size at the record's own motion
 relative to the spring's (or the damper's) linear force: ``c = 0.1`` is 10 % of it. For the time terms ``t_0``
 is the middle of the record and ``T`` its length (``scale`` = ``T``, ``start``): ``c = 0.2`` changes ``w_h^2``
-(or ``xi_h w_h``) by 20 % from the record's start to its end. :func:`~smd_statespace.person.screen.generic_library`
+(or ``xi_h w_h``) by 20 % from the record's start to its end. A step is at ``t_s = start + at T`` (``at``, a
+fraction of the record, default 1/2; ``H`` the unit step): ``c = 0.2`` is ``w_h^2`` 20 % higher after it than
+before, ``f_h`` the middle of the two. A person who changes once (tires, changes stance) is a step; one who
+changes gradually a drift. :func:`~smd_statespace.person.screen.generic_library`
 builds every term scaled to a fitted person's record.
 """
 
@@ -49,6 +54,8 @@ TERMS = {
     "u_v": ("damping", "damping that changes with the leg's compression"),
     "f_drift": ("time", "a leg stiffness (f_h) that drifts over the record"),
     "xi_drift": ("time", "a leg damping (xi_h) that drifts over the record"),
+    "f_step": ("time", "a leg stiffness (f_h) that steps to another value during the record"),
+    "xi_step": ("time", "a leg damping (xi_h) that steps to another value during the record"),
 }
 """``kind: (family, physical name)`` of the generic terms; the family says what ``scale`` is (m, m/s or s)."""
 
@@ -68,6 +75,8 @@ class GenericTerm(Effect):
         the record's RMS compression, compression rate, or length. Must be positive.
     start : float
         For the time terms, the record's first time (s, on its own time axis); ``t_0 = start + T / 2``.
+    at : float
+        For a step, where it is as a fraction of the record, between 0 and 1 (default 0.5).
 
     Examples
     --------
@@ -80,14 +89,16 @@ class GenericTerm(Effect):
 
     name = "term"
 
-    def __init__(self, kind: str, scale: float, start: float = 0.0):
+    def __init__(self, kind: str, scale: float, start: float = 0.0, at: float = 0.5):
         if kind not in TERMS:
             raise OptionError(f"term: kind={kind!r}; give one of {', '.join(TERMS)}")
         if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not (math.isfinite(scale) and scale > 0):
             raise OptionError(f"term: scale={scale!r}; give the record's RMS motion (m, m/s) or length (s), > 0")
         if isinstance(start, bool) or not isinstance(start, (int, float)) or not math.isfinite(start):
             raise OptionError(f"term: start={start!r}; give the record's first time in s")
-        self.kind, self.scale, self.start = kind, float(scale), float(start)
+        if isinstance(at, bool) or not isinstance(at, (int, float)) or not 0.0 < at < 1.0:
+            raise OptionError(f"term: at={at!r}; give where a step is as a fraction of the record, between 0 and 1")
+        self.kind, self.scale, self.start, self.at = kind, float(scale), float(start), float(at)
         self.family, self.physics = TERMS[kind]
 
     @property
@@ -108,8 +119,9 @@ class GenericTerm(Effect):
         spring, damper = omega**2, 2.0 * x[..., XI_H] * omega
         kind, s = self.kind, self.scale
         if self.family == "time":
-            moment = (np.asarray(t, dtype=float) - self.start - s / 2.0) / s
-            return -c * moment * (spring * r if kind == "f_drift" else damper * rate)
+            since = np.asarray(t, dtype=float) - self.start
+            moment = (since >= self.at * s) - 0.5 if kind.endswith("step") else (since - s / 2.0) / s
+            return -c * moment * (spring * r if kind.startswith("f_") else damper * rate)
         terms = {"abs_u": lambda: spring * np.abs(r), "u2": lambda: spring * r**2 / s,
                  "u_abs_u": lambda: spring * r * np.abs(r) / s, "u3": lambda: spring * r**3 / s**2,
                  "v2": lambda: damper * rate**2 / s, "v_abs_v": lambda: damper * rate * np.abs(rate) / s,
@@ -128,10 +140,12 @@ class GenericTerm(Effect):
         return None
 
     def __repr__(self):
-        return f"GenericTerm(kind={self.kind!r}, scale={self.scale:g}, start={self.start:g})"
+        return f"GenericTerm(kind={self.kind!r}, scale={self.scale:g}, start={self.start:g}, at={self.at:g})"
 
 
 def label(effect) -> str:
     """How tables and figures name an effect: its registry name, with the kind for a generic term
-    (``term:abs_u``)."""
-    return f"{effect.name}:{effect.kind}" if isinstance(effect, GenericTerm) else effect.name
+    (``term:abs_u``) and where a step is (``term:f_step@0.33``)."""
+    if not isinstance(effect, GenericTerm):
+        return effect.name
+    return f"{effect.name}:{effect.kind}" + (f"@{effect.at:.2g}" if effect.kind.endswith("step") else "")

@@ -28,10 +28,11 @@ seconds, and its test counts them (Bonferroni).
 
 Generic terms: besides those, every generic term of the library
 (:data:`~smd_statespace.effects.generic.TERMS`: a spring stiffer on one side, one that hardens with amplitude,
-damping that grows with speed or differs up and down, a stiffness or damping that drifts over the record) is
-screened by a score test at the fitted person (:func:`~smd_statespace.person.screen.screen`: no fit, about a
-second for the nine), and the :data:`SCREENED` most significant over the library (Holm, at ``alpha``) are fitted
-as candidates like the others. The Bonferroni level counts every term screened, so the chance of a false alarm
+damping that grows with speed or differs up and down, a stiffness or damping that drifts or steps) is
+screened at the fitted person (:func:`~smd_statespace.person.screen.screen`): a score test (no fit) rules out
+the terms the record does not pull away from zero, the others get a quick fit, and the :data:`SCREENED` whose
+quick likelihood ratio is largest among those significant over the library (Holm, at ``alpha``) are fitted as
+candidates like the others. The Bonferroni level counts every term screened, so the chance of a false alarm
 does not grow with the library.
 
 A candidate that passes the test is also validated on held-out data
@@ -60,7 +61,7 @@ from scipy import stats
 from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
-from ..effects.generic import TERMS, label
+from ..effects.generic import label
 from .extend import configured_for_record, fit_effects
 from .screen import generic_library, screen
 from .validation import cross_validated_loglike
@@ -77,8 +78,8 @@ FREE_RUN_POINTS = 0.05
 """A held-out free run's fit lower by more than this many points with a candidate is told in a note."""
 
 SCREENED = 2
-"""How many generic terms (:mod:`~smd_statespace.person.screen`) whose score test is significant over the library
-(Holm) are fitted as candidates, the most significant first."""
+"""How many generic terms (:mod:`~smd_statespace.person.screen`) whose quick fit is significant over the library
+(Holm) are fitted as candidates, the largest likelihood ratio first."""
 
 ZERO_Z = 2.0
 """A candidate whose added parameters and harmonics are all within this many sds of zero is not proposed."""
@@ -373,15 +374,15 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
                               f"top of it ({', '.join(sorted(present))})")
     tests = len(effects)
     if candidates is None if library is None else library:
-        terms = generic_library(result, [kind for kind in TERMS if f"term:{kind}" not in present | {
-            label(effect) for effect in effects}])
+        taken = present | {label(effect) for effect in effects}
+        terms = [term for term in generic_library(result) if label(term) not in taken]
         tests += len(terms)  # Bonferroni counts every term screened, fitted or not
         try:
             screened = screen(result, terms, alpha=alpha)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed["generic terms (score tests)"] = " ".join(str(exc).split())
         else:
-            flagged = set(screened.index[screened["p_holm"] < alpha][:SCREENED])
+            flagged = set(screened.index[screened["p_quick_holm"] < alpha][:SCREENED])
             effects += [effect for effect in terms if effect.spec in flagged]
     level = alpha / max(tests, 1)
     fits, rows = {}, []

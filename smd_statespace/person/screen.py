@@ -24,9 +24,10 @@ The score is a slope at ``c = 0``, and some terms show their effect only away fr
 side (``|u|``) linearised about the path of the person without it is nearly a change of stiffness, so its
 score is small (robust LM 13 on a record where its fit gives a likelihood ratio of 1021, ranked sixth of nine),
 and only when the model is linearised again about its own path does the asymmetry appear. So the terms the
-score test passes over the library are *ranked* by a quick fit (:func:`quick_ratio`: one search at the person's
+score test does not rule out are *tested and ranked* by a quick fit (:func:`quick_ratio`: one search at the person's
 variation and cycle starts, a nonlinear term linearised once more about its own path, about a second each);
-the score test stays the gate, so the false-alarm rate is the score test's.
+the score test only pre-filters them (a term it rules out is not fitted), the quick fits' likelihood ratios,
+adjusted by Holm over the whole library, decide which are fitted.
 """
 
 from __future__ import annotations
@@ -42,7 +43,14 @@ from .extend import effect_model
 from .score import cycle_sums, profile_out, score
 from .search import fit_model
 
-__all__ = ["RELINEARISED", "generic_library", "score_test", "quick_ratio", "screen", "holm"]
+__all__ = ["STEPS", "PREFILTER", "RELINEARISED", "generic_library", "score_test", "quick_ratio", "screen", "holm"]
+
+STEPS = (1.0 / 3.0, 0.5, 2.0 / 3.0)
+"""Where the library's steps in time are, as fractions of the record (one term each: a step elsewhere is
+found, less strongly, by the nearest)."""
+
+PREFILTER = 0.05
+"""A term whose robust score p-value (unadjusted) is below this gets a quick fit in :func:`screen`."""
 
 RELINEARISED = 1
 """How many times :func:`quick_ratio` linearises a nonlinear term again about its quick fit's own path."""
@@ -51,7 +59,7 @@ RELINEARISED = 1
 def generic_library(result, kinds=None) -> list:
     """Every generic term (:data:`~smd_statespace.effects.generic.TERMS`, or those in ``kinds``) scaled to the
     record of the fitted ``result``: the RMS compression and rate its person predicts, and its fitted span's
-    start and length."""
+    start and length; a step at each of :data:`STEPS`."""
     path = result.predicted_path()
     rms = np.sqrt(np.mean(path[:, :2] ** 2, axis=0))
     scales = {"restoring": float(rms[0]), "damping": float(rms[1])}
@@ -60,8 +68,11 @@ def generic_library(result, kinds=None) -> list:
     out = []
     for kind in (TERMS if kinds is None else kinds):
         family = TERMS[kind][0]
-        scale = length if family == "time" else max(scales[family], 1e-9)
-        out.append(GenericTerm(kind, scale=scale, start=start if family == "time" else 0.0))
+        if family == "time":
+            out += [GenericTerm(kind, scale=length, start=start, at=at)
+                    for at in (STEPS if kind.endswith("step") else (0.5,))]
+        else:
+            out.append(GenericTerm(kind, scale=max(scales[family], 1e-9)))
     return out
 
 
@@ -144,7 +155,14 @@ def holm(p_values) -> np.ndarray:
 
 def screen(result, effects=None, alpha=None) -> pd.DataFrame:
     """Score-test every candidate of ``effects`` (default :func:`generic_library`) at ``result``, most
-    significant first; with ``alpha``, those significant over the library ranked by :func:`quick_ratio`.
+    significant first; with ``alpha``, the terms the score test does not rule out fitted quickly and tested
+    by their likelihood ratio over the library.
+
+    With ``alpha``, two stages: every term whose robust score p-value is below :data:`PREFILTER` (unadjusted:
+    a term that shows only away from ``c = 0`` has a small score) gets a quick fit (:func:`quick_ratio`); its
+    likelihood ratio's p-value (chi-square(1)) is adjusted by Holm over the *whole* library (a term not fitted
+    counts as p = 1, so the pre-filter can lose power, never add false alarms). Those below ``alpha`` come
+    first, the largest quick likelihood ratio first: they are what ``diagnose`` fits.
 
     Returns
     -------
@@ -152,9 +170,8 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
         Indexed by the effect's spec: ``label`` (``term:abs_u``), ``physics`` (its physical name, where it has
         one), ``parameter``,
         ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` and ``p_holm`` (the robust p-values adjusted
-        over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick`` and
-        ``estimate`` of :func:`quick_ratio` for the terms with ``p_holm < alpha`` (NaN for the others), which
-        come first, largest ``lr_quick`` first.
+        over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``
+        (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm``, ordered as above.
     """
     effects = generic_library(result) if effects is None else list(effects)
     rows = []
@@ -169,8 +186,10 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
         return table
     table["lr_quick"], table["estimate"] = np.nan, np.nan
     by_spec = {effect.spec: effect for effect in effects}
-    for spec in table.index[table["p_holm"] < alpha]:
+    for spec in table.index[table["p_robust"] < PREFILTER]:
         quick = quick_ratio(result, by_spec[spec])
         table.loc[spec, ["lr_quick", "estimate"]] = quick["lr_quick"], quick["estimate"]
-    flagged = table["p_holm"] < alpha
-    return pd.concat([table[flagged].sort_values("lr_quick", ascending=False), table[~flagged]])
+    p_quick = stats.chi2.sf(np.maximum(table["lr_quick"].fillna(0.0).to_numpy(), 0.0), 1)
+    table["p_quick_holm"] = holm(np.where(table["lr_quick"].notna(), p_quick, 1.0))
+    passed = table["p_quick_holm"] < alpha
+    return pd.concat([table[passed].sort_values("lr_quick", ascending=False), table[~passed]])
