@@ -29,7 +29,8 @@ FIGURES = {
     "tutorial-identify.md": {"parameters.png": "tutorial_parameters.png"},
     "tutorial-compare.md": {"compare.png": "tutorial_compare.png"},
     "tutorial-floor.md": {"floor.png": "tutorial_floor.png"},
-    "tutorial-missing-physics.md": {"spectrum_before_after.png": "tutorial_missing_spectrum.png"},
+    "tutorial-missing-physics.md": {"spectrum_before_after.png": "tutorial_missing_spectrum.png",
+                                    "held_out.png": "tutorial_missing_held_out.png"},
 }
 """Per page: the file a code block writes -> the name it has in ``docs/figures/``."""
 
