@@ -201,7 +201,8 @@ class PersonDiagnosis:
     validation: dict = field(default_factory=dict)
 
     def table(self) -> pd.DataFrame:
-        """The candidates, most significant first (by the log p-value of the likelihood ratio)."""
+        """The candidates: those that pass first, by their held-out log-likelihood gain (the joint fit's
+        choice first when it separated two), then the others by the log p-value of their likelihood ratio."""
         if not self.rows:
             return pd.DataFrame()
         table = pd.DataFrame(self.rows).set_index("effect")
