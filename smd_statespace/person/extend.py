@@ -62,7 +62,8 @@ NOMINAL_RELATIVE = 1e-3
 """Or a change below this fraction of the log-likelihood's gain over the fit without the effects: a path that
 moves the likelihood by 0.2 of a gain of 510 (a spring stiffer on one side, its likelihood ratio 1021 steady to
 0.05 %) has settled for the test; a runaway that keeps rising (a cubic spring on a clean record, by units per
-linearisation) has not."""
+linearisation) has not. A path whose likelihood comes back within as much of its value two linearisations
+before swings between two paths: it has settled on that cycle, and the better of the two is kept."""
 
 
 def check_effects(effects, record) -> tuple:
@@ -320,7 +321,7 @@ def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -
     from .search import fit_model
     from .statespace import nominal_path
 
-    linearisations, settled = 0, True
+    linearisations, settled, earlier = 0, True, None
     with tqdm(total=NOMINAL_ITERATIONS, desc="effects (record)", unit="fit", disable=not progress or not
               model.approximate, leave=False) as bar:
         while model.approximate and linearisations < NOMINAL_ITERATIONS:
@@ -330,8 +331,16 @@ def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -
             bar.update()
             tolerance = max(NOMINAL_TOLERANCE, NOMINAL_RELATIVE * abs(again["loglike"] - reference))
             settled = abs(again["loglike"] - fitted["loglike"]) < tolerance
+            # a path that swings between two (a spring stiffer on one side: LR 529.2, 530.2, 529.2, ... on a
+            # record where it is the truth) has settled on a cycle, not run away: the better of the two is kept
+            cycle = earlier is not None and abs(again["loglike"] - earlier) < tolerance
+            earlier = fitted["loglike"]
+            if cycle and again["loglike"] < fitted["loglike"]:
+                settled = True
+                break
             model, fitted = moved, again
-            if settled:
+            if settled or cycle:
+                settled = True
                 break
         if linearisations:  # the last path's search run to the full tolerance
             fitted = fit_model(model, fitted["params"])
