@@ -140,7 +140,7 @@ def test_a_searched_floor_frequency_counts_its_trials():
         effects = (searched,)
         sigma, f_h, xi_h, settled, loglike = 1.0, 2.4, 0.3, True, 11.0
         model = type("M", (), {"person_at_bound": staticmethod(lambda params: False), "approximate": False,
-                               "n_harmonics": 4})()
+                               "exact": True, "n_harmonics": 4})()
         params = None
 
         def effect_test(self):

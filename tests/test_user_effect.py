@@ -229,7 +229,8 @@ def test_the_loop_carries_the_users_effect_with_its_options(tmp_path, capsys):
     assert person["effects"] == ["quadratic_damping:c_q_max=15"]
     line = next(line for line in printed.splitlines() if "without the effect(s)" in line)
     before = float(re.search(r"without the effect\(s\):.*?log-likelihood (-?[\d.]+)", line).group(1))
-    tested = float(re.search(r"with them at its cycle starts and variation model: log-likelihood (-?[\d.]+)",
-                             line).group(1)) if "with them at" in line else person["log_likelihood"]
-    lr, df = re.search(r"likelihood ratio (-?[\d.]+) on (\d+) parameter", line).groups()
-    assert float(lr) == pytest.approx(2 * (tested - before), abs=0.2) and int(df) == person["lr_df"] == 1
+    ratio = next(line for line in printed.splitlines() if line.lstrip().startswith("likelihood ratio"))
+    lr, df, tested, without = re.search(r"likelihood ratio (-?[\d.]+) on (\d+) parameter.*= 2 x \((-?[\d.]+) with - "
+                                        r"(-?[\d.]+) without\)", ratio).groups()
+    assert float(without) == before and float(tested) == pytest.approx(person["loglike_tested"], abs=0.05)
+    assert float(lr) == pytest.approx(2 * (float(tested) - before), abs=0.2) and int(df) == person["lr_df"] == 1

@@ -265,10 +265,18 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress)
         if len(given) > len(effects_asked):  # the record brought its floor
-            result.notes.append(f"the record's floor_acc is in the model (floor_mode, measured: the person rides "
-                                f"the floor, no unknown added; likelihood ratio against the person without it "
-                                f"{result.effect_test()['lr']:.1f}); --no-floor (measured_floor=False) leaves it out")
+            result.notes.append(_floor_note(result))
     return result
+
+
+def _floor_note(result) -> str:
+    """The note of a fit with the floor its record brought: what it is and its likelihood ratio, with the two
+    log-likelihoods the ratio is of (both at the cycle starts and variation model of the fit without it)."""
+    test = result.effect_test()
+    return (f"the record's floor_acc is in the model (floor_mode, measured: the person rides the floor, no unknown "
+            f"added; likelihood ratio against the person without it {test['lr']:.1f} = 2 x "
+            f"({test['loglike_tested']:.1f} - {test['loglike_before']:.1f}), both at the cycle starts and variation "
+            "model of the fit without it); --no-floor (measured_floor=False) leaves it out")
 
 
 def zero_drift(time) -> list:

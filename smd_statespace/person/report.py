@@ -12,7 +12,7 @@ from ..io import G
 from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
 from .phone_report import phone_words
 
-__all__ = ["CONFOUNDED", "change_words", "person_warnings", "result_dict", "summary_text", "table_row"]
+__all__ = ["CONFOUNDED", "change_words", "person_warnings", "ratio_words", "result_dict", "summary_text", "table_row"]
 
 
 CONFOUNDED = 0.9
@@ -222,17 +222,36 @@ def summary_text(result, verbose=False) -> str:
         for name, row in result.effect_estimates().iterrows():
             lines.append(f"  {name} = {row['value']:.4g}{_unit(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
                          f"interval {row['low']:.4g} to {row['high']:.4g})")
-        before, test = d["before"], result.effect_test()
-        p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: compare log-likelihoods"
-        moved = result.tested_loglike not in (None, result.loglike)
+        before = d["before"]
         lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
-                     f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}; "
-                     + (f"with them at its cycle starts and variation model: log-likelihood "
-                        f"{test['loglike_tested']:.1f}; " if moved else "")
-                     + f"likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p})")
+                     f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}")
+        lines.append(ratio_words(result))
     lines += [f"note: {n}" for n in d["notes"]]
     lines += [f"warning: {w}" for w in d["warnings"]]
     return "\n".join(lines)
+
+
+def ratio_words(result) -> str:
+    """The likelihood ratio of ``result``'s effects as printed: the statistic and the two log-likelihoods it is of.
+
+    ``2 x (with - without)``, both at the cycle starts and variation model of the fit without the effects
+    (:meth:`~smd_statespace.person.results.PersonResult.effect_test`). When the fit kept with the effects then
+    re-placed the starts (and perhaps chose another variation model), its own log-likelihood, printed above it,
+    is not the one tested, and the line says so. Until 2026-11-28 the tested one was given in passing and the
+    ratio said "compare log-likelihoods": a user compared the two printed first, 1973.5 with the floor (its own
+    starts, another variation model) and 1960.7 without, above a ratio of -79.8 (issue 45).
+    """
+    test = result.effect_test()
+    p = f"p {test['lr_p']:.2g}" if np.isfinite(test["lr_p"]) else "not nested: no p-value"
+    words = (f"  likelihood ratio {test['lr']:.1f} on {test['lr_df']} parameter(s) ({p}) = 2 x "
+             f"({test['loglike_tested']:.1f} with - {test['loglike_before']:.1f} without)")
+    if result.tested_loglike in (None, result.loglike):
+        return words
+    tested_variation, kept = result.before.model.variation, result.model.variation
+    chose = "" if kept == tested_variation else f" and chose the {kept} variation"
+    return (f"{words}, both at the cycle starts and {tested_variation} variation of the fit without them; the fit "
+            f"above then re-placed the starts with them{chose}: its log-likelihood {result.loglike:.1f} is not "
+            "the one tested")
 
 
 def _unit(unit: str) -> str:
