@@ -116,7 +116,8 @@ def _at_null(result, effect) -> tuple:
 
 
 def quick_ratio(result, effect) -> dict:
-    """The likelihood ratio of a one-parameter ``effect`` from a quick fit, for ranking (not a test).
+    """The likelihood ratio of a one-parameter ``effect`` from a quick fit: what :func:`screen` tests (chi-square(1),
+    Holm over the library) and ranks by; the candidates it passes are then fitted in full and tested again.
 
     One search (the looser stop rule) from the fitted ``result`` with the coefficient at 0, at its variation
     model and cycle starts; a nonlinear effect, first linearised about ``result``'s path, is linearised
