@@ -95,7 +95,8 @@ EXPECTED = {"clean": None, "harmonics": "harmonics", "cubic_stiffness": "cubic_s
 FITTED = {"harmonics": "harmonics:count=2", "cubic_stiffness": "cubic_stiffness", "floor_measured": "floor_mode",
           "floor_unmeasured": "floor_mode:source=modal", "quadratic_damping": "quadratic_damping",
           "term_abs_u": "term:kind=abs_u,scale=0.01", "term_v_abs_v": "term:kind=v_abs_v,scale=0.15",
-          "term_f_drift": f"term:kind=f_drift,scale={DURATION:g}", "term_f_step": f"term:kind=f_step,scale={DURATION:g}"}
+          "term_f_drift": f"term:kind=f_drift,scale={DURATION:g}",
+          "term_f_step": f"term:kind=f_step,scale={DURATION:g}"}
 """The true effect as ``identify --effect`` adds it."""
 
 TRUE_PARAMETER = {"cubic_stiffness": ("beta_3", "beta_3"), "quadratic_damping": ("c_q", "c_q"),

@@ -157,8 +157,9 @@ def cross_validated_loglike(model, params) -> dict | None:
         and of the free run over both held-out halves; ``time``, ``measured``, ``one_step``,
         ``free_run``: those over the record, each half as predicted from the other (arrays, s and
         m/s^2); ``cut``: where the second half begins (s); ``folds``: per fold the fitted half's
-        ``start``, ``end`` (s), its parameters and the held-out log-likelihood of the other half. None when the record is too short to halve
-        (:func:`halves`) or a half's fit does not converge.
+        ``start``, ``end`` (s), its parameters and the held-out log-likelihood of the other half.
+        None when the record is too short to halve (:func:`halves`) or a half's fit does not
+        converge.
     """
     cut = halves(model)
     if cut is None:
