@@ -86,3 +86,18 @@ def test_an_effect_that_cannot_be_told_from_f_h_is_said_so_in_words():
     # an effect the record does tell apart (the growing stiffness above) is not said to be confounded
     growing = fit_effects(base, [GrowingStiffness()], intervals="wald").warnings
     assert not any("cannot be told" in w for w in growing)
+
+
+def test_a_nonlinear_path_that_has_not_settled_is_warned_of(monkeypatch):
+    """One linearisation allowed: a cubic spring's path has not settled, and its fit says so (an approximate
+    likelihood, a warning)."""
+    from smd_statespace.person import extend, identify_person
+    from smd_statespace.simulation import simulate_bouncing
+
+    sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=12, seed=4,
+                            effects=["cubic_stiffness:beta_3=900"])
+    base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
+    monkeypatch.setattr(extend, "NOMINAL_ITERATIONS", 1)
+    spring = extend.fit_effects(base, ["cubic_stiffness"], intervals="wald")
+    assert not spring.settled and any("had not settled after 1 linearisations" in w for w in spring.warnings)
+    assert any(n.startswith("the likelihood is approximate") for n in spring.notes)

@@ -50,8 +50,8 @@ from .effect_adapter import record_default, record_harmonics, record_starts
 from .model import RecordModel
 from .search import WIDER_SANDWICH
 
-__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects", "configured_for_record",
-           "split_effects", "record_signals", "effect_model", "fit_effects"]
+__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects",
+           "configured_for_record", "split_effects", "record_signals", "effect_model", "fit_effects"]
 
 NOMINAL_ITERATIONS = 6
 """Most re-linearisations of a nonlinear effect about the new predicted path."""
@@ -295,16 +295,15 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
                        f"did not converge ({fitted['message']})")
     notes, warnings = list(root.notes), list(root.record_warnings)
-    if model.approximate and not model.exact:
-        notes.append(f"the likelihood is approximate: {', '.join(e.name for e in effects)} linearised about the "
-                     f"one-step predicted path, {linearisations} time(s) (an extended Kalman filter at the fixed "
-                     "point)")
-    elif model.approximate:
-        notes.append(f"the likelihood is exact: {', '.join(e.name for e in effects)} changes in time but is linear "
-                     "in the state, so its expansion about the path at every sample is the dynamics themselves")
+    if model.approximate:
+        names = ", ".join(e.name for e in effects)
+        notes.append(f"the likelihood is exact: {names} changes in time but is linear in the state, so its "
+                     "expansion about the path at every sample is the dynamics themselves" if model.exact else
+                     f"the likelihood is approximate: {names} linearised about the one-step predicted path, "
+                     f"{linearisations} time(s) (an extended Kalman filter at the fixed point)")
         if not settled:
-            warnings.append(f"the path of {', '.join(e.name for e in effects)} had not settled after "
-                            f"{NOMINAL_ITERATIONS} linearisations: its estimates are approximate")
+            warnings.append(f"the path of {names} had not settled after {NOMINAL_ITERATIONS} linearisations: its "
+                            "estimates are approximate")
     return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
                          comparison=comparison, record_warnings=warnings, notes=notes,
                          before=result, effects=tuple(effects), linearisations=linearisations,
@@ -331,17 +330,15 @@ def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -
             again = fit_model(moved, fitted["params"], quick=True)
             bar.update()
             tolerance = max(NOMINAL_TOLERANCE, NOMINAL_RELATIVE * abs(again["loglike"] - reference))
-            settled = abs(again["loglike"] - fitted["loglike"]) < tolerance
             # a path that swings between two (a spring stiffer on one side: LR 529.2, 530.2, 529.2, ... on a
             # record where it is the truth) has settled on a cycle, not run away: the better of the two is kept
             cycle = earlier is not None and abs(again["loglike"] - earlier) < tolerance
+            settled = cycle or abs(again["loglike"] - fitted["loglike"]) < tolerance
             earlier = fitted["loglike"]
             if cycle and again["loglike"] < fitted["loglike"]:
-                settled = True
                 break
             model, fitted = moved, again
-            if settled or cycle:
-                settled = True
+            if settled:
                 break
         if linearisations:  # the last path's search run to the full tolerance
             fitted = fit_model(model, fitted["params"])
@@ -387,8 +384,8 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
     # called only when result re-placed its starts: its comparison lists every variation model it fitted,
     # the one it kept among them
     variations = list(dict.fromkeys(row["variation"] for row in result.comparison))
-    suspect, earlier = set(), result if any(isinstance(effect, FloorMotion) for effect in effects) else None
-    while earlier is not None:
+    suspect, earlier = set(), result
+    while earlier is not None and any(isinstance(effect, FloorMotion) for effect in effects):
         suspect |= {row["variation"] for row in earlier.comparison if row["on_bound"]}
         earlier = earlier.before
     fits = []
