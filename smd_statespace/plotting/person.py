@@ -266,8 +266,9 @@ def plot_person_diagnostics(result, path=None, lags=None) -> Figure:
 def plot_candidates(diagnosis, path=None) -> Figure:
     """What ``diagnose`` found: the generic terms' score tests and the fitted candidates' likelihood ratios.
 
-    Left: every generic term's robust score statistic (chi-square(1) under "absent"), with the level a term
-    must pass over the library (Holm's first step, ``alpha / terms``); right: each fitted candidate's likelihood
+    Left: every generic term's robust score statistic (chi-square(1) under "absent"), with Holm's first level
+    over the library (``alpha / terms``), in blue the terms whose quick fit passed over the library (the
+    largest of them are fitted: :func:`~smd_statespace.person.screen.screen`); right: each fitted candidate's likelihood
     ratio against the level of its own test (Bonferroni over every test), proposed ones in blue.
     """
     from scipy import stats
@@ -278,13 +279,15 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     if len(screened):
         names = [name.replace("term:", "") for name in screened["label"]][::-1]
         values = screened["lm_robust"].to_numpy()[::-1]
-        flagged = (screened["p_holm"] < diagnosis.alpha).to_numpy()[::-1]
+        gate = "p_quick_holm" if "p_quick_holm" in screened else "p_holm"  # what decided the fit (screen's stages)
+        flagged = (screened[gate] < diagnosis.alpha).to_numpy()[::-1]
         left.barh(names, values, color=np.where(flagged, "tab:blue", "0.6"))
         left.axvline(stats.chi2.isf(diagnosis.alpha / len(screened), 1), color="k", ls="--", lw=0.8,
                      label=f"Holm's first level (alpha {diagnosis.alpha:g} over {len(screened)})")
         left.set_xscale("symlog", linthresh=10.0)
         left.legend(fontsize=8, loc="lower right")
-    left.set(xlabel="robust score statistic (no fit)", title="generic terms at the fitted person")
+    left.set(xlabel="robust score statistic (no fit)",
+             title="generic terms at the fitted person (blue: passed by a quick fit)")
     table = diagnosis.table()
     if not table.empty:
         level = diagnosis.alpha / max(diagnosis.tests or len(table), 1)
