@@ -128,6 +128,7 @@ def test_halves_that_determine_f_h_and_differ_name_a_person_who_changes():
     words = change_words(changed)
     assert words.startswith("the person changes during the record: f_h 2.4 Hz (2.32-2.48) in 4.0-19.0 s, 2.75 Hz")
     assert "--span START:END" in words
+    assert "(term:f_step, term:f_drift)" in words and "xi_step" not in words  # what diagnose tries for it
     # the same difference where a half does not determine f_h (sd over a quarter of the yardstick), or too small
     assert compare_halves([half(4.0, 19.0, 2.40, 0.05), half(19.0, 34.0, 2.75, 0.30)])["changed"] == []
     assert compare_halves([half(4.0, 19.0, 2.40, 0.001), half(19.0, 34.0, 2.45, 0.001)])["changed"] == []

@@ -8,7 +8,7 @@ from smd_statespace.person.diagnose import held_out
 from smd_statespace.person.extend import fit_effects
 from smd_statespace.person.search import fit_model
 from smd_statespace.measures import fit_percent
-from smd_statespace.person.validation import (cross_validated_loglike, halves, held_out_free_run, held_out_loglike,
+from smd_statespace.person.validation import (BREAK_MARGIN, cross_validated_loglike, halves, held_out_free_run, held_out_loglike,
                                               part)
 from smd_statespace.simulation import simulate_bouncing
 
@@ -78,3 +78,43 @@ def test_the_free_run_of_a_held_out_half_reproduces_a_record_without_variation()
     assert fit_percent(second.y, held_out_free_run(second, wrong, delta)) < 70.0
     runs = result.model.free_run(result.params, np.c_[delta, 2.0 * delta])  # columns are runs
     assert np.allclose(runs[:, 0], result.model.free_run(result.params, delta))
+
+
+def test_a_change_in_time_moves_the_cut_away_from_it(clean):
+    """A step at the middle: the cut moves a sixth of the record away, every break on one side; breaks that leave no
+    such cut with enough cycles in each half give None; without breaks the cut stays at the middle."""
+    time = clean.model.time
+    length = time[-1] - time[0]
+    middle = halves(clean.model)
+    at_middle = time[middle[1][0]][0]
+    moved = halves(clean.model, breaks=[at_middle])
+    cut = time[moved[1][0]][0]
+    assert abs(cut - at_middle) >= BREAK_MARGIN * length and abs(cut - at_middle) < BREAK_MARGIN * length + 1.0
+    assert np.all(moved[0][0] ^ moved[1][0])
+    for breaks in ([time[0] + 0.3 * length, time[0] + 0.6 * length], [time[0] + 0.55 * length]):
+        cut = time[halves(clean.model, breaks)[1][0]][0]
+        assert np.all(np.abs(cut - np.array(breaks)) >= BREAK_MARGIN * length)
+        assert np.all(np.array(breaks) > cut) or np.all(np.array(breaks) < cut)
+    assert halves(clean.model, [time[0] + f * length for f in (0.2, 0.5, 0.8)]) is None
+
+
+@pytest.mark.slow
+def test_a_step_is_judged_by_the_fold_fitted_across_it():
+    """f_h 30 % higher (w_h^2) after the middle: the fold fitted across the step predicts the part before it better
+    with the step than without. (On the middle cut each half sees one side of the step only, where the step's term is
+    a constant confounded with f_h: what it says depends on where each half's search stops along that ridge.)"""
+    from smd_statespace.effects.generic import GenericTerm
+
+    step = GenericTerm("f_step", scale=PERSON["duration"], at=0.5)
+    sim = simulate_bouncing(**PERSON, effects=[step.with_values(c_f_step=0.3)])
+    base = identify_person(sim.record, check_change=False)
+    fitted = fit_effects(base, [step], timing=False)
+    before = cross_validated_loglike(base.model, base.params, step.breaks)
+    after = cross_validated_loglike(fitted.model, fitted.params, step.breaks)
+    assert len(after["folds"]) == 1 and after["cut"] == before["cut"]
+    assert abs(after["cut"] - step.breaks[0]) >= BREAK_MARGIN * PERSON["duration"] - 1.0
+    fold = after["folds"][0]
+    assert fold["start"] < step.breaks[0] < fold["end"]  # fitted across the step
+    assert after["loglike"] > before["loglike"] + 10.0
+    assert np.isnan(after["free_run"][fitted.model.time >= after["cut"]] if fold["start"] >= after["cut"]
+                    else after["free_run"][fitted.model.time < after["cut"]]).all()

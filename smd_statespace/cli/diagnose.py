@@ -149,7 +149,7 @@ def run_person_diagnose(args) -> int:
         written += [directory / "person_spectrum.png", directory / "person_compare.png"]
         plot_spectrum(proposed, written[-2])
         plot_compare(proposed, written[-1])
-    validated = [name for name in result.table().index if name in result.validation]
+    validated = [name for name in result.table().index if result.held_out_pair(name) is not None]
     if validated:  # the proposed one, else the best that was judged on held-out data
         written.append(directory / "person_held_out.png")
         plot_held_out(result, (result.missing or validated)[0], written[-1])

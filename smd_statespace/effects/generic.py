@@ -106,6 +106,11 @@ class GenericTerm(Effect):
         """The name of the term's parameter slot, ``c_<kind>``."""
         return f"c_{self.kind}"
 
+    @property
+    def breaks(self) -> tuple[float, ...]:
+        """Where a step is (s, ``start + at T``); none for the other kinds."""
+        return (self.start + self.at * self.scale,) if self.kind.endswith("step") else ()
+
     def slots(self, model):
         low, high = COEFFICIENT_RANGE
         return (Slot(self.coefficient, "parameter", "-", low, high, nominal=0.1,

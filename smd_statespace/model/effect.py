@@ -159,6 +159,15 @@ class Effect:
             return self.name
         return f"{self.name}:" + ",".join(f"{key}={spec_value(value, self.name, key)}" for key, value in given.items())
 
+    @property
+    def breaks(self) -> tuple[float, ...]:
+        """Times (s, on the record's time axis) where the effect's term changes abruptly, such as a step; default none.
+
+        A fit on one side of a break cannot predict the other side, so the held-out check
+        (:func:`~smd_statespace.person.validation.cross_validated_loglike`) cuts the record away from them.
+        """
+        return ()
+
     def slots(self, model: "SMDModel") -> tuple[Slot, ...]:
         """State slots the effect adds (default: none).
 

@@ -67,7 +67,7 @@ from .screen import generic_library, screen
 from .validation import cross_validated_loglike
 
 __all__ = ["LESS_WHITE", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
-           "HELD_OUT", "label", "indistinguishable_from_zero"]
+           "HELD_OUT", "label", "indistinguishable_from_zero", "without_key"]
 
 HELD_OUT = ("held_out_before", "held_out", "held_out_one_step_fit_before", "held_out_one_step_fit",
             "held_out_free_run_fit_before", "held_out_free_run_fit")
@@ -187,7 +187,9 @@ class PersonDiagnosis:
         How many tests the Bonferroni level counts: the candidates fitted and every generic term screened.
     validation : dict
         Held-out validation (:func:`~smd_statespace.person.validation.cross_validated_loglike`) of the person
-        without any candidate (``"without"``) and with each candidate that passed its test (by name).
+        without any candidate (``"without"``) and with each candidate that passed its test (by name); for a
+        candidate with a change in time (a step) the person without it on that candidate's cut too
+        (:func:`without_key`). :meth:`held_out_pair` gives the two to compare.
     """
 
     base: object
@@ -226,6 +228,13 @@ class PersonDiagnosis:
     def adequate(self) -> bool:
         """True when no candidate is a significant improvement."""
         return not self.missing
+
+    def held_out_pair(self, name: str) -> tuple | None:
+        """``(without, with)``: the held-out validation of the person without and with candidate ``name``, on the
+        same cut of the record; None when it was not judged on held-out data."""
+        key = without_key(name) if without_key(name) in self.validation else "without"
+        pair = (self.validation.get(key), self.validation.get(name))
+        return None if None in pair else pair
 
     def command(self, record: str, mass, extra: str = "") -> str:
         """The ``identify`` command that adds the best candidate (runs as printed); empty when adequate.
@@ -280,12 +289,24 @@ class PersonDiagnosis:
                        f"on top of {first}: {self.joint['verdict']}")
         return out
 
-    @staticmethod
-    def _held_out_notes(table) -> list:
-        """Notes on the held-out validation: the person with each candidate that passed, and a worse free run."""
+    def _held_out_notes(self, table) -> list:
+        """Notes on the held-out validation: the person with each candidate that passed, a worse free run, and a
+        change in time judged on one fold."""
         if table.empty:
             return []
         out = []
+        for name in table.index[table["significant"].astype(bool) | table["held_out_worse"].astype(bool)]:
+            checked = self.validation.get(name)
+            if without_key(name) not in self.validation:
+                continue
+            if checked is None:
+                out.append(f"{name}: a change in time, and no cut of the record leaves it a sixth of the record "
+                           "away in one half: not judged on held-out data")
+            elif len(checked["folds"]) == 1:
+                fold = checked["folds"][0]
+                out.append(f"{name}: a fit that has not seen a change in time cannot predict it, so it is judged "
+                           f"on one fold: the person fitted on {fold['start']:.1f}-{fold['end']:.1f} s (which "
+                           f"holds the change; the cut moved to {checked['cut']:.1f} s) predicting the rest")
         significant = table[table["significant"].astype(bool)]
         if len(significant) >= 2:
             out.append("candidates that pass, by how well they predict the held-out halves (held-out "
@@ -307,6 +328,12 @@ class PersonDiagnosis:
         return {"base": self.base.to_dict(), "candidates": table.reset_index().to_dict(orient="records"),
                 "missing": self.missing, "adequate": self.adequate, "alpha": self.alpha, "notes": self.notes(),
                 "joint": self.joint, "screened": screened, "tests": self.tests}
+
+
+def without_key(name: str) -> str:
+    """The key of :attr:`PersonDiagnosis.validation` that holds the person without candidate ``name`` validated
+    on ``name``'s own cut (a candidate with a change in time: :func:`~smd_statespace.person.validation.halves`)."""
+    return f"without, on the cut of {name}"
 
 
 def _joint(base, fits: dict, names: list, level: float) -> dict:
@@ -399,10 +426,12 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     validation = {}
     for i in [i for i, row in enumerate(rows) if row["significant"]]:  # the held-out check where the test passed
         name = rows[i]["effect"]
-        if "without" not in validation:
-            validation["without"] = cross_validated_loglike(result.model, result.params)
-        validation[name] = cross_validated_loglike(fits[name].model, fits[name].params)
-        rows[i] = held_out(rows[i], validation["without"], validation[name])
+        breaks = tuple(moment for effect in fits[name].effects for moment in effect.breaks)
+        key = without_key(name) if breaks else "without"  # a change in time moves the cut (validation.halves)
+        if key not in validation:
+            validation[key] = cross_validated_loglike(result.model, result.params, breaks)
+        validation[name] = cross_validated_loglike(fits[name].model, fits[name].params, breaks)
+        rows[i] = held_out(rows[i], validation[key], validation[name])
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha, screened=screened,
                                 tests=tests, validation=validation)
     significant = diagnosis.missing

@@ -91,9 +91,12 @@ def person_warnings(result) -> list:
     command = f"`smd-statespace diagnose {result.record_arguments()}`"
     if result.misfit or tests["ljung_box_p"] < WHITENESS_ALPHA:
         if result.misfit:
-            out.append(f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}; their "
-                       f"predictable part is {100 * result.misfit_share:.1f} % of the signal, over "
-                       f"{100 * MISFIT_SHARE:g} %): the model misses something, which it puts into f_h and xi_h, "
+            share = f"{100 * result.misfit_share:.1f} % of the signal, over {100 * MISFIT_SHARE:g} %"
+            seen = (f"innovations are serially correlated (Ljung-Box p = {tests['ljung_box_p']:.2g}; their "
+                    f"predictable part is {share})" if tests["ljung_box_p"] < WHITENESS_ALPHA else
+                    f"the innovations' own past predicts part of them ({share}), although Ljung-Box does not "
+                    f"flag it (p = {tests['ljung_box_p']:.2g})")
+            out.append(f"{seen}: the model misses something, which it puts into f_h and xi_h, "
                        "so they are not determined (their intervals are as wide as the yardstick) until the "
                        f"missing effect is in the model; run {command}")
         else:
@@ -271,7 +274,9 @@ def change_words(change) -> str:
                      f"{first['start']:.1f}-{first['end']:.1f} s, {second[name]:.3g}{unit} "
                      f"({second[f'{name}_low']:.3g}-{second[f'{name}_high']:.3g}) in {second['start']:.1f}-"
                      f"{second['end']:.1f} s ({abs(change['z'][name]):.1f} sd apart)")
+    kinds = ", ".join(f"term:{name[:-2] if name == 'xi_h' else 'f'}_{shape}" for name in change["changed"]
+                      if name in ("f_h", "xi_h") for shape in ("step", "drift"))
     return ("the person changes during the record: " + "; ".join(parts) + ". One SMD model does not describe the "
-            "whole record: read the halves, not one value; a parameter that varies in time (tiring, warming up) is "
-            "the likely missing piece, which no candidate effect of diagnose takes; identify parts separately with "
-            "--span START:END")
+            "whole record: read the halves, not one value; a parameter that varies in time (tiring, warming up, a "
+            f"change of stance) is the likely missing piece: diagnose tries it as a step or a drift ({kinds}), or "
+            "identify parts separately with --span START:END")

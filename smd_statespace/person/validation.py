@@ -17,6 +17,12 @@ predictions are scored by MATLAB's fit % (``compare`` on validation data).
 The halves are the ones :func:`~smd_statespace.person.change.change_test` compares
 (:func:`part`: the same options, the cycle timing and regressors cut with the samples; a nonlinear
 effect keeps the whole fit's linearisation path, cut likewise).
+
+A change in time (a step, an effect's :attr:`~smd_statespace.model.effect.Effect.breaks`) cannot be
+predicted by a fit that has not seen it: on one side of a step its term is a constant, confounded with
+``f_h``. For such a model the cut is moved at least :data:`BREAK_MARGIN` of the record away from every
+break (all breaks on one side), and only the fold fitted on the part that holds them is scored: the
+person fitted across the step predicts the part before (or after) it.
 """
 
 from __future__ import annotations
@@ -30,25 +36,41 @@ from .dynamics import PersonDynamics
 from .search import fit_model
 from .timing import CycleTiming
 
-__all__ = ["MIN_HALF_CYCLES", "halves", "part", "held_out_prediction", "held_out_loglike", "held_out_free_run",
+__all__ = ["MIN_HALF_CYCLES", "BREAK_MARGIN", "halves", "part", "held_out_prediction", "held_out_loglike", "held_out_free_run",
            "cross_validated_loglike"]
 
 MIN_HALF_CYCLES = 8
 """Fewest whole force cycles in each half (the record-level model needs as many to estimate the variation)."""
 
+BREAK_MARGIN = 1.0 / 6.0
+"""Least distance of the cut from a break (a step in time), as a fraction of the record: a step at the middle is cut
+at a third (or two thirds), so the part that holds it has at least a quarter of its length on each side."""
 
-def halves(model) -> list | None:
+
+def halves(model, breaks=()) -> list | None:
     """``[(keep, kept), (keep, kept)]``: the samples and cycle boundaries of the record's two halves.
 
-    The cut is the cycle boundary nearest the middle of the boundaries inside the record; None when
-    a half would hold fewer than :data:`MIN_HALF_CYCLES` cycles.
+    The cut is the cycle boundary nearest the middle of the boundaries inside the record, among those that
+    leave :data:`MIN_HALF_CYCLES` cycles in each half and lie at least :data:`BREAK_MARGIN` of the record from
+    every time in ``breaks`` (s, on the record's time axis), with all of them on one side. None when no
+    boundary does.
     """
     boundaries = np.asarray(model.timing.boundaries, dtype=float)
     time = model.time
     inside = boundaries[(boundaries > time[0]) & (boundaries < time[-1])]
     if inside.size < 2 * MIN_HALF_CYCLES + 1:
         return None
-    cut = inside[inside.size // 2]
+    index = np.arange(MIN_HALF_CYCLES, inside.size - MIN_HALF_CYCLES)
+    breaks = np.asarray(breaks, dtype=float)
+    if breaks.size:
+        margin = BREAK_MARGIN * (time[-1] - time[0])
+        distance = inside[index, None] - breaks[None, :]
+        apart = np.all(np.abs(distance) >= margin, axis=1)
+        one_side = np.all(distance > 0, axis=1) | np.all(distance < 0, axis=1)
+        index = index[apart & one_side]
+        if index.size == 0:
+            return None
+    cut = inside[index[np.argmin(np.abs(index - inside.size // 2))]]
     return [(time < cut, boundaries <= cut), (time >= cut, boundaries >= cut)]
 
 
@@ -139,7 +161,7 @@ def held_out_free_run(model, params, delta) -> np.ndarray:
     return runs[:, 0] + response @ estimate
 
 
-def cross_validated_loglike(model, params) -> dict | None:
+def cross_validated_loglike(model, params, breaks=()) -> dict | None:
     """Two-fold held-out validation of ``model``: each half fitted, the other half predicted.
 
     Parameters
@@ -148,25 +170,33 @@ def cross_validated_loglike(model, params) -> dict | None:
         The whole record's model.
     params : ndarray
         Its estimate (each half's search starts there).
+    breaks : sequence of float
+        Times (s) where a candidate's term changes abruptly (its effects'
+        :attr:`~smd_statespace.model.effect.Effect.breaks`): the cut is moved away from them (:func:`halves`)
+        and only the fold fitted on the part that holds them is scored. Give the same ``breaks`` for the
+        model without the candidate, so both are judged on the same samples.
 
     Returns
     -------
     dict or None
-        ``loglike``: the held-out log-likelihood summed over both folds; ``one_step_fit`` and
+        ``loglike``: the held-out log-likelihood summed over the folds scored; ``one_step_fit`` and
         ``free_run_fit``: :func:`~smd_statespace.measures.fit_percent` (%) of the one-step prediction
-        and of the free run over both held-out halves; ``time``, ``measured``, ``one_step``,
+        and of the free run over the held-out samples; ``time``, ``measured``, ``one_step``,
         ``free_run``: those over the record, each half as predicted from the other (arrays, s and
-        m/s^2); ``cut``: where the second half begins (s); ``folds``: per fold the fitted half's
-        ``start``, ``end`` (s), its parameters and the held-out log-likelihood of the other half.
-        None when the record is too short to halve (:func:`halves`) or a half's fit does not
-        converge.
+        m/s^2; NaN on a half no fold predicts); ``cut``: where the second half begins (s); ``folds``: per
+        fold scored the fitted half's ``start``, ``end`` (s), its parameters and the held-out log-likelihood
+        of the other half. None when the record is too short to halve (:func:`halves`) or a half's fit does
+        not converge.
     """
-    cut = halves(model)
+    cut = halves(model, breaks)
     if cut is None:
         return None
     parts = [part(model, keep, kept) for keep, kept in cut]
-    folds, one_step, free = [], np.empty(model.y.size), np.empty(model.y.size)
-    for (fitted_part, held_part), (held, _) in zip((parts, parts[::-1]), cut[::-1]):
+    order = list(zip((parts, parts[::-1]), cut[::-1]))
+    if len(breaks):  # only the half that holds the breaks can determine the change
+        order = order[:1] if float(np.min(breaks)) < float(parts[1].time[0]) else order[1:]
+    folds, one_step, free = [], np.full(model.y.size, np.nan), np.full(model.y.size, np.nan)
+    for (fitted_part, held_part), (held, _) in order:
         fitted = fit_model(fitted_part, params, quick=True)
         if not fitted["converged"]:
             return None
@@ -176,9 +206,9 @@ def cross_validated_loglike(model, params) -> dict | None:
         free[held] = held_out_free_run(held_part, fitted["params"], filtered["delta"])
         folds.append({"start": float(fitted_part.time[0]), "end": float(fitted_part.time[-1]),
                       "params": fitted["params"], "held_out_loglike": predicted["loglike"]})
-    observed = model.observed
+    scored = model.observed & np.isfinite(free)
     return {"loglike": float(sum(f["held_out_loglike"] for f in folds)), "folds": folds,
-            "one_step_fit": fit_percent(model.y[observed], one_step[observed]),
-            "free_run_fit": fit_percent(model.y[observed], free[observed]),
+            "one_step_fit": fit_percent(model.y[scored], one_step[scored]),
+            "free_run_fit": fit_percent(model.y[scored], free[scored]),
             "time": model.time, "measured": model.y, "one_step": one_step, "free_run": free,
             "cut": float(model.time[cut[1][0]][0])}

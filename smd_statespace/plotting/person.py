@@ -96,7 +96,7 @@ def _worst_window(time, residual, seconds) -> float:
     """Start (s) of the ``seconds`` window with the largest residual energy."""
     dt = time[1] - time[0]
     width = max(int(round(seconds / dt)), 1)
-    energy = np.convolve(residual**2, np.ones(width), mode="valid")
+    energy = np.convolve(np.nan_to_num(residual) ** 2, np.ones(width), mode="valid")  # NaN: not predicted
     return float(time[int(np.argmax(energy))])
 
 
@@ -104,6 +104,7 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None) -> F
     """Measured against simulated runs ``[(color key, label, run)]``: the residuals, the worst window, the middle.
 
     ``one_step``: one-step predictions ``[(color key, label, prediction)]`` drawn as their errors in a first panel.
+    Samples a run does not predict (NaN) are left out of its fit % and of the middle window.
     """
     fig = Figure(figsize=(10.0, 7.5 if one_step is None else 9.6), layout="constrained")
     axes = list(fig.subplots(3 if one_step is None else 4, 1))
@@ -111,15 +112,18 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None) -> F
     panels.append((axes[0], runs, "measured - simulated (m/s$^2$)"))
     for ax, series, ylabel in panels:
         for key, label, predicted in series:
+            known = np.isfinite(predicted)
             ax.plot(time, y - predicted, color=COLORS.get(key, "tab:blue"), lw=0.6, alpha=0.85,
-                    label=f"{label}: fit {fit_percent(y, predicted):.1f} %")
+                    label=f"{label}: fit {fit_percent(y[known], predicted[known]):.1f} %")
         if cut is not None:
             ax.axvline(cut, color="k", lw=1.0, ls="--", label="halves' boundary")
         ax.set(xlabel="time (s)", ylabel=ylabel)
         ax.legend(fontsize=8, loc="upper right")
     panels[0][0].set_title(title, fontsize=10)
     worst, middle = axes[1:]
-    starts = (_worst_window(time, y - runs[0][2], seconds), time[0] + 0.5 * (time[-1] - time[0]) - seconds / 2)
+    predicted = time[np.isfinite(runs[0][2])]
+    starts = (_worst_window(time, y - runs[0][2], seconds),
+              predicted[0] + 0.5 * (predicted[-1] - predicted[0]) - seconds / 2)
     for ax, start, what in ((worst, starts[0], "free run, where the model without misses most"),
                             (middle, starts[1], "free run, middle")):
         shown = (time >= start) & (time <= start + seconds)
@@ -156,12 +160,15 @@ def plot_held_out(diagnosis, name, path=None, seconds: float = 3.0) -> Figure:
     panel: the one-step prediction errors, with the held-out log-likelihood (what ``diagnose`` judges by); then
     the free run as :func:`plot_compare` draws it. Each legend gives the fit %.
     """
-    before, after = diagnosis.validation["without"], diagnosis.validation[name]
+    before, after = diagnosis.held_out_pair(name)
     pairs = (("without", "without", before), ("with", f"with {name}", after))
     runs = [(key, label, check["free_run"]) for key, label, check in pairs]
     one_step = [(key, f"{label} (held-out log-likelihood {check['loglike']:.1f})", check["one_step"])
                 for key, label, check in pairs]
     title = f"{_name(diagnosis.base)}: each half predicted by the person fitted on the other half"
+    if len(after["folds"]) == 1:  # a change in time: only the half that holds it was fitted (validation.halves)
+        title = (f"{_name(diagnosis.base)}: the part outside {after['folds'][0]['start']:.1f}-"
+                 f"{after['folds'][0]['end']:.1f} s predicted by the person fitted there (which holds the change)")
     return _save(_compare_figure(before["time"], before["measured"], runs, title, seconds, cut=before["cut"],
                                  one_step=one_step), path)
 
