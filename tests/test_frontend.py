@@ -167,3 +167,23 @@ def test_a_jump_is_movement_and_flight_not_bouncing():
     kinds = [s.kind for s in bouts.segments]
     assert not bouts.found and kinds == ["standing", "movement", "no_contact", "movement", "standing"]
     assert bouts.segments[2].start == pytest.approx(4.0, abs=0.03) and bouts.segments[2].end == pytest.approx(4.5, abs=0.03)
+
+
+@pytest.mark.parametrize("blf_1, flight", [(0.235, False), (0.30, True)])
+def test_a_deep_bounce_near_zero_keeps_contact_and_one_through_zero_does_not(blf_1, flight):
+    """Bouncing near resonance (f_b 2.40, f_h 2.50 Hz, xi_h 0.105) dips to 3 % of body weight each cycle and stays on
+    the plate: one bout, no "no contact" (the noise takes it under 5 % for 0.03 s); a force that would have to pass
+    through zero (blf_1 0.30 g) is contact lost."""
+    from smd_statespace.applicability import check_bouncing
+    from smd_statespace.simulation import simulate_bouncing
+
+    record = simulate_bouncing(mass=MASS, f_b=2.4, f_h=2.5, xi_h=0.105, duration=30.0, noise=0.01, seed=3,
+                               blf=[blf_1, 0.05, 0.02], fb_variation=0.0, coef_variation=0.0).record
+    bouts = find_bouts(record)
+    kinds = [s.kind for s in bouts.segments]
+    refusals = {f.kind for f in check_bouncing(record).refusals}
+    if flight:
+        assert "no_contact" in kinds and "contact_lost" in refusals
+    else:
+        assert record.force.min() < 0.05 * MASS * G  # the dips are there
+        assert kinds == ["ramp", "bouncing", "ramp"] and not refusals

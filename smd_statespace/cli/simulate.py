@@ -5,7 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..applicability import flights
 from ..errors import OptionError, SMDInputError
+from ..io import G
 from ..simulation import VARIATIONS
 from ..simulation.phone import PHONE_DEFAULTS
 from ..simulation.phone_session import SESSION_DEFAULTS
@@ -179,6 +181,12 @@ def run_simulate(args) -> int:
         f"wrote {csv_path}: {record.duration:.2f} s at {record.fs:g} Hz, {info['n_cycles']} force cycles "
         f"(f_b {args.fb:g} Hz, f_h {args.fh:g} Hz, xi_h {args.xi:g}, {seed}{extra}); truth in {truth_path}"
     )
+    fraction = record.force / (mass * G)
+    starts, _ = flights(fraction, 1.0 / record.fs)
+    if starts.size:
+        print(f"warning: the simulated GRF falls to about zero {starts.size} times (lowest {fraction.min():.0%} of "
+              "body weight): a person would leave the plate there, which the SMD model cannot (no flight phase); "
+              "identify reads these parts as no contact and leaves them out. Lower --blf's first value or raise --xi")
     return 0
 
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..applicability import CONTACT_FRACTION, CONTACT_MIN_DURATION, RHYTHM_MIN, repeating_period, runs
+from ..applicability import CONTACT_FRACTION, RHYTHM_MIN, flights, repeating_period, runs
 from ..errors import OptionError, RecordError
 from ..io import G, Record
 from .decimation import RECORD_RATE, decimate_record
@@ -368,8 +368,10 @@ def _states(force, fs, weight):
     rms = np.sqrt(_moving_mean(band ** 2, max(int(round(fs)), 3)))
     state = np.where(rms > ACTIVE_LEVEL * weight, 2, 1)
     starts, stops = runs(low < CONTACT_FRACTION * weight)
-    for a, b in zip(starts, stops):
-        state[a:b] = 0 if (b - a) / fs >= CONTACT_MIN_DURATION else 2
+    for a, b in zip(starts, stops):  # a dip that is not a flight (applicability.flights) is movement
+        state[a:b] = 2
+    for a, b in zip(*flights(low / weight, 1.0 / fs)):
+        state[a:b] = 0
     starts, stops = runs(state == 1)  # short quiet gaps inside movement are movement
     for a, b in zip(starts, stops):
         if (b - a) / fs < _MIN_STANDING and a > 0 and b < state.size:
@@ -444,8 +446,8 @@ def find_bouts(record: Record) -> Bouts:
     -----
     Per sample, the force low-passed at 20 Hz under
     :data:`~smd_statespace.applicability.CONTACT_FRACTION` of ``M g`` for
-    :data:`~smd_statespace.applicability.CONTACT_MIN_DURATION` or more is no
-    contact; the RMS over 1 s of the force band-passed to 0.7-10 Hz above :data:`ACTIVE_LEVEL` of ``M g`` is
+    :data:`~smd_statespace.applicability.CONTACT_MIN_DURATION` or more, at about zero
+    (:func:`~smd_statespace.applicability.flights`), is no contact; the RMS over 1 s of the force band-passed to 0.7-10 Hz above :data:`ACTIVE_LEVEL` of ``M g`` is
     movement (quiet gaps under 0.5 s inside movement too); the rest is standing. A movement is a bout of bouncing
     when its force repeats (autocorrelation >= 0.5 at a period of 0.2-1.25 s) over at least :data:`MIN_BOUT_CYCLES`
     steady cycles. A bout is cut at force peaks: from each end inwards, cycles off the period by 30 % or more, and
