@@ -2,7 +2,8 @@
 
 Simulated people bounce for 30 s at 100 Hz (1 % BW noise) with one hidden
 physical effect, or with none, under **both** generators of cycle-to-cycle
-force variation (``jumps`` and ``smooth``). Each record is identified as a
+force variation (``jumps`` and ``smooth``), and as a lab exports a whole trial (``lab``, :data:`GENERATORS`: a
+person without an effect or whose ``f_h`` drifts or steps). Each record is identified as a
 user would (``identify_person`` with its defaults), diagnosed with the
 candidates (:func:`smd_statespace.person.diagnose.diagnose_person`: every
 registered effect, the user's quadratic damper of docs/effects.md (its
@@ -61,7 +62,7 @@ from smd_statespace.person import identify_person
 from smd_statespace.person.diagnose import diagnose_person, label
 from smd_statespace.person.effect_adapter import record_default
 from smd_statespace.person.extend import configured_for_record, fit_effects
-from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing
+from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing, simulate_lab_record
 
 REPO = Path(__file__).resolve().parents[1]
 USER_EFFECT_PAGE = REPO / "docs" / "effects.md"
@@ -105,7 +106,25 @@ TRUE_PARAMETER = {"cubic_stiffness": ("beta_3", "beta_3"), "quadratic_damping": 
                   "term_f_step": ("c_f_step", "c_f_step")}
 """The effect parameter whose error is counted: ``(estimated name, key of the simulation's truth)``."""
 
-GENERATORS = ("jumps", "smooth")
+GENERATORS = ("jumps", "smooth", "lab")
+"""The two generators of force variation of :func:`simulate_bouncing`, and ``lab``: a lab's force-plate export of a
+whole trial (:func:`simulate_lab_record`: standing 4 s before and after, ramps, 1000 Hz, mains hum, a drifting zero,
+1 N noise; jumps variation), which the fit reaches through the record front end as a user's export would."""
+
+LAB_KINDS = {"clean", "term_f_drift", "term_f_step"}
+"""What the lab generator makes: a person without an effect, or whose ``f_h`` drifts or steps over the bout (the
+lab simulator's ``f_h_change``; it has no other effects)."""
+
+
+def lab_change(effects) -> dict:
+    """``simulate_lab_record``'s options for a drift or step term: the change of ``f_h`` over the bout that the
+    term's ``c`` makes (``w_h^2`` from ``1 - c/2`` to ``1 + c/2`` times the middle's)."""
+    if not effects:
+        return {}
+    term = effects["term"]
+    c = term[f"c_{term['kind']}"]
+    return {"f_h_change": float(np.sqrt((1 + c / 2) / (1 - c / 2)) - 1),
+            "change": "step" if term["kind"] == "f_step" else "drift"}
 
 
 def _load_user_effect():
@@ -137,6 +156,8 @@ def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATO
                               "xi_h": rng.uniform(0.1, 0.5), "mass": rng.uniform(50.0, 90.0),
                               "blf": tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))}
                     label = ("small", "large")[size] if effects else "-"
+                    if generator == "lab" and kind not in LAB_KINDS:
+                        continue
                     if generator in generators and kind in kinds and (effects is None or label in sizes):
                         out.append((kind, label, generator, i, person, int(rng.integers(2**31)), effects))
     return out
@@ -160,6 +181,29 @@ def _with_true_effect(base, diagnosis, spec) -> tuple:
     return fitted, time.perf_counter() - moment
 
 
+def _lab_record(person, sim_seed, effects) -> tuple:
+    """A lab export of the person (:data:`GENERATORS`) and the effect's size: the RMS of the GRF difference the change
+    makes (noise-free) over the plate's noise sd."""
+    common = dict(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], blf=person["blf"],
+                  seed=sim_seed)
+    sim = simulate_lab_record(**common, **lab_change(effects))
+    if not effects:
+        return sim, np.nan
+    quiet = dict(hum=(0.0, 0.0, 0.0), drift=0.0, noise=0.0)
+    plain = simulate_lab_record(**common, **quiet).record.force
+    forced = simulate_lab_record(**common, **quiet, **lab_change(effects)).record.force
+    return sim, float(np.sqrt(np.mean((forced - plain) ** 2)) / sim.truth["noise_n"])
+
+
+def _true_spec(kind, base) -> str:
+    """The true effect as ``identify --effect`` adds it (:data:`FITTED`); a time term on the fitted record's own time
+    axis (a lab export's bouncing starts seconds into it)."""
+    if kind in ("term_f_drift", "term_f_step"):
+        time = base.model.time
+        return f"{FITTED[kind].split(',')[0]},scale={time[-1] - time[0]:.6g},start={time[0]:.6g}"
+    return FITTED[kind]
+
+
 def one(task) -> dict:
     """Simulate, identify, diagnose and identify with the true effect one record; never raises."""
     _load_user_effect()
@@ -170,14 +214,18 @@ def one(task) -> dict:
                   fs=FS, blf=person["blf"], seed=sim_seed, variation=generator)
     started = time.perf_counter()
     try:
-        sim = simulate_bouncing(noise=NOISE, effects=effects, **common)
+        if generator == "lab":
+            sim, row["effect_size"] = _lab_record(person, sim_seed, effects)
+            row["f_h"] = sim.truth["f_h"]  # the bout's mean f_h
+        else:
+            sim = simulate_bouncing(noise=NOISE, effects=effects, **common)
+            if effects:
+                plain = simulate_bouncing(noise=0.0, **common).record.force
+                forced = simulate_bouncing(noise=0.0, effects=effects, **common).record.force
+                row["effect_size"] = float(np.sqrt(np.mean((forced - plain) ** 2)) / (NOISE * person["mass"] * G))
         record = sim.record
         if kind == "floor_unmeasured":
             record = dataclasses.replace(record, floor_acc=None)
-        if effects:
-            plain = simulate_bouncing(noise=0.0, **common).record.force
-            forced = simulate_bouncing(noise=0.0, effects=effects, **common).record.force
-            row["effect_size"] = float(np.sqrt(np.mean((forced - plain) ** 2)) / (NOISE * person["mass"] * G))
         moment = time.perf_counter()
         # the person without any effect, where the loop starts: a record's measured floor, which identify adds by
         # default (measured_floor), is left out so that diagnose can be asked to find it
@@ -201,13 +249,13 @@ def one(task) -> dict:
                    f_h_determined_before=base.determined("f_h"),
                    f_h_covered_before=bool(base.intervals["f_h"][0] <= person["f_h"] <= base.intervals["f_h"][1]))
         if kind in FITTED:
-            fitted, seconds = _with_true_effect(base, diagnosis, FITTED[kind])
+            fitted, seconds = _with_true_effect(base, diagnosis, _true_spec(kind, base))
             row["identify_effect_seconds"] = base_seconds + seconds
             row.update(f_h_after=fitted.f_h, xi_h_after=fitted.xi_h, f_h_sd_after=float(fitted.se[0]),
                        misfit_share_after=fitted.misfit_share, f_h_determined_after=fitted.determined("f_h"),
                        ljung_box_after=fitted.test_pvalues()["ljung_box_p"],
                        f_h_covered=bool(fitted.intervals["f_h"][0] <= person["f_h"] <= fitted.intervals["f_h"][1]))
-            if kind in TRUE_PARAMETER:
+            if kind in TRUE_PARAMETER and generator != "lab":  # the lab simulator's truth is its change of f_h
                 name, key = TRUE_PARAMETER[kind]
                 truth = sim.truth["effects"][next(iter(effects))][key]
                 estimate = fitted.effect_estimates().loc[name]
