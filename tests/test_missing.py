@@ -1,4 +1,7 @@
-"""diagnose on records with a hidden effect and on clean ones (false alarms are as bad as misses)."""
+"""diagnose on records with a hidden effect and on clean ones (false alarms are as bad as misses).
+
+One record per effect and one clean record (issue 46: a test keeps one positive and one negative case; the rates over
+many records are benchmarks/person_effects.py's for the record-level diagnosis, the product's default)."""
 
 import json
 
@@ -17,7 +20,7 @@ def record(seed, f_b, f_h, xi_h, effects=None, duration=12.0):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed,f_b,f_h,xi_h,blf", [(31, 2.0, 2.5, 0.3, (0.04, 0.03)), (32, 2.6, 3.1, 0.4, (0.05, 0.02))])
+@pytest.mark.parametrize("seed,f_b,f_h,xi_h,blf", [(31, 2.0, 2.5, 0.3, (0.04, 0.03))])
 def test_hidden_harmonics_are_found_and_adding_them_lowers_the_residual(seed, f_b, f_h, xi_h, blf):
     result = diagnose(record(seed, f_b, f_h, xi_h, {"harmonics": {"blf": blf}}), max_passes=3)
     assert not result.adequate
@@ -45,7 +48,7 @@ def check_found(result, name):
 # (below about f_b 1.8 Hz with beta 1000 1/m^2; at the simulator's default 400 1/m^2 and 2 Hz the force
 # absorbs it, see smd_statespace.diagnostics.missing).
 @pytest.mark.slow
-@pytest.mark.parametrize("seed,f_b,f_h,beta", [(1, 1.6, 1.92, 1500.0), (12, 1.5, 1.8, 1200.0)])
+@pytest.mark.parametrize("seed,f_b,f_h,beta", [(1, 1.6, 1.92, 1500.0)])
 def test_hidden_cubic_stiffness_is_found(seed, f_b, f_h, beta):
     result = diagnose(record(seed, f_b, f_h, 0.3, {"cubic_stiffness": {"beta_3": beta}}), max_passes=3)
     best = check_found(result, "cubic_stiffness")
@@ -55,7 +58,7 @@ def test_hidden_cubic_stiffness_is_found(seed, f_b, f_h, beta):
 
 # A floor vibrating above n f_b (here from other occupants, about 1 m/s^2) reaches the GRF through the legs.
 @pytest.mark.slow
-@pytest.mark.parametrize("seed,f_b,f_f", [(9, 1.7, 9.5), (5, 1.5, 8.2)])
+@pytest.mark.parametrize("seed,f_b,f_f", [(9, 1.7, 9.5)])
 def test_hidden_floor_mode_is_found(seed, f_b, f_f):
     synthetic = simulate_bouncing(mass=72.0, f_b=f_b, f_h=1.2 * f_b, xi_h=0.3, duration=12.0, seed=seed,
                                   effects={"floor_mode": {"frequency": f_f, "ambient": 1.0}})
@@ -68,7 +71,7 @@ def test_hidden_floor_mode_is_found(seed, f_b, f_f):
 # its motion estimated cycle by cycle. It explains the residual with 2 values per cycle (z, z_dot) where
 # extra harmonics need 4, so it ranks above them.
 @pytest.mark.slow
-@pytest.mark.parametrize("seed,f_b,f_f,ambient", [(5, 1.5, 8.2, 1.0), (14, 1.8, 11.0, 1.3)])
+@pytest.mark.parametrize("seed,f_b,f_f,ambient", [(14, 1.8, 11.0, 1.3)])
 def test_hidden_floor_without_accelerometer_is_found(seed, f_b, f_f, ambient):
     synthetic = simulate_bouncing(mass=72.0, f_b=f_b, f_h=1.2 * f_b, xi_h=0.3, duration=12.0, seed=seed,
                                   effects={"floor_mode": {"frequency": f_f, "ambient": ambient}})
@@ -98,7 +101,7 @@ def test_floor_at_the_bouncing_harmonics_is_absorbed_and_said_so():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed,f_b,f_h,xi_h", [(41, 1.8, 2.2, 0.35), (42, 2.9, 3.3, 0.25), (43, 2.3, 2.0, 0.4)])
+@pytest.mark.parametrize("seed,f_b,f_h,xi_h", [(43, 2.3, 2.0, 0.4)])
 def test_clean_records_are_adequate(seed, f_b, f_h, xi_h):
     result = diagnose(record(seed, f_b, f_h, xi_h), max_passes=3)
     assert result.adequate, result.table()

@@ -46,6 +46,27 @@ def test_expm_stack_matches_scipy():
         np.testing.assert_allclose(matrix, expected, rtol=1e-12, atol=1e-12)
 
 
+def test_exponentials_of_the_person_alone_match_scipy_singular_and_negative_stiffness_too():
+    """The 2 x 2 path of ``exponentials`` (written out) against scipy's expm of Van Loan's block, for springs of
+    positive, zero (a singular A) and negative stiffness, over- and under-damped, at 100 Hz and 1000 Hz."""
+    from smd_statespace.person.dynamics import exponentials
+
+    rng = np.random.default_rng(np.random.SeedSequence(46))
+    omega = 2 * np.pi * rng.uniform(0.5, 8.0, 40)
+    A = np.zeros((40, 2, 2))
+    A[:, 0, 1] = 1.0
+    A[:, 1, 0] = -omega**2 * np.resize([1.0, 0.0, -0.5, 2.0], 40)
+    A[:, 1, 1] = -2.0 * rng.uniform(0.0, 2.0, 40) * omega
+    for dt in (0.01, 0.001):
+        phi, integral = exponentials(A, dt)
+        for matrix, p, w in zip(A, phi, integral):
+            block = np.zeros((4, 4))
+            block[:2, :2], block[:2, 2:] = matrix * dt, np.eye(2) * dt
+            expected = linalg.expm(block)
+            np.testing.assert_allclose(p, expected[:2, :2], rtol=1e-12, atol=1e-13)
+            np.testing.assert_allclose(w, expected[:2, 2:], rtol=1e-12, atol=1e-13 * dt)
+
+
 def test_floor_mode_likelihood_equals_an_independent_linear_system():
     """Person + floor + one force harmonic, constant coefficients (a random walk with a vanishing step):
     the record-level likelihood equals the profile likelihood of the exact linear regression on the
@@ -375,59 +396,31 @@ def test_diagnose_prints_the_identify_command_that_adds_the_effect_and_it_runs(t
     assert abs(person["f_h"] / 2.6 - 1) <= abs(person["before"]["f_h"] / 2.6 - 1) + 0.01
 
 
-@pytest.mark.slow
-def test_the_likelihood_ratio_of_an_absent_effect_is_chi_square_with_its_degrees_of_freedom():
-    """On clean records, adding an effect of one parameter that is not there gives a likelihood ratio distributed
-    as chi-square(1) (30 records: mean near 1, Kolmogorov-Smirnov not rejected); where the disturbance is there,
-    its gain comes back."""
+@pytest.mark.parametrize("study", ["disturbance", "cubic"])
+def test_the_likelihood_ratio_of_an_absent_effect_is_small_and_of_a_present_one_large(study):
+    """A clean record: adding a known disturbance of unknown gain (linear, exact likelihood) or a cubic spring
+    (nonlinear, its path settled) gives a ratio under chi-square(1)'s 99.9 % point on its one degree of freedom;
+    where the disturbance is there its gain comes back. (That the ratio is chi-square(1) over many clean records is
+    benchmarks/likelihood_ratio_null.py; measured: docs/effects.md.)"""
     from scipy import stats
 
     from smd_statespace.person import identify_person
     from smd_statespace.person.extend import fit_effects
     from smd_statespace.simulation import simulate_bouncing
 
-    effect = known_disturbance()
-    ratios = []
-    for seed in np.random.SeedSequence(2026).generate_state(30):
-        sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=8, seed=int(seed))
-        base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
-        fitted = fit_effects(base, [effect], intervals="wald")
-        test = fitted.effect_test()
-        assert test["lr_df"] == 1 and not fitted.model.approximate
-        ratios.append(test["lr"])
-    ratios = np.array(ratios)
-    print(np.round(np.sort(ratios), 2))
-    assert 0.5 < ratios.mean() < 1.6
-    assert stats.kstest(ratios, stats.chi2(1).cdf).pvalue > 0.01
-    sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=10, seed=7,
-                            effects=[effect.with_values(c_d=0.3)])
+    effect = known_disturbance() if study == "disturbance" else make_effect("cubic_stiffness")
+    sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=8, seed=2026)
     base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
-    gain = fit_effects(base, [effect], intervals="wald").effect_estimates().loc["c_d"]
-    assert abs(gain["value"] - 0.3) < 3 * gain["sd"] and gain["value"] > 5 * gain["sd"]
-
-
-@pytest.mark.slow
-def test_the_likelihood_ratio_of_an_absent_cubic_spring_is_near_chi_square_1():
-    """A nonlinear effect's (approximate) likelihood ratio on clean records: 30 records, every path settled,
-    Kolmogorov-Smirnov against chi-square(1) not rejected, mean below 2 (with the force's constant free it was
-    2.9, median 1.5, 6 of 12 paths unsettled)."""
-    from scipy import stats
-
-    from smd_statespace.person import identify_person
-    from smd_statespace.person.extend import fit_effects
-    from smd_statespace.simulation import simulate_bouncing
-
-    ratios = []
-    for seed in np.random.SeedSequence(2027).generate_state(30):
-        sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=8, seed=int(seed))
+    fitted = fit_effects(base, [effect], intervals="wald")
+    test = fitted.effect_test()
+    assert test["lr_df"] == 1 and fitted.settled and fitted.model.approximate == (study == "cubic")
+    assert test["lr"] < stats.chi2(1).ppf(0.999)
+    if study == "disturbance":
+        sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=10, seed=7,
+                                effects=[effect.with_values(c_d=0.3)])
         base = identify_person(sim.record, variation="independent", timing="template", intervals="wald")
-        fitted = fit_effects(base, [make_effect("cubic_stiffness")], intervals="wald")
-        assert fitted.settled and fitted.effect_test()["lr_df"] == 1
-        ratios.append(fitted.effect_test()["lr"])
-    ratios = np.array(ratios)
-    print(np.round(np.sort(ratios), 2))
-    assert ratios.mean() < 2.0 and np.median(ratios) < 1.0
-    assert stats.kstest(ratios, stats.chi2(1).cdf).pvalue > 0.01
+        gain = fit_effects(base, [effect], intervals="wald").effect_estimates().loc["c_d"]
+        assert abs(gain["value"] - 0.3) < 3 * gain["sd"] and gain["value"] > 5 * gain["sd"]
 
 
 def test_an_effect_added_on_top_of_another_is_tested_against_the_person_with_the_first():

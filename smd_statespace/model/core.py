@@ -347,6 +347,8 @@ class SMDModel:
         x = np.asarray(x, dtype=float)
         start = self._index["a0"]
         coefficients = x[..., start:start + 1 + 2 * self.n_harmonics]
+        if not np.any(coefficients):  # no force (the record-level model linearises at such states): no basis to build
+            return np.zeros(np.broadcast_shapes(coefficients.shape[:-1], np.shape(t)))
         return G * np.sum(coefficients * self.fourier_basis(t, inputs), axis=-1)
 
     def acceleration(self, x, t, inputs: CycleInputs):

@@ -233,11 +233,41 @@ def exponentials(A, dt):
     which stays right when ``A`` is singular.
     """
     K, n, _ = A.shape
+    if n == 2:  # the person alone: the same series on 2 x 2 matrices written out (about 5 times faster)
+        return _exponentials_2x2(A, dt)
     block = np.zeros((K, 2 * n, 2 * n))
     block[:, :n, :n] = A * dt
     block[:, :n, n:] = np.eye(n) * dt
     e = expm_stack(block)
     return e[:, :n, :n], e[:, :n, n:]
+
+
+def _product(p, q):
+    """``p @ q`` of two stacks of 2 x 2 matrices given as their entries ``(m00, m01, m10, m11)``."""
+    return (p[0] * q[0] + p[1] * q[2], p[0] * q[1] + p[1] * q[3], p[2] * q[0] + p[3] * q[2], p[2] * q[1] + p[3] * q[3])
+
+
+def _exponentials_2x2(A, dt, order: int = 14):
+    """:func:`exponentials` for 2 x 2 ``A``: the Taylor series of :func:`expm_stack` (the same scaling by halving
+    and the same order), summed by Horner's rule on the matrices' entries, with ``W = dt phi_1(A dt)``,
+    ``phi_1(X) = sum X^k / (k + 1)!``, carried through the squarings by ``W(2h) = (I + Phi(h)) W(h)``.
+    Singular ``A`` needs no care: no inverse is taken."""
+    M = np.asarray(A, dtype=float) * dt
+    norm = float(np.max(np.abs(M).sum(axis=-1))) + dt if M.size else 0.0  # that of [[A dt, I dt], [0, 0]]
+    squarings = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
+    X = M / 2.0**squarings
+    x = (X[:, 0, 0], X[:, 0, 1], X[:, 1, 0], X[:, 1, 1])
+    one, zero = np.ones(len(M)), np.zeros(len(M))
+    identity = (one, zero, zero, one)
+    exp_, phi = identity, identity
+    for k in range(order, 0, -1):  # exp: I + X/k (...); phi_1: I + X/(k + 1) (...)
+        exp_ = tuple(i + e / k for i, e in zip(identity, _product(x, exp_)))
+        phi = tuple(i + e / (k + 1) for i, e in zip(identity, _product(x, phi)))
+    integral = tuple(e * (dt / 2.0**squarings) for e in phi)
+    for _ in range(squarings):
+        integral = _product(tuple(i + e for i, e in zip(identity, exp_)), integral)
+        exp_ = _product(exp_, exp_)
+    return (np.stack(exp_, axis=-1).reshape(-1, 2, 2), np.stack(integral, axis=-1).reshape(-1, 2, 2))
 
 
 def expm_stack(M, order: int = 14):
