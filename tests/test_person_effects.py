@@ -401,7 +401,7 @@ def test_the_likelihood_ratio_of_an_absent_effect_is_small_and_of_a_present_one_
     """A clean record: adding a known disturbance of unknown gain (linear, exact likelihood) or a cubic spring
     (nonlinear, its path settled) gives a ratio under chi-square(1)'s 99.9 % point on its one degree of freedom;
     where the disturbance is there its gain comes back. (That the ratio is chi-square(1) over many clean records is
-    benchmarks/likelihood_ratio_null.py; measured: docs/effects.md.)"""
+    benchmarks/likelihood_ratio_null.py; measured: docs/person.md.)"""
     from scipy import stats
 
     from smd_statespace.person import identify_person
