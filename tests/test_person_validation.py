@@ -118,3 +118,19 @@ def test_a_step_is_judged_by_the_fold_fitted_across_it():
     assert after["loglike"] > before["loglike"] + 10.0
     assert np.isnan(after["free_run"][fitted.model.time >= after["cut"]] if fold["start"] >= after["cut"]
                     else after["free_run"][fitted.model.time < after["cut"]]).all()
+
+
+def test_candidates_are_ranked_by_their_held_out_gain_per_held_out_sample():
+    """A step is judged on one fold (a third of the samples), harmonics on both halves: +40 on 1000 samples predicts
+    better than +72 on 3000, and is ranked first; a candidate that failed its test comes last whatever its gain."""
+    from smd_statespace.person.diagnose import PersonDiagnosis
+
+    def row(name, gain, samples, significant=True, log_p=-50.0):
+        return {"effect": name, "significant": significant, "held_out_before": 1000.0, "held_out": 1000.0 + gain,
+                "held_out_samples": samples, "log_p": log_p}
+
+    rows = [row("harmonics", 72.0, 3000), row("term:f_step@0.5", 40.0, 1000), row("cubic", 500.0, 3000, False, -90)]
+    diagnosis = PersonDiagnosis(base=None, fits={}, rows=rows, failed={}, alpha=0.01)
+    assert list(diagnosis.table().index) == ["term:f_step@0.5", "harmonics", "cubic"]
+    rows[1]["held_out_samples"] = 3000  # the same gain on as many samples as the harmonics': they come first
+    assert list(PersonDiagnosis(base=None, fits={}, rows=rows, failed={}, alpha=0.01).table().index)[0] == "harmonics"

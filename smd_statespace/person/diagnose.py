@@ -69,10 +69,11 @@ from .validation import cross_validated_loglike
 __all__ = ["LESS_WHITE", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
            "HELD_OUT", "label", "indistinguishable_from_zero", "without_key"]
 
-HELD_OUT = ("held_out_before", "held_out", "held_out_one_step_fit_before", "held_out_one_step_fit",
+HELD_OUT = ("held_out_before", "held_out", "held_out_samples", "held_out_one_step_fit_before", "held_out_one_step_fit",
             "held_out_free_run_fit_before", "held_out_free_run_fit")
-"""A candidate row's held-out validation (:func:`held_out`): the held-out log-likelihood and the one-step and
-free-run fits (%) on the held-out halves, without and with it; NaN when not validated."""
+"""A candidate row's held-out validation (:func:`held_out`): the held-out log-likelihood (over ``held_out_samples``
+samples) and the one-step and free-run fits (%) on the held-out halves, without and with it; NaN when not
+validated."""
 
 FREE_RUN_POINTS = 0.05
 """A held-out free run's fit lower by more than this many points with a candidate is told in a note."""
@@ -138,6 +139,7 @@ def held_out(row: dict, before, after) -> dict:
         return row
     worse = bool(after["loglike"] < before["loglike"])
     return {**row, "held_out_before": before["loglike"], "held_out": after["loglike"],
+            "held_out_samples": int(np.sum(np.isfinite(after["one_step"]))),
             "held_out_one_step_fit_before": before["one_step_fit"], "held_out_one_step_fit": after["one_step_fit"],
             "held_out_free_run_fit_before": before["free_run_fit"], "held_out_free_run_fit": after["free_run_fit"],
             "held_out_worse": worse, "significant": row["significant"] and not worse}
@@ -203,13 +205,16 @@ class PersonDiagnosis:
     validation: dict = field(default_factory=dict)
 
     def table(self) -> pd.DataFrame:
-        """The candidates: those that pass first, by their held-out log-likelihood gain (the joint fit's
-        choice first when it separated two), then the others by the log p-value of their likelihood ratio."""
+        """The candidates: those that pass first, by their held-out log-likelihood gain per held-out sample (the
+        joint fit's choice first when it separated two), then the others by the log p-value of their likelihood
+        ratio."""
         if not self.rows:
             return pd.DataFrame()
         table = pd.DataFrame(self.rows).set_index("effect")
-        # the significant ones by how well they predict the held-out halves, the others by their test
-        gain = np.where(table["significant"], table["held_out"] - table["held_out_before"], np.nan)
+        # the significant ones by how well they predict the held-out halves, per held-out sample (a step is judged
+        # on one fold, the others on two), the others by their test
+        gain = np.where(table["significant"], (table["held_out"] - table["held_out_before"])
+                        / table["held_out_samples"], np.nan)
         table = table.assign(_gain=np.nan_to_num(gain, nan=-np.inf))
         order = list(table.sort_values(["significant", "_gain", "log_p"], ascending=[False, False, True]).index)
         table = table.drop(columns="_gain")
@@ -310,9 +315,10 @@ class PersonDiagnosis:
         significant = table[table["significant"].astype(bool)]
         if len(significant) >= 2:
             out.append("candidates that pass, by how well they predict the held-out halves (held-out "
-                       "log-likelihood gain; f_h, xi_h with each): " + "; ".join(
-                           f"{name} {row['held_out'] - row['held_out_before']:+.1f} (f_h {row['f_h']:.3f} Hz, "
-                           f"xi_h {row['xi_h']:.3f})" for name, row in significant.iterrows()))
+                       "log-likelihood gain per held-out sample; f_h, xi_h with each): " + "; ".join(
+                           f"{name} {row['held_out'] - row['held_out_before']:+.1f} on {row['held_out_samples']:.0f} "
+                           f"samples (f_h {row['f_h']:.3f} Hz, xi_h {row['xi_h']:.3f})"
+                           for name, row in significant.iterrows()))
         for name, row in significant.iterrows():
             if row["held_out_free_run_fit"] < row["held_out_free_run_fit_before"] - FREE_RUN_POINTS:
                 out.append(f"{name}: it predicts the held-out halves one step ahead better, but their free run "
