@@ -353,3 +353,16 @@ def test_drawing_a_floors_ambient_excitation_returns_a_new_floor():
     assert rates[1][1] != 0.0  # the drawn copy's floor is shaken by its ambient excitation
     plain = make_effect("cubic_stiffness:beta_3=400")
     assert draw_inputs(plain, np.random.default_rng(1), 10.0) is plain  # nothing to draw: the adapter's default
+
+
+def test_diagnoses_floor_candidate_is_the_measured_floor_or_else_the_estimated_mode():
+    """A record with floor_acc gets the measured floor as diagnose's candidate; one without it the estimated floor
+    mode (a person on a vibrating floor without an accelerometer was otherwise read as missing harmonics)."""
+    from types import SimpleNamespace
+
+    from smd_statespace.effects.floor_mode import FloorMode
+
+    with_accelerometer = SimpleNamespace(record=SimpleNamespace(floor_acc=np.zeros(10)))
+    without = SimpleNamespace(record=SimpleNamespace(floor_acc=None))
+    assert FloorMode.record_default(with_accelerometer).source == "measured"
+    assert FloorMode.record_default(without).spec == "floor_mode:source=modal"  # as the verdict prints it

@@ -41,7 +41,7 @@ def add_diagnose(subparsers):
     add_run_arguments(parser)
     parser.add_argument("--candidate", action="append", default=[], metavar="NAME[:key=value,...]",
                         help="a candidate effect to try, repeatable (default: every registered effect not in the "
-                             "model; floor_mode:source=modal only when named here)")
+                             "model; the floor is the measured one with a floor_acc column, else an estimated mode)")
     parser.add_argument("--no-floor", action="store_true",
                         help="record estimator: leave a record's measured floor (floor_acc) out of the person's "
                              "model and try it as a candidate (by default the person rides it, as in identify)")

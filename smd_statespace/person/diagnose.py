@@ -20,11 +20,10 @@ the model, so that its row shows the numbers ``identify --effect`` gives (its
 test stays the screening's, made where the person without it was fitted).
 
 Candidates, by default (:func:`~smd_statespace.person.effect_adapter.record_default`): every registered effect
-(a user's too), the floor only as the measured floor when the record has a
-``floor_acc`` column. An estimated floor mode (``floor_mode:source=modal``)
-is tried only when asked for (``--effect floor_mode:source=modal``): its
-frequency is searched over a fine grid of about 230 trials, which costs
-seconds, and its test counts them (Bonferroni).
+(a user's too); the floor as the measured floor when the record has a
+``floor_acc`` column, else as an estimated floor mode (``floor_mode:source=modal``),
+whose frequency is searched over a fine grid of about 230 trials, which costs
+seconds, and whose test counts them (Bonferroni).
 
 Generic terms: besides those, every generic term of the library
 (:data:`~smd_statespace.effects.generic.TERMS`: a spring stiffer on one side, one that hardens with amplitude,

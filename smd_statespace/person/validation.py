@@ -36,8 +36,8 @@ from .dynamics import PersonDynamics
 from .search import fit_model
 from .timing import CycleTiming
 
-__all__ = ["MIN_HALF_CYCLES", "BREAK_MARGIN", "halves", "part", "held_out_prediction", "held_out_loglike", "held_out_free_run",
-           "cross_validated_loglike"]
+__all__ = ["MIN_HALF_CYCLES", "BREAK_MARGIN", "halves", "part", "held_out_prediction", "held_out_loglike",
+           "held_out_free_run", "cross_validated_loglike"]
 
 MIN_HALF_CYCLES = 8
 """Fewest whole force cycles in each half (the record-level model needs as many to estimate the variation)."""

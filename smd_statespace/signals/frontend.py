@@ -447,7 +447,8 @@ def find_bouts(record: Record) -> Bouts:
     Per sample, the force low-passed at 20 Hz under
     :data:`~smd_statespace.applicability.CONTACT_FRACTION` of ``M g`` for
     :data:`~smd_statespace.applicability.CONTACT_MIN_DURATION` or more, at about zero
-    (:func:`~smd_statespace.applicability.flights`), is no contact; the RMS over 1 s of the force band-passed to 0.7-10 Hz above :data:`ACTIVE_LEVEL` of ``M g`` is
+    (:func:`~smd_statespace.applicability.flights`), is no contact; the RMS over 1 s of the force band-passed to
+    0.7-10 Hz above :data:`ACTIVE_LEVEL` of ``M g`` is
     movement (quiet gaps under 0.5 s inside movement too); the rest is standing. A movement is a bout of bouncing
     when its force repeats (autocorrelation >= 0.5 at a period of 0.2-1.25 s) over at least :data:`MIN_BOUT_CYCLES`
     steady cycles. A bout is cut at force peaks: from each end inwards, cycles off the period by 30 % or more, and
