@@ -312,9 +312,9 @@ class PersonDiagnosis:
             return []
         out = []
         for name in table.index[table["significant"].astype(bool) | table["held_out_worse"].astype(bool)]:
-            checked = self.validation.get(name)
-            if without_key(name) not in self.validation:
+            if without_key(name) not in self.validation:  # not a change in time
                 continue
+            checked = self.validation.get(name)
             if checked is None:
                 out.append(f"{name}: a change in time, and no cut of the record leaves it a sixth of the record "
                            "away in one half: not judged on held-out data")

@@ -274,8 +274,9 @@ def change_words(change) -> str:
                      f"{first['start']:.1f}-{first['end']:.1f} s, {second[name]:.3g}{unit} "
                      f"({second[f'{name}_low']:.3g}-{second[f'{name}_high']:.3g}) in {second['start']:.1f}-"
                      f"{second['end']:.1f} s ({abs(change['z'][name]):.1f} sd apart)")
-    kinds = ", ".join(f"term:{name[:-2] if name == 'xi_h' else 'f'}_{shape}" for name in change["changed"]
-                      if name in ("f_h", "xi_h") for shape in ("step", "drift"))
+    prefix = {"f_h": "f", "xi_h": "xi"}  # the generic terms of a parameter that changes in time
+    kinds = ", ".join(f"term:{prefix[name]}_{shape}" for name in change["changed"] if name in prefix
+                      for shape in ("step", "drift"))
     return ("the person changes during the record: " + "; ".join(parts) + ". One SMD model does not describe the "
             "whole record: read the halves, not one value; a parameter that varies in time (tiring, warming up, a "
             f"change of stance) is the likely missing piece: diagnose tries it as a step or a drift ({kinds}), or "

@@ -121,9 +121,8 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None) -> F
         ax.legend(fontsize=8, loc="upper right")
     panels[0][0].set_title(title, fontsize=10)
     worst, middle = axes[1:]
-    predicted = time[np.isfinite(runs[0][2])]
-    starts = (_worst_window(time, y - runs[0][2], seconds),
-              predicted[0] + 0.5 * (predicted[-1] - predicted[0]) - seconds / 2)
+    covered = time[np.isfinite(runs[0][2])]  # the samples the runs predict
+    starts = (_worst_window(time, y - runs[0][2], seconds), covered[0] + 0.5 * (covered[-1] - covered[0]) - seconds / 2)
     for ax, start, what in ((worst, starts[0], "free run, where the model without misses most"),
                             (middle, starts[1], "free run, middle")):
         shown = (time >= start) & (time <= start + seconds)
