@@ -136,10 +136,11 @@ def test_candidates_are_ranked_by_their_held_out_gain_per_held_out_sample():
     assert list(PersonDiagnosis(base=None, fits={}, rows=rows, failed={}, alpha=0.01).table().index)[0] == "harmonics"
 
 
-@pytest.mark.parametrize("kurtosis, noted", [(15.9, True), (3.1, False)])
-def test_heavy_tailed_innovations_are_said_to_overstate_the_ratios(kurtosis, noted):
+@pytest.mark.parametrize("kurtosis, scale, noted", [(15.9, 3.2, True), (3.1, 1.0, False)])
+def test_heavy_tailed_innovations_are_said_to_overstate_the_ratios(kurtosis, scale, noted):
     """A person whose innovations have a kurtosis of 15.9 (a quiet lab plate's) gets the note that the likelihood
-    ratios assume Gaussian innovations; one near a Gaussian's 3 does not."""
+    ratios assume Gaussian innovations, and a candidate whose ratio is scaled by 3.2 the note that says by how much
+    the likelihood overstates it; one near a Gaussian's 3 with a plain ratio gets neither."""
     from types import SimpleNamespace
 
     from smd_statespace.person.diagnose import PersonDiagnosis
@@ -148,6 +149,8 @@ def test_heavy_tailed_innovations_are_said_to_overstate_the_ratios(kurtosis, not
     row = {"effect": "term:f_drift", "significant": True, "held_out_before": 1000.0, "held_out": 1010.0,
            "held_out_samples": 3000, "log_p": -20.0, "on_bound": False, "zero": False, "less_white": False,
            "held_out_worse": False, "settled": True, "likelihood": "exact", "f_h": 2.5, "xi_h": 0.3,
-           "held_out_free_run_fit": 80.0, "held_out_free_run_fit_before": 79.0}
+           "held_out_free_run_fit": 80.0, "held_out_free_run_fit_before": 79.0, "lr_scale": scale}
     notes = PersonDiagnosis(base=base, fits={}, rows=[row], failed={}, alpha=0.01).notes()
     assert any(note.startswith("the person's innovations are heavy-tailed (kurtosis 15.9") for note in notes) == noted
+    assert any("overstates the evidence for a candidate by up to 3.2 times (term:f_drift)" in note
+               for note in notes) == noted

@@ -114,7 +114,7 @@ def run_person_diagnose(args) -> int:
     if table.empty:
         print("  none could be fitted")
     else:
-        columns = list(SHARED_COLUMNS[:-1]) + ["noise_change_%", "held_out_before", "held_out",
+        columns = list(SHARED_COLUMNS[:2]) + ["lr_scale"] + list(SHARED_COLUMNS[2:-1]) + ["noise_change_%", "held_out_before", "held_out",
                                                "held_out_free_run_fit_before", "held_out_free_run_fit", "parameters"]
         with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 200,
                                "display.max_colwidth", 60):
@@ -123,8 +123,8 @@ def run_person_diagnose(args) -> int:
         print(f"\ngeneric terms, each score-tested at the fitted person, those not ruled out fitted quickly; the "
               f"{SCREENED} largest quick likelihood ratios significant over the library (Holm) are fitted above:")
         for _, row in result.screened.head(5).iterrows():
-            quick = (f"quick LR {row['lr_quick']:7.1f} (Holm p {row['p_quick_holm']:<7.2g})"
-                     if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 21)
+            quick = (f"quick LR {row['lr_quick']:7.1f} / {row['lr_scale']:<4.2g} (Holm p {row['p_quick_holm']:<7.2g})"
+                     if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 28)
             print(f"  {row['label']:<17} robust LM {row['lm_robust']:7.1f}  {quick}  {row['physics']}")
     tests = result.tests or len(result.rows) + len(result.failed)
     level = args.alpha / max(tests, 1)
@@ -134,8 +134,9 @@ def run_person_diagnose(args) -> int:
     else:
         best = table.loc[result.missing[0]]
         physics = f" = {best['physics']}" if best.get("physics") else ""
-        print(f"\nverdict: missing effect '{result.missing[0]}'{physics} (LR {best['lr']:.1f} on {int(best['df'])} "
-              f"parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} "
+        scaled = f" / {best['lr_scale']:.2g}" if best["lr_scale"] > 1 else ""
+        print(f"\nverdict: missing effect '{result.missing[0]}'{physics} (LR {best['lr']:.1f}{scaled} on "
+              f"{int(best['df'])} parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} "
               f"Hz, xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
         extra = "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
         print("next: " + result.command(args.record, args.mass, extra))

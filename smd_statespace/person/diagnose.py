@@ -62,10 +62,11 @@ from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from ..effects.generic import label
 from .extend import configured_for_record, fit_effects
+from .robust import MIN_SCALE, added_unknowns, misspecification_scale
 from .screen import generic_library, screen
 from .validation import cross_validated_loglike
 
-__all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
+__all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "robust_scale", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
            "HELD_OUT", "label", "indistinguishable_from_zero", "without_key"]
 
 HELD_OUT = ("held_out_before", "held_out", "held_out_samples", "held_out_one_step_fit_before", "held_out_one_step_fit",
@@ -89,6 +90,9 @@ HEAVY_TAILS = 6.0
 note: the likelihood ratios assume Gaussian innovations. Measured: clean lab-shaped exports of a quiet plate (the
 force's jumps from cycle to cycle in the innovations, kurtosis up to 16) had 2 false alarms in 4."""
 
+SCALE_NOTE = 1.5
+"""A candidate whose likelihood ratio is scaled by more than this (:func:`robust_scale`) gets a note in words."""
+
 LESS_WHITE = 0.1
 """A candidate with which the innovations' Ljung-Box p falls below this fraction of its value without it is not
 proposed (less white: it does not take what the model misses; the fraction leaves the p-values' own noise)."""
@@ -99,17 +103,21 @@ def candidate_row(base, fitted, level: float) -> dict:
     test = fitted.effect_test()
     df, lr = test["lr_df"], test["lr"]
     added = fitted.effects[len(base.effects):]  # the candidate, on top of the effects already in the model
+    # the ratio scaled by how much the likelihood overstates the evidence where the rest of the model is wrong
+    # (robust.py: a quiet plate's misfit gave clean records a cubic spring at LR 52.6, scale 6.3)
+    scale = robust_scale(fitted, added_unknowns(fitted, base))
     # a candidate with nothing to estimate (a measured floor) is not nested: it must beat chi-square(1);
     # one found as the best of many trials (a floor mode's frequency grid) is tested as that many (Bonferroni)
     trials = int(np.prod([record_search_size(effect, base) for effect in added]))
-    log_p = min(float(stats.chi2.logsf(max(lr, 0.0), max(df, 1))) + math.log(trials), 0.0)
+    log_p = min(float(stats.chi2.logsf(max(lr / scale, 0.0), max(df, 1))) + math.log(trials), 0.0)
     estimates = fitted.effect_estimates()
     before_tests, after_tests = base.test_pvalues(), fitted.test_pvalues()
     person_on_bound = fitted.model.person_at_bound(fitted.params)
     effect_on_bound = bool(estimates["on_bound"].any()) if len(estimates) else False
     row = {"effect": "+".join(label(e) for e in added),
            "physics": "; ".join(getattr(e, "physics", "") for e in added),
-           "spec": " ".join(e.spec for e in fitted.effects), "df": df, "lr": lr, "p_value": math.exp(log_p),
+           "spec": " ".join(e.spec for e in fitted.effects), "df": df, "lr": lr, "lr_scale": scale,
+           "lr_robust": lr / scale, "p_value": math.exp(log_p),
            "log_p": log_p, "trials": trials, "f_h_before": base.f_h, "f_h": fitted.f_h, "xi_h_before": base.xi_h,
            "xi_h": fitted.xi_h, "noise_change_%": 100.0 * (fitted.sigma / base.sigma - 1.0),
            "ljung_box_p_before": before_tests["ljung_box_p"], "ljung_box_p": after_tests["ljung_box_p"],
@@ -128,6 +136,15 @@ def candidate_row(base, fitted, level: float) -> dict:
                           and not row["zero"] and not row["less_white"])
     row.update({key: math.nan for key in HELD_OUT}, held_out_worse=False)
     return row
+
+
+def robust_scale(fitted, tested) -> float:
+    """:func:`~smd_statespace.person.robust.misspecification_scale` of the unknowns ``tested`` at ``fitted``'s
+    estimate; 1 (the plain ratio) where it cannot be computed."""
+    try:
+        return misspecification_scale(fitted.model, fitted.params, tested)["scale"]
+    except (SMDInputError, ArithmeticError, np.linalg.LinAlgError, ValueError):
+        return MIN_SCALE
 
 
 def held_out(row: dict, before, after) -> dict:
@@ -261,12 +278,19 @@ class PersonDiagnosis:
         candidates separated."""
         out = []
         kurtosis = self.base.test_pvalues()["kurtosis"] if self.base is not None else math.nan
+        table = self.table()
         if kurtosis > HEAVY_TAILS and not self.adequate:
             out.append(f"the person's innovations are heavy-tailed (kurtosis {kurtosis:.1f}; a Gaussian's is 3): the "
                        "likelihood ratios assume Gaussian innovations and may overstate the evidence (on clean "
                        "lab exports of a quiet plate they proposed effects that were not there), so weigh the "
                        "held-out gains more than the ratios")
-        table = self.table()
+        if not table.empty and float(table["lr_scale"].max()) > SCALE_NOTE:
+            worst = table["lr_scale"].idxmax()
+            out.append(f"the person misses something none of the candidates is (a quiet plate shows how the force "
+                       f"varies from cycle to cycle): the likelihood overstates the evidence for a candidate by "
+                       f"up to {table.loc[worst, 'lr_scale']:.2g} times ({worst}), so each ratio is divided by its "
+                       "own factor (lr_scale: the scores' spread between cycles over the likelihood's "
+                       "information) before it is tested")
         if not table.empty:
             for name in table.index[table["on_bound"].astype(bool)]:
                 out.append(f"{name}: its fit put f_h, xi_h or the effect's parameter on a search bound (f_h "
@@ -299,10 +323,9 @@ class PersonDiagnosis:
             out.append(f"{name}: not fitted ({why})")
         if self.joint:
             first, second = self.joint["effects"]
-            out.append(f"{first} and {second} both explain the residual; fitted together, {first} adds LR "
-                       f"{self.joint[first]['lr']:.1f} (p {self.joint[first]['p_value']:.2g}) on top of {second}, "
-                       f"and {second} adds LR {self.joint[second]['lr']:.1f} (p {self.joint[second]['p_value']:.2g}) "
-                       f"on top of {first}: {self.joint['verdict']}")
+            out.append(f"{first} and {second} both explain the residual; fitted together, {first} adds "
+                       f"{_ratio_text(self.joint[first])} on top of {second}, and {second} adds "
+                       f"{_ratio_text(self.joint[second])} on top of {first}: {self.joint['verdict']}")
         return out
 
     def _held_out_notes(self, table) -> list:
@@ -347,6 +370,13 @@ class PersonDiagnosis:
                 "joint": self.joint, "screened": screened, "tests": self.tests}
 
 
+def _ratio_text(test: dict) -> str:
+    """``LR 52.6 / 6.3 (p 0.004)``: a likelihood ratio, its misspecification scale where above 1, its p-value."""
+    scale = test.get("lr_scale", MIN_SCALE)
+    scaled = f" / {scale:.2g}" if scale > MIN_SCALE else ""
+    return f"LR {test['lr']:.1f}{scaled} (p {test['p_value']:.2g})"
+
+
 def without_key(name: str) -> str:
     """The key of :attr:`PersonDiagnosis.validation` that holds the person without candidate ``name`` validated
     on ``name``'s own cut (a candidate with a change in time: :func:`~smd_statespace.person.validation.halves`)."""
@@ -364,7 +394,9 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
         lr = 2.0 * (both.loglike - fits[other].loglike)
         df = max(both.added_unknowns(fits[other]), 1)
         trials = int(np.prod([record_search_size(e, base) for e in fits[name].effects[present:]]))
-        out[name] = {"lr": float(lr), "p_value": min(float(stats.chi2.sf(max(lr, 0.0), df)) * trials, 1.0)}
+        scale = robust_scale(both, added_unknowns(fits[name], base))
+        out[name] = {"lr": float(lr), "lr_scale": scale,
+                     "p_value": min(float(stats.chi2.sf(max(lr / scale, 0.0), df)) * trials, 1.0)}
     keeps = [name for name in (first, second) if out[name]["p_value"] < level]
     if len(keeps) == 1:
         out["first"] = keeps[0]

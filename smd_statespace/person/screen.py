@@ -27,7 +27,9 @@ and only when the model is linearised again about its own path does the asymmetr
 score test does not rule out are *tested and ranked* by a quick fit (:func:`quick_ratio`: one search at the person's
 variation and cycle starts, a nonlinear term linearised once more about its own path, about a second each);
 the score test only pre-filters them (a term it rules out is not fitted), the quick fits' likelihood ratios,
-adjusted by Holm over the whole library, decide which are fitted.
+scaled for misspecification (:mod:`~smd_statespace.person.robust`: divided by how much the likelihood
+overstates the evidence where the rest of the model is wrong) and adjusted by Holm over the whole library,
+decide which are fitted.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from scipy import stats
 
 from ..effects.generic import TERMS, GenericTerm, label
 from .extend import effect_model
+from .robust import MIN_SCALE, misspecification_scale
 from .score import cycle_sums, profile_out, score
 from .search import fit_model
 
@@ -127,7 +130,9 @@ def quick_ratio(result, effect) -> dict:
     Returns
     -------
     dict
-        ``lr_quick`` (twice the gain of log-likelihood over ``result``) and ``estimate`` (the coefficient).
+        ``lr_quick`` (twice the gain of log-likelihood over ``result``), ``estimate`` (the coefficient) and
+        ``lr_scale`` (:func:`~smd_statespace.person.robust.misspecification_scale` at the quick fit: the ratio
+        over it is what is tested).
     """
     from .statespace import nominal_path  # statsmodels: imported when an effect is linearised
 
@@ -136,7 +141,12 @@ def quick_ratio(result, effect) -> dict:
     for _ in range(RELINEARISED if model.approximate else 0):
         model = replace(model, nominal=nominal_path(model, fitted["params"]))
         fitted = fit_model(model, fitted["params"], quick=True)
-    return {"lr_quick": float(2.0 * (fitted["loglike"] - result.loglike)), "estimate": float(fitted["params"][j])}
+    try:
+        scale = misspecification_scale(model, fitted["params"], [model.param_names[j]])["scale"]
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError):
+        scale = MIN_SCALE
+    return {"lr_quick": float(2.0 * (fitted["loglike"] - result.loglike)), "estimate": float(fitted["params"][j]),
+            "lr_scale": scale}
 
 
 def holm(p_values) -> np.ndarray:
@@ -160,10 +170,10 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
     by their likelihood ratio over the library.
 
     With ``alpha``, two stages: every term whose robust score p-value is below :data:`PREFILTER` (unadjusted:
-    a term that shows only away from ``c = 0`` has a small score) gets a quick fit (:func:`quick_ratio`); its
-    likelihood ratio's p-value (chi-square(1)) is adjusted by Holm over the *whole* library (a term not fitted
+    a term that shows only away from ``c = 0`` has a small score) gets a quick fit (:func:`quick_ratio`); the
+    p-value of its likelihood ratio over its misspecification scale (chi-square(1)) is adjusted by Holm over the *whole* library (a term not fitted
     counts as p = 1, so the pre-filter can lose power, never add false alarms). Those below ``alpha`` come
-    first, the largest quick likelihood ratio first: they are what ``diagnose`` fits.
+    first, the largest scaled quick likelihood ratio first: they are what ``diagnose`` fits.
 
     Returns
     -------
@@ -171,8 +181,9 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
         Indexed by the effect's spec: ``label`` (``term:abs_u``), ``physics`` (its physical name, where it has
         one), ``parameter``,
         ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` and ``p_holm`` (the robust p-values adjusted
-        over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``
-        (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm``, ordered as above.
+        over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
+        ``lr_scale`` (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm`` (of ``lr_quick /
+        lr_scale``), ordered as above.
     """
     effects = generic_library(result) if effects is None else list(effects)
     rows = []
@@ -185,12 +196,14 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
     table = table.sort_values("p_robust")
     if alpha is None:
         return table
-    table["lr_quick"], table["estimate"] = np.nan, np.nan
+    table["lr_quick"], table["estimate"], table["lr_scale"] = np.nan, np.nan, np.nan
     by_spec = {effect.spec: effect for effect in effects}
     for spec in table.index[table["p_robust"] < PREFILTER]:
         quick = quick_ratio(result, by_spec[spec])
-        table.loc[spec, ["lr_quick", "estimate"]] = quick["lr_quick"], quick["estimate"]
-    p_quick = stats.chi2.sf(np.maximum(table["lr_quick"].fillna(0.0).to_numpy(), 0.0), 1)
+        table.loc[spec, ["lr_quick", "estimate", "lr_scale"]] = quick["lr_quick"], quick["estimate"], quick["lr_scale"]
+    scaled = (table["lr_quick"] / table["lr_scale"]).fillna(0.0).to_numpy()
+    p_quick = stats.chi2.sf(np.maximum(scaled, 0.0), 1)
     table["p_quick_holm"] = holm(np.where(table["lr_quick"].notna(), p_quick, 1.0))
     passed = table["p_quick_holm"] < alpha
-    return pd.concat([table[passed].sort_values("lr_quick", ascending=False), table[~passed]])
+    return pd.concat([table[passed].assign(_scaled=scaled[passed.to_numpy()]).sort_values("_scaled", ascending=False)
+                      .drop(columns="_scaled"), table[~passed]])

@@ -298,13 +298,14 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     if not table.empty:
         level = diagnosis.alpha / max(diagnosis.tests or len(table), 1)
         names = list(table.index)[::-1]
-        ratios = np.maximum(table["lr"].to_numpy(dtype=float), 0.0)[::-1]
+        ratios = np.maximum(table["lr_robust"].to_numpy(dtype=float), 0.0)[::-1]
         proposed = table["significant"].to_numpy(dtype=bool)[::-1]
         right.barh(names, ratios, color=np.where(proposed, "tab:blue", "0.6"))
         degrees = table["df"].to_numpy(dtype=int)[::-1]
         for y, (ratio, df) in enumerate(zip(ratios, degrees)):
             right.plot([stats.chi2.isf(level, max(df, 1))] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
         right.set_xscale("symlog", linthresh=10.0)
-    right.set(xlabel="likelihood ratio (black: its test's level)", title="candidates fitted with the person")
+    right.set(xlabel="likelihood ratio / misspecification scale (black: its test's level)",
+              title="candidates fitted with the person")
     fig.suptitle(f"{_name(diagnosis.base)}: is an effect missing? blue: proposed", fontsize=10)
     return _save(fig, path)
