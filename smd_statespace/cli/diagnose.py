@@ -121,7 +121,8 @@ def run_person_diagnose(args) -> int:
             print(table[columns].to_string())
     if len(result.screened):
         print(f"\ngeneric terms, each score-tested at the fitted person, those not ruled out fitted quickly; the "
-              f"{SCREENED} largest quick likelihood ratios significant over the library (Holm) are fitted above:")
+              f"{SCREENED} largest quick likelihood ratios (over their misspecification scale) significant over the "
+              "library (Holm) are fitted above:")
         for _, row in result.screened.head(5).iterrows():
             quick = (f"quick LR {row['lr_quick']:7.1f} / {row['lr_scale']:<4.2g} (Holm p {row['p_quick_holm']:<7.2g})"
                      if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 28)

@@ -275,7 +275,8 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     Left: every generic term's robust score statistic (chi-square(1) under "absent"), with Holm's first level
     over the library (``alpha / terms``), in blue the terms whose quick fit passed over the library (the
     largest of them are fitted: :func:`~smd_statespace.person.screen.screen`); right: each fitted candidate's likelihood
-    ratio against the level of its own test (Bonferroni over every test), proposed ones in blue.
+    ratio over its misspecification scale (:func:`~smd_statespace.person.diagnose.robust_scale`) against the level
+    of its own test (Bonferroni over every test, and over a floor mode's frequency grid), proposed ones in blue.
     """
     from scipy import stats
 
@@ -302,10 +303,11 @@ def plot_candidates(diagnosis, path=None) -> Figure:
         proposed = table["significant"].to_numpy(dtype=bool)[::-1]
         right.barh(names, ratios, color=np.where(proposed, "tab:blue", "0.6"))
         degrees = table["df"].to_numpy(dtype=int)[::-1]
-        for y, (ratio, df) in enumerate(zip(ratios, degrees)):
-            right.plot([stats.chi2.isf(level, max(df, 1))] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
+        trials = table["trials"].to_numpy(dtype=float)[::-1]  # a floor mode's frequency grid: tested as that many
+        for y, (df, tried) in enumerate(zip(degrees, trials)):
+            right.plot([stats.chi2.isf(level / tried, max(df, 1))] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
         right.set_xscale("symlog", linthresh=10.0)
-    right.set(xlabel="likelihood ratio / misspecification scale (black: its test's level)",
+    right.set(xlabel="likelihood ratio / its scale (black: its test's level)",
               title="candidates fitted with the person")
     fig.suptitle(f"{_name(diagnosis.base)}: is an effect missing? blue: proposed", fontsize=10)
     return _save(fig, path)
