@@ -231,9 +231,7 @@ def one(task) -> dict:
         base = identify_person(record, measured_floor=False)
         base_seconds = time.perf_counter() - moment
         candidates = [record_default(cls, base) for cls in EFFECTS.values()]
-        candidates = [c for c in candidates if c is not None]
-        if record.floor_acc is None:
-            candidates.append("floor_mode:source=modal")
+        candidates = [c for c in candidates if c is not None]  # without floor_acc the floor is the estimated mode
         diagnosis = diagnose_person(base, candidates=candidates, library=True)
         row["diagnose_seconds"] = time.perf_counter() - started
         top = diagnosis.missing[0] if diagnosis.missing else None

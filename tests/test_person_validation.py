@@ -154,3 +154,23 @@ def test_heavy_tailed_innovations_are_said_to_overstate_the_ratios(kurtosis, sca
     assert any(note.startswith("the person's innovations are heavy-tailed (kurtosis 15.9") for note in notes) == noted
     assert any("overstates the evidence for a candidate by up to 3.2 times (term:f_drift)" in note
                for note in notes) == noted
+
+
+@pytest.mark.parametrize("q_before, q_after, lags, less", [(62.0, 80.0, 39, True), (62.0, 70.0, 39, False),
+                                                          (377.0, 388.0, 39, False), (377.0, 420.0, 39, True)])
+def test_less_white_is_a_rise_of_q_beyond_its_own_spread(q_before, q_after, lags, less):
+    """Ljung-Box Q rising by more than the sd of a non-central chi-square with Q as its mean: 13 at Q 62 (p 0.01 on
+    39 lags), 38 at Q 377 (a quiet plate's misfit, p 1e-57), where a true drift raised Q by 11 (p 7.9e-57 ->
+    5.2e-59) and a rule on p-values had called it less white."""
+    from smd_statespace.person.diagnose import less_white
+
+    before = {"ljung_box_q": q_before, "ljung_box_lags": lags}
+    assert less_white(before, {"ljung_box_q": q_after}) == less
+
+
+def test_a_candidate_given_twice_is_refused(long_fit):
+    from smd_statespace.errors import OptionError
+    from smd_statespace.person.diagnose import diagnose_person
+
+    with pytest.raises(OptionError, match="candidate 'floor_mode' is given twice"):
+        diagnose_person(long_fit, candidates=["floor_mode", "floor_mode:source=modal"])

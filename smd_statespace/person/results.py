@@ -537,13 +537,15 @@ class PersonResult:
         return self.statespace_results.test_heteroskedasticity("breakvar")
 
     def test_pvalues(self) -> dict:
-        """``ljung_box_p``, ``jarque_bera_p``, ``heteroskedasticity_p`` and the innovations' kurtosis."""
+        """``ljung_box_p`` (and its statistic ``ljung_box_q``), ``jarque_bera_p``, ``heteroskedasticity_p`` and the
+        innovations' kurtosis."""
         lb = self.test_serial_correlation()
         lags = self.default_lags()
         innov = self.standardized_innovations()[self.model.observed]  # a missing sample has no innovation
         centred = innov - innov.mean()
         return {
             "ljung_box_p": float(lb[0, 1, lags - 1]),
+            "ljung_box_q": float(lb[0, 0, lags - 1]),
             "ljung_box_lags": lags,
             "jarque_bera_p": float(self.test_normality()[0, 1]),
             "heteroskedasticity_p": float(self.test_heteroskedasticity()[0, 1]),
