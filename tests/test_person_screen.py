@@ -97,5 +97,25 @@ def test_diagnose_fits_the_screened_term_and_names_its_physics(clean, tmp_path, 
     out = capsys.readouterr().out
     assert "verdict: missing effect 'term:f_drift' = a leg stiffness (f_h) that drifts over the record" in out
     assert "--effect term:kind=f_drift,scale=20" in out and "score-tested at the fitted person" in out
+    assert "term:u3 " not in out  # cubic_stiffness is a candidate: its twin is not screened again (SAME_AS)
     for figure in ("person_candidates.png", "person_spectrum.png", "person_compare.png", "person_held_out.png"):
         assert (tmp_path / "d" / figure).stat().st_size > 10_000
+
+
+def test_u3_is_the_cubic_spring_in_another_unit(clean):
+    """``SAME_AS``: the generic ``u3`` with coefficient ``c`` is ``cubic_stiffness`` with ``beta_3 = c / r_0^2``, the
+    same likelihood, so diagnose screens one of them."""
+    from smd_statespace.effects.generic import SAME_AS
+
+    assert SAME_AS["u3"] == "cubic_stiffness"
+    term = generic_library(clean, ["u3"])[0]
+    spring = make_effect("cubic_stiffness:beta_range=-100000/100000")
+    named = clean.model.unpack(clean.params)
+    likelihoods = []
+    for effect, name, value in ((term, "c_u3", 0.2), (spring, "beta_3", 0.2 / term.scale**2)):
+        model = effect_model(clean, [effect])
+        params = np.array([named.get(n, 0.0) for n in model.param_names])
+        params[model.position(name)] = value
+        likelihoods.append(model.loglike(params))
+    assert likelihoods[0] == pytest.approx(likelihoods[1], abs=1e-6 * abs(likelihoods[0]))
+    assert likelihoods[0] != pytest.approx(clean.loglike, abs=1.0)  # the term is not nothing at this size

@@ -60,7 +60,7 @@ from scipy import stats
 from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
-from ..effects.generic import label
+from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
 from .robust import MIN_SCALE, added_unknowns, misspecification_scale
 from .screen import generic_library, screen
@@ -472,7 +472,8 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     tests = len(effects)
     if candidates is None if library is None else library:
         taken = present | {label(effect) for effect in effects}
-        terms = [term for term in generic_library(result) if label(term) not in taken]
+        terms = [term for term in generic_library(result)  # a term that is a candidate in another unit: once
+                 if label(term) not in taken and SAME_AS.get(term.kind) not in taken]
         tests += len(terms)  # Bonferroni counts every term screened, fitted or not
         try:
             screened = screen(result, terms, alpha=alpha)
