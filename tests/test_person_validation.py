@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from smd_statespace.person import identify_person
-from smd_statespace.person.diagnose import held_out
+from smd_statespace.person.diagnose import held_out, verdict
 from smd_statespace.person.extend import fit_effects
 from smd_statespace.person.search import fit_model
 from smd_statespace.measures import fit_percent
@@ -55,13 +55,18 @@ def test_a_missing_effect_predicts_the_held_out_half_better_and_an_absent_one_wo
 
     absent = fit_effects(clean, ["harmonics"], timing=False)
     base = cross_validated_loglike(clean.model, clean.params)
-    row = held_out({"significant": True}, base, cross_validated_loglike(absent.model, absent.params))
+    passed = {"passed": True, "less_white": False, "significant": True}
+    row = held_out(passed, base, cross_validated_loglike(absent.model, absent.params))
     assert row["held_out"] < row["held_out_before"]
     assert row["held_out_worse"] and not row["significant"]
-    kept = held_out({"significant": True}, before, after)
+    kept = held_out(passed, before, after)
     assert kept["significant"] and not kept["held_out_worse"]
     assert kept["held_out_one_step_fit"] > kept["held_out_one_step_fit_before"]
-    assert held_out({"significant": True}, None, after) == {"significant": True}  # cannot halve: not judged
+    assert held_out(passed, None, after) == passed  # cannot halve: not judged
+    # less white innovations veto a candidate only where no held-out data judged it (verdict)
+    assert held_out({**passed, "less_white": True}, before, after)["significant"]
+    unjudged = {**passed, "less_white": True, "held_out": float("nan"), "held_out_worse": False}
+    assert not verdict(unjudged)["significant"] and verdict({**unjudged, "less_white": False})["significant"]
 
 
 def test_the_free_run_of_a_held_out_half_reproduces_a_record_without_variation():
