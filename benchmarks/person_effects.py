@@ -105,10 +105,12 @@ TRUE_PARAMETER = {"cubic_stiffness": ("beta_3", "beta_3"), "quadratic_damping": 
                   "term_f_step": ("c_f_step", "c_f_step")}
 """The effect parameter whose error is counted: ``(estimated name, key of the simulation's truth)``."""
 
-GENERATORS = ("jumps", "smooth", "lab")
+GENERATORS = ("jumps", "smooth", "lab", "lab_smooth")
 """The two generators of force variation of :func:`simulate_bouncing`, and ``lab``: a lab's force-plate export of a
 whole trial (:func:`simulate_lab_record`: standing 4 s before and after, ramps, 1000 Hz, mains hum, a drifting zero,
-1 N noise; jumps variation), which the fit reaches through the record front end as a user's export would."""
+1 N noise; jumps variation), which the fit reaches through the record front end as a user's export would; and
+``lab_smooth``: the same with the smooth variation (a force that changes continuously from cycle to cycle, as a
+person's does, where the jumps variation's force jumps at every cycle boundary)."""
 
 LAB_KINDS = {"clean", "term_f_drift", "term_f_step"}
 """What the lab generator makes: a person without an effect, or whose ``f_h`` drifts or steps over the bout (the
@@ -155,7 +157,7 @@ def tasks(records: int, seed: int, sizes=("small", "large"), generators=GENERATO
                               "xi_h": rng.uniform(0.1, 0.5), "mass": rng.uniform(50.0, 90.0),
                               "blf": tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))}
                     label = ("small", "large")[size] if effects else "-"
-                    if generator == "lab" and kind not in LAB_KINDS:
+                    if generator.startswith("lab") and kind not in LAB_KINDS:
                         continue
                     if generator in generators and kind in kinds and (effects is None or label in sizes):
                         out.append((kind, label, generator, i, person, int(rng.integers(2**31)), effects))
@@ -180,11 +182,11 @@ def _with_true_effect(base, diagnosis, spec) -> tuple:
     return fitted, time.perf_counter() - moment
 
 
-def _lab_record(person, sim_seed, effects) -> tuple:
+def _lab_record(person, sim_seed, effects, variation="jumps") -> tuple:
     """A lab export of the person (:data:`GENERATORS`) and the effect's size: the RMS of the GRF difference the change
     makes (noise-free) over the plate's noise sd."""
     common = dict(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], blf=person["blf"],
-                  seed=sim_seed)
+                  seed=sim_seed, variation=variation)
     sim = simulate_lab_record(**common, **lab_change(effects))
     if not effects:
         return sim, np.nan
@@ -213,8 +215,9 @@ def one(task) -> dict:
                   fs=FS, blf=person["blf"], seed=sim_seed, variation=generator)
     started = time.perf_counter()
     try:
-        if generator == "lab":
-            sim, row["effect_size"] = _lab_record(person, sim_seed, effects)
+        if generator.startswith("lab"):
+            sim, row["effect_size"] = _lab_record(person, sim_seed, effects, "smooth" if generator == "lab_smooth"
+                                                  else "jumps")
             row["f_h"] = sim.truth["f_h"]  # the bout's mean f_h
         else:
             sim = simulate_bouncing(noise=NOISE, effects=effects, **common)
@@ -252,7 +255,7 @@ def one(task) -> dict:
                        misfit_share_after=fitted.misfit_share, f_h_determined_after=fitted.determined("f_h"),
                        ljung_box_after=fitted.test_pvalues()["ljung_box_p"],
                        f_h_covered=bool(fitted.intervals["f_h"][0] <= person["f_h"] <= fitted.intervals["f_h"][1]))
-            if kind in TRUE_PARAMETER and generator != "lab":  # the lab simulator's truth is its change of f_h
+            if kind in TRUE_PARAMETER and not generator.startswith("lab"):  # the lab simulator's truth is its change of f_h
                 name, key = TRUE_PARAMETER[kind]
                 truth = sim.truth["effects"][next(iter(effects))][key]
                 estimate = fitted.effect_estimates().loc[name]
