@@ -114,8 +114,9 @@ def run_person_diagnose(args) -> int:
     if table.empty:
         print("  none could be fitted")
     else:
-        columns = list(SHARED_COLUMNS[:2]) + ["lr_scale"] + list(SHARED_COLUMNS[2:-1]) + ["noise_change_%", "held_out_before", "held_out",
-                                               "held_out_free_run_fit_before", "held_out_free_run_fit", "parameters"]
+        columns = (list(SHARED_COLUMNS[:2]) + ["lr_scale"] + list(SHARED_COLUMNS[2:-1])
+                   + ["noise_change_%", "held_out_before", "held_out", "held_out_free_run_fit_before",
+                      "held_out_free_run_fit", "parameters"])
         with pd.option_context("display.float_format", "{:.4g}".format, "display.width", 200,
                                "display.max_colwidth", 60):
             print(table[columns].to_string())
@@ -137,8 +138,8 @@ def run_person_diagnose(args) -> int:
         physics = f" = {best['physics']}" if best.get("physics") else ""
         scaled = f" / {best['lr_scale']:.2g}" if best["lr_scale"] > 1 else ""
         print(f"\nverdict: missing effect '{result.missing[0]}'{physics} (LR {best['lr']:.1f}{scaled} on "
-              f"{int(best['df'])} parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} "
-              f"Hz, xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
+              f"{int(best['df'])} parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> "
+              f"{best['f_h']:.3f} Hz, xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
         extra = "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
         print("next: " + result.command(args.record, args.mass, extra))
     for note in result.notes():

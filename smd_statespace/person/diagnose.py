@@ -66,8 +66,9 @@ from .robust import MIN_SCALE, added_unknowns, misspecification_scale
 from .screen import generic_library, screen
 from .validation import cross_validated_loglike
 
-__all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "robust_scale", "less_white", "verdict", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person", "candidate_row", "held_out",
-           "HELD_OUT", "label", "indistinguishable_from_zero", "without_key"]
+__all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "PersonDiagnosis", "diagnose_person",
+           "candidate_row", "held_out", "verdict", "less_white", "robust_scale", "HELD_OUT", "label",
+           "indistinguishable_from_zero", "without_key"]
 
 HELD_OUT = ("held_out_before", "held_out", "held_out_samples", "held_out_one_step_fit_before", "held_out_one_step_fit",
             "held_out_free_run_fit_before", "held_out_free_run_fit")

@@ -171,8 +171,8 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
 
     With ``alpha``, two stages: every term whose robust score p-value is below :data:`PREFILTER` (unadjusted:
     a term that shows only away from ``c = 0`` has a small score) gets a quick fit (:func:`quick_ratio`); the
-    p-value of its likelihood ratio over its misspecification scale (chi-square(1)) is adjusted by Holm over the *whole* library (a term not fitted
-    counts as p = 1, so the pre-filter can lose power, never add false alarms). Those below ``alpha`` come
+    p-value of its likelihood ratio over its misspecification scale (chi-square(1)) is adjusted by Holm over the
+    *whole* library (a term not fitted counts as p = 1, so the pre-filter can lose power, never add false alarms). Those below ``alpha`` come
     first, the largest scaled quick likelihood ratio first: they are what ``diagnose`` fits.
 
     Returns
