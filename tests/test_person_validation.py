@@ -56,16 +56,17 @@ def test_a_missing_effect_predicts_the_held_out_half_better_and_an_absent_one_wo
     absent = fit_effects(clean, ["harmonics"], timing=False)
     base = cross_validated_loglike(clean.model, clean.params)
     passed = {"passed": True, "less_white": False, "significant": True}
-    row = held_out(passed, base, cross_validated_loglike(absent.model, absent.params))
+    row = held_out(passed, base, cross_validated_loglike(absent.model, absent.params), 0.01)
     assert row["held_out"] < row["held_out_before"]
     assert row["held_out_worse"] and not row["significant"]
-    kept = held_out(passed, before, after)
+    kept = held_out(passed, before, after, 0.01)
     assert kept["significant"] and not kept["held_out_worse"]
     assert kept["held_out_one_step_fit"] > kept["held_out_one_step_fit_before"]
-    assert held_out(passed, None, after) == passed  # cannot halve: not judged
+    assert held_out(passed, None, after, 0.01) == passed  # cannot halve: not judged
     # less white innovations veto a candidate only where no held-out data judged it (verdict)
-    assert held_out({**passed, "less_white": True}, before, after)["significant"]
-    unjudged = {**passed, "less_white": True, "held_out": float("nan"), "held_out_worse": False}
+    assert held_out({**passed, "less_white": True}, before, after, 0.01)["significant"]
+    unjudged = {**passed, "less_white": True, "held_out": float("nan"), "held_out_worse": False,
+                "held_out_weak": False}
     assert not verdict(unjudged)["significant"] and verdict({**unjudged, "less_white": False})["significant"]
 
 
@@ -154,7 +155,8 @@ def test_heavy_tailed_innovations_are_said_to_overstate_the_ratios(kurtosis, sca
     row = {"effect": "term:f_drift", "significant": True, "held_out_before": 1000.0, "held_out": 1010.0,
            "held_out_samples": 3000, "log_p": -20.0, "on_bound": False, "zero": False, "less_white": False,
            "held_out_worse": False, "settled": True, "likelihood": "exact", "f_h": 2.5, "xi_h": 0.3,
-           "held_out_free_run_fit": 80.0, "held_out_free_run_fit_before": 79.0, "lr_scale": scale}
+           "held_out_free_run_fit": 80.0, "held_out_free_run_fit_before": 79.0, "lr_scale": scale,
+           "held_out_weak": False}
     notes = PersonDiagnosis(base=base, fits={}, rows=[row], failed={}, alpha=0.01).notes()
     assert any(note.startswith("the person's innovations are heavy-tailed (kurtosis 15.9") for note in notes) == noted
     assert any("overstates the evidence for a candidate by up to 3.2 times (term:f_drift)" in note
@@ -179,3 +181,33 @@ def test_a_candidate_given_twice_is_refused(long_fit):
 
     with pytest.raises(OptionError, match="candidate 'floor_mode' is given twice"):
         diagnose_person(long_fit, candidates=["floor_mode", "floor_mode:source=modal"])
+
+
+def test_a_held_out_gain_made_by_a_few_samples_is_weak_and_one_spread_over_the_cycles_is_clear():
+    """``held_out_gain``: the same total gain (+20) from one sample is under the sds of its noise from cycle to cycle
+    that a test at level 0.01 / 18 asks (``held_out_z``, 3.26), from every cycle well over it; diagnose proposes
+    only the second."""
+    from smd_statespace.person.diagnose import held_out_z
+    from smd_statespace.person.validation import held_out_gain
+
+    rng = np.random.default_rng(np.random.SeedSequence(45))
+    cycle = np.repeat(np.arange(60), 40)
+    before = {"sample_loglike": rng.normal(1.0, 0.3, cycle.size), "cycle": cycle, "loglike": 0.0,
+              "one_step": np.zeros(cycle.size), "one_step_fit": 50.0, "free_run_fit": 40.0}
+    before["sample_loglike"][:100] = np.nan  # samples no fold predicts
+    before["loglike"] = float(np.nansum(before["sample_loglike"]))
+    spiked, spread = dict(before), dict(before)
+    spiked["sample_loglike"] = before["sample_loglike"] + rng.normal(0.0, 0.3, cycle.size)
+    spiked["sample_loglike"][500] += 20.0 - np.nansum(spiked["sample_loglike"] - before["sample_loglike"])
+    spread["sample_loglike"] = before["sample_loglike"] + 20.0 / np.isfinite(before["sample_loglike"]).sum()
+    for case in (spiked, spread):
+        case["loglike"] = float(np.nansum(case["sample_loglike"]))
+        assert held_out_gain(before, case)["gain"] == pytest.approx(20.0)
+    level = 0.01 / 18
+    assert held_out_z(level) == pytest.approx(3.26, abs=0.01)
+    assert held_out_gain(before, spiked)["z"] < held_out_z(level) < held_out_gain(before, spread)["z"]
+    assert held_out_gain(before, spread)["cycles"] == 58  # the first 2.5 cycles are not predicted
+    passed = {"passed": True, "less_white": False, "significant": True}
+    weak = held_out(passed, before, spiked, level)
+    assert weak["held_out_weak"] and not weak["held_out_worse"] and not weak["significant"]
+    assert held_out(passed, before, spread, level)["significant"]

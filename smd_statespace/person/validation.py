@@ -37,7 +37,7 @@ from .search import fit_model
 from .timing import CycleTiming
 
 __all__ = ["MIN_HALF_CYCLES", "BREAK_MARGIN", "halves", "part", "held_out_prediction", "held_out_loglike",
-           "held_out_free_run", "cross_validated_loglike"]
+           "held_out_free_run", "cross_validated_loglike", "held_out_gain"]
 
 MIN_HALF_CYCLES = 8
 """Fewest whole force cycles in each half (the record-level model needs as many to estimate the variation)."""
@@ -118,13 +118,15 @@ def held_out_prediction(model, params, delta, sigma2) -> dict:
     dict
         ``loglike``: the sum of the one-step prediction log-densities over the held-out samples (-inf
         when the pass breaks down at these parameters); ``one_step``: the one-step predicted output
-        (m/s^2, NaN when it breaks down).
+        (m/s^2, NaN when it breaks down); ``sample_loglike``: the log-density of each sample (NaN where
+        missing or when it breaks down).
     """
     out = model.filter(params)
     raw, regression = out["innovations_raw"], out["innovation_regression"]
     variance = out["innovation_variance_unscaled"]
     if not (np.all(np.isfinite(raw)) and np.all(np.isfinite(variance))):
-        return {"loglike": -np.inf, "one_step": np.full(model.y.size, np.nan)}
+        return {"loglike": -np.inf, "one_step": np.full(model.y.size, np.nan),
+                "sample_loglike": np.full(model.y.size, np.nan)}
     own = _own(model, len(delta))
     template = np.arange(model.n_dynamic, model.n_dynamic + model.n_coefficients)
     residual = raw - regression[:, template] @ np.asarray(delta)[template]
@@ -133,8 +135,8 @@ def held_out_prediction(model, params, delta, sigma2) -> dict:
     estimate, *_ = np.linalg.lstsq(columns, residual * weight, rcond=None)
     residual = residual - regression[:, own] @ estimate
     scaled = variance * sigma2
-    loglike = float(-0.5 * np.sum((np.log(2.0 * np.pi * scaled) + residual**2 / scaled)[model.observed]))
-    return {"loglike": loglike, "one_step": model.y - residual}
+    sample = np.where(model.observed, -0.5 * (np.log(2.0 * np.pi * scaled) + residual**2 / scaled), np.nan)
+    return {"loglike": float(np.nansum(sample)), "one_step": model.y - residual, "sample_loglike": sample}
 
 
 def held_out_loglike(model, params, delta, sigma2) -> float:
@@ -183,7 +185,9 @@ def cross_validated_loglike(model, params, breaks=()) -> dict | None:
         ``free_run_fit``: :func:`~smd_statespace.measures.fit_percent` (%) of the one-step prediction
         and of the free run over the held-out samples; ``time``, ``measured``, ``one_step``,
         ``free_run``: those over the record, each half as predicted from the other (arrays, s and
-        m/s^2; NaN on a half no fold predicts); ``cut``: where the second half begins (s); ``folds``: per
+        m/s^2; NaN on a half no fold predicts); ``sample_loglike``: each held-out sample's log-density
+        (NaN elsewhere); ``cycle``: each sample's force cycle (the clusters of :func:`held_out_gain`);
+        ``cut``: where the second half begins (s); ``folds``: per
         fold scored the fitted half's ``start``, ``end`` (s), its parameters and the held-out log-likelihood
         of the other half. None when the record is too short to halve (:func:`halves`) or a half's fit does
         not converge.
@@ -196,6 +200,7 @@ def cross_validated_loglike(model, params, breaks=()) -> dict | None:
     if len(breaks):  # only the half that holds the breaks can determine the change
         order = order[:1] if float(np.min(breaks)) < float(parts[1].time[0]) else order[1:]
     folds, one_step, free = [], np.full(model.y.size, np.nan), np.full(model.y.size, np.nan)
+    sample = np.full(model.y.size, np.nan)
     for (fitted_part, held_part), (held, _) in order:
         fitted = fit_model(fitted_part, params, quick=True)
         if not fitted["converged"]:
@@ -203,6 +208,7 @@ def cross_validated_loglike(model, params, breaks=()) -> dict | None:
         filtered = fitted_part.filter(fitted["params"])
         predicted = held_out_prediction(held_part, fitted["params"], filtered["delta"], filtered["sigma2"])
         one_step[held] = predicted["one_step"]
+        sample[held] = predicted["sample_loglike"]
         free[held] = held_out_free_run(held_part, fitted["params"], filtered["delta"])
         folds.append({"start": float(fitted_part.time[0]), "end": float(fitted_part.time[-1]),
                       "params": fitted["params"], "held_out_loglike": predicted["loglike"]})
@@ -211,4 +217,28 @@ def cross_validated_loglike(model, params, breaks=()) -> dict | None:
             "one_step_fit": fit_percent(model.y[scored], one_step[scored]),
             "free_run_fit": fit_percent(model.y[scored], free[scored]),
             "time": model.time, "measured": model.y, "one_step": one_step, "free_run": free,
-            "cut": float(model.time[cut[1][0]][0])}
+            "sample_loglike": sample, "cycle": model._phase[0], "cut": float(model.time[cut[1][0]][0])}
+
+
+def held_out_gain(before: dict, after: dict) -> dict:
+    """How much better ``after`` predicts the held-out samples than ``before``, against the noise of that gain.
+
+    ``before``, ``after``: :func:`cross_validated_loglike` of two models of the same record on the same cut. The
+    gain in log-density is summed per force cycle ``g_c`` (a misfit is correlated within a cycle), and its total
+    is compared with its cluster-robust sd ``sqrt(n / (n - 1) sum (g_c - mean)^2)`` over the ``n`` held-out
+    cycles (a Diebold-Mariano comparison of two forecasts, with cycles as the blocks).
+
+    Returns
+    -------
+    dict
+        ``gain`` (the total), ``sd`` and ``z`` (``gain / sd``; NaN with fewer than 3 cycles), ``cycles``.
+    """
+    difference = after["sample_loglike"] - before["sample_loglike"]
+    scored = np.isfinite(difference)
+    cycles = np.unique(before["cycle"][scored], return_inverse=True)[1]
+    per_cycle = np.bincount(cycles, weights=difference[scored]) if scored.any() else np.zeros(0)
+    n, gain = per_cycle.size, float(per_cycle.sum())
+    if n < 3:
+        return {"gain": gain, "sd": float("nan"), "z": float("nan"), "cycles": n}
+    sd = float(np.sqrt(n / (n - 1.0) * np.sum((per_cycle - per_cycle.mean()) ** 2)))
+    return {"gain": gain, "sd": sd, "z": gain / sd if sd > 0 else float("nan"), "cycles": n}
