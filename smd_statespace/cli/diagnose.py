@@ -47,7 +47,9 @@ def add_diagnose(subparsers):
                              "model and try it as a candidate (by default the person rides it, as in identify)")
     parser.add_argument("--json", metavar="FILE", help="write the report as JSON")
     parser.add_argument("--alpha", type=float, default=0.01, metavar="P",
-                        help="significance level of the candidates' F-tests (default 0.01, Bonferroni-corrected)")
+                        help="family-wise significance level (default 0.01, Bonferroni over the candidates): of "
+                             "the likelihood-ratio tests (record level, the default; their held-out gain is asked "
+                             "as clearly) or the F-tests (per cycle, --estimator)")
     parser.add_argument("--initial-state", choices=INITIAL_STATES, default=INITIAL_STATES[0],
                         help="where each cycle's free simulation starts: 'estimate' (least-squares fit to the "
                              "cycle, as MATLAB's compare) or 'filtered' (the filter at the first sample)")
