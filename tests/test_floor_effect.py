@@ -140,7 +140,8 @@ def test_a_searched_floor_frequency_counts_its_trials():
         effects = (searched,)
         sigma, f_h, xi_h, settled, loglike = 1.0, 2.4, 0.3, True, 11.0
         model = type("M", (), {"person_at_bound": staticmethod(lambda params: False), "approximate": False,
-                               "exact": True, "n_harmonics": 4})()
+                               "exact": True, "n_harmonics": 4, "param_names": ["f_h", "xi_h"],
+                               "delta_names": ["u0", "u_dot0"], "held_delta": ()})()
         params = None
 
         def effect_test(self):
@@ -151,7 +152,7 @@ def test_a_searched_floor_frequency_counts_its_trials():
             return pd.DataFrame({"value": [2.46], "sd": [0.02], "unit": ["Hz"], "on_bound": [False]}, index=["f_f"])
 
         def test_pvalues(self):
-            return {"ljung_box_p": 0.5}
+            return {"ljung_box_p": 0.5, "ljung_box_q": 38.0, "ljung_box_lags": 38}
 
         def template_blf(self):
             return None

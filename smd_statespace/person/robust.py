@@ -98,6 +98,8 @@ def misspecification_scale(model, params, tested) -> dict:
         information is singular); ``eigenvalues``: those of ``I^-1 J`` (the weights of the ratio's
         chi-square(1) terms, all 1 when the model is right); ``tested``: the unknowns used.
     """
+    if not len(tested):  # nothing added (a measured floor): the plain ratio, and no pass is run
+        return {"scale": MIN_SCALE, "eigenvalues": np.array([]), "tested": []}
     params = np.asarray(params, dtype=float)
     names, information, scores = information_and_scores(model, params)
     on_bound = {model.param_names[i] for i in range(params.size) if model.at_bound(params, i)}
