@@ -131,7 +131,7 @@ def run_person_diagnose(args) -> int:
                      if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 28)
             print(f"  {row['label']:<17} robust LM {row['lm_robust']:7.1f}  {quick}  {row['physics']}")
     tests = result.tests or len(result.rows) + len(result.failed)
-    level = args.alpha / max(tests, 1)
+    level = result.level
     if result.adequate:
         print(f"\nverdict: no candidate effect is a significant improvement at alpha {args.alpha:g} "
               f"(Bonferroni over {tests}: each at {level:.2g})")

@@ -62,12 +62,12 @@ from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
-from .robust import MIN_SCALE, added_unknowns, misspecification_scale
+from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .validation import cross_validated_loglike, held_out_gain
 
-__all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "held_out_z", "PersonDiagnosis", "diagnose_person",
-           "candidate_row", "held_out", "verdict", "less_white", "robust_scale", "HELD_OUT", "label",
+__all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "held_out_z", "PersonDiagnosis",
+           "diagnose_person", "candidate_row", "held_out", "verdict", "less_white", "HELD_OUT", "label",
            "indistinguishable_from_zero", "without_key"]
 
 HELD_OUT = ("held_out_before", "held_out", "held_out_samples", "held_out_z", "held_out_one_step_fit_before",
@@ -76,6 +76,7 @@ HELD_OUT = ("held_out_before", "held_out", "held_out_samples", "held_out_z", "he
 samples) without and with it, the gain's ``z`` against its noise from cycle to cycle
 (:func:`~smd_statespace.person.validation.held_out_gain`), and the one-step and free-run fits (%) on the held-out
 halves without and with it; NaN when not validated."""
+
 
 def held_out_z(level: float, heavy_tailed: bool = True) -> float:
     """How many sds of its own noise from cycle to cycle a candidate's held-out gain must reach
@@ -94,6 +95,7 @@ def held_out_z(level: float, heavy_tailed: bool = True) -> float:
     """
     return float(stats.norm.isf(level)) if heavy_tailed else 0.0
 
+
 FREE_RUN_POINTS = 0.05
 """A held-out free run's fit lower by more than this many points with a candidate is told in a note."""
 
@@ -111,7 +113,8 @@ force's jumps from cycle to cycle in the innovations, kurtosis up to 16) had 2 f
 candidate's held-out gain must also be clear (:func:`held_out_z`)."""
 
 SCALE_NOTE = 1.5
-"""A candidate whose likelihood ratio is scaled by more than this (:func:`robust_scale`) gets a note in words."""
+"""A candidate whose likelihood ratio is scaled by more than this
+(:func:`~smd_statespace.person.robust.robust_scale`) gets a note in words."""
 
 LESS_WHITE = 1.0
 """A candidate with which the innovations' Ljung-Box statistic ``Q`` rises by more than this many of its own sds is
@@ -129,7 +132,7 @@ def candidate_row(base, fitted, level: float) -> dict:
     added = fitted.effects[len(base.effects):]  # the candidate, on top of the effects already in the model
     # the ratio scaled by how much the likelihood overstates the evidence where the rest of the model is wrong
     # (robust.py: a quiet plate's misfit gave clean records a cubic spring at LR 52.6, scale 6.3)
-    scale = robust_scale(fitted, added_unknowns(fitted, base))
+    scale = robust_scale(fitted.model, fitted.params, added_unknowns(fitted, base))
     # a candidate with nothing to estimate (a measured floor) is not nested: it must beat chi-square(1);
     # one found as the best of many trials (a floor mode's frequency grid) is tested as that many (Bonferroni)
     trials = int(np.prod([record_search_size(effect, base) for effect in added]))
@@ -185,15 +188,6 @@ def less_white(before: dict, after: dict) -> bool:
     q, lags = before["ljung_box_q"], before["ljung_box_lags"]
     spread = math.sqrt(2.0 * (lags + 2.0 * max(q - lags, 0.0)))
     return bool(after["ljung_box_q"] - q > LESS_WHITE * spread)
-
-
-def robust_scale(fitted, tested) -> float:
-    """:func:`~smd_statespace.person.robust.misspecification_scale` of the unknowns ``tested`` at ``fitted``'s
-    estimate; 1 (the plain ratio) where it cannot be computed."""
-    try:
-        return misspecification_scale(fitted.model, fitted.params, tested)["scale"]
-    except (SMDInputError, ArithmeticError, np.linalg.LinAlgError, ValueError):
-        return MIN_SCALE
 
 
 def held_out(row: dict, before, after, level: float, heavy_tailed: bool = True) -> dict:
@@ -468,7 +462,7 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
         lr = 2.0 * (both.loglike - fits[other].loglike)
         df = max(both.added_unknowns(fits[other]), 1)
         trials = int(np.prod([record_search_size(e, base) for e in fits[name].effects[present:]]))
-        scale = robust_scale(both, added_unknowns(fits[name], base))
+        scale = robust_scale(both.model, both.params, added_unknowns(fits[name], base))
         out[name] = {"lr": float(lr), "lr_scale": scale,
                      "p_value": min(float(stats.chi2.sf(max(lr / scale, 0.0), df)) * trials, 1.0)}
     keeps = [name for name in (first, second) if out[name]["p_value"] < level]

@@ -27,9 +27,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import SMDInputError
 from .score import cycle_sums, profile_out, score
 
-__all__ = ["MIN_SCALE", "information_and_scores", "misspecification_scale", "added_unknowns"]
+__all__ = ["MIN_SCALE", "information_and_scores", "misspecification_scale", "robust_scale", "added_unknowns"]
 
 MIN_SCALE = 1.0
 """The smallest scale :func:`misspecification_scale` returns: a ratio is never made larger than the plain one."""
@@ -117,3 +118,12 @@ def misspecification_scale(model, params, tested) -> dict:
     scale = float(np.trace(weights)) / len(keep)
     return {"scale": max(scale, MIN_SCALE) if np.isfinite(scale) else MIN_SCALE, "eigenvalues": eigenvalues,
             "tested": [names[i] for i in keep]}
+
+
+def robust_scale(model, params, tested) -> float:
+    """:func:`misspecification_scale`'s ``scale`` of the unknowns ``tested`` at ``params``; :data:`MIN_SCALE` (the
+    plain ratio) where it cannot be computed (a pass that breaks down, a singular information)."""
+    try:
+        return misspecification_scale(model, params, tested)["scale"]
+    except (SMDInputError, ArithmeticError, np.linalg.LinAlgError, ValueError):
+        return MIN_SCALE

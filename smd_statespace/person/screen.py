@@ -42,7 +42,7 @@ from scipy import stats
 
 from ..effects.generic import TERMS, GenericTerm, label
 from .extend import effect_model
-from .robust import MIN_SCALE, misspecification_scale
+from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
 from .search import fit_model
 
@@ -131,8 +131,8 @@ def quick_ratio(result, effect) -> dict:
     -------
     dict
         ``lr_quick`` (twice the gain of log-likelihood over ``result``), ``estimate`` (the coefficient) and
-        ``lr_scale`` (:func:`~smd_statespace.person.robust.misspecification_scale` at the quick fit: the ratio
-        over it is what is tested).
+        ``lr_scale`` (:func:`~smd_statespace.person.robust.robust_scale` at the quick fit: the ratio over it is
+        what is tested).
     """
     from .statespace import nominal_path  # statsmodels: imported when an effect is linearised
 
@@ -141,12 +141,8 @@ def quick_ratio(result, effect) -> dict:
     for _ in range(RELINEARISED if model.approximate else 0):
         model = replace(model, nominal=nominal_path(model, fitted["params"]))
         fitted = fit_model(model, fitted["params"], quick=True)
-    try:
-        scale = misspecification_scale(model, fitted["params"], [model.param_names[j]])["scale"]
-    except (ArithmeticError, np.linalg.LinAlgError, ValueError):
-        scale = MIN_SCALE
     return {"lr_quick": float(2.0 * (fitted["loglike"] - result.loglike)), "estimate": float(fitted["params"][j]),
-            "lr_scale": scale}
+            "lr_scale": robust_scale(model, fitted["params"], [model.param_names[j]])}
 
 
 def holm(p_values) -> np.ndarray:
@@ -172,8 +168,9 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
     With ``alpha``, two stages: every term whose robust score p-value is below :data:`PREFILTER` (unadjusted:
     a term that shows only away from ``c = 0`` has a small score) gets a quick fit (:func:`quick_ratio`); the
     p-value of its likelihood ratio over its misspecification scale (chi-square(1)) is adjusted by Holm over the
-    *whole* library (a term not fitted counts as p = 1, so the pre-filter can lose power, never add false alarms). Those below ``alpha`` come
-    first, the largest scaled quick likelihood ratio first: they are what ``diagnose`` fits.
+    *whole* library (a term not fitted counts as p = 1, so the pre-filter can lose power, never add false
+    alarms). Those below ``alpha`` come first, the largest scaled quick likelihood ratio first: they are what
+    ``diagnose`` fits.
 
     Returns
     -------
@@ -200,7 +197,8 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
     by_spec = {effect.spec: effect for effect in effects}
     for spec in table.index[table["p_robust"] < PREFILTER]:
         quick = quick_ratio(result, by_spec[spec])
-        table.loc[spec, ["lr_quick", "estimate", "lr_scale"]] = quick["lr_quick"], quick["estimate"], quick["lr_scale"]
+        table.loc[spec, ["lr_quick", "estimate", "lr_scale"]] = [quick[key] for key in ("lr_quick", "estimate",
+                                                                                         "lr_scale")]
     scaled = (table["lr_quick"] / table["lr_scale"]).fillna(0.0).to_numpy()
     p_quick = stats.chi2.sf(np.maximum(scaled, 0.0), 1)
     table["p_quick_holm"] = holm(np.where(table["lr_quick"].notna(), p_quick, 1.0))

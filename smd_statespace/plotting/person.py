@@ -275,7 +275,7 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     Left: every generic term's robust score statistic (chi-square(1) under "absent"), with Holm's first level
     over the library (``alpha / terms``), in blue the terms whose quick fit passed over the library (the
     largest of them are fitted: :func:`~smd_statespace.person.screen.screen`); right: each fitted candidate's likelihood
-    ratio over its misspecification scale (:func:`~smd_statespace.person.diagnose.robust_scale`) against the level
+    ratio over its misspecification scale (:func:`~smd_statespace.person.robust.robust_scale`) against the level
     of its own test (Bonferroni over every test, and over a floor mode's frequency grid), proposed ones in blue.
     """
     from scipy import stats
@@ -297,7 +297,7 @@ def plot_candidates(diagnosis, path=None) -> Figure:
              title="generic terms at the fitted person (blue: passed by a quick fit)")
     table = diagnosis.table()
     if not table.empty:
-        level = diagnosis.alpha / max(diagnosis.tests or len(table), 1)
+        level = diagnosis.level
         names = list(table.index)[::-1]
         ratios = np.maximum(table["lr_robust"].to_numpy(dtype=float), 0.0)[::-1]
         proposed = table["significant"].to_numpy(dtype=bool)[::-1]
