@@ -339,7 +339,7 @@ class PersonDiagnosis:
                        "held-out gains more than the ratios")
         if not table.empty and float(table["lr_scale"].max()) > SCALE_NOTE:
             worst = table["lr_scale"].idxmax()
-            out.append(f"the person misses something that none of the candidates describes (on a quiet plate: "
+            out.append(f"the person misses something that none of the candidates describes (a quiet record shows "
                        f"how the force varies from cycle to cycle): the likelihood overstates the evidence for a "
                        f"candidate by up to {table.loc[worst, 'lr_scale']:.2g} times ({worst}), so each ratio is "
                        "divided by its own factor (lr_scale: the scores' spread between cycles over the likelihood's "
