@@ -10,12 +10,15 @@ often the 90 % intervals hold the truth::
 
     python benchmarks/person_noise.py --jobs 2 --records 16 --seed 77    # about 10 min on 2 cores
     python benchmarks/person_noise.py --floor 0.08,0.05                   # another floor
+    python benchmarks/person_noise.py --generators smooth,matern --records 8 --jobs 2   # the variation's shape
 
 Columns: coverage of ``f_h`` and ``xi_h``, without the model-error floor (the same fits'
 calibrated sds alone, as ``--floor 0,0`` would give) and with it; the median signed error of ``f_h``
 (%), which the noise level does not remove; the median calibrated sd of
 ``f_h`` (Hz); the share of records whose innovations pass the Ljung-Box test
-(p >= 0.01: no "the model misses something" warning). ``--floor F,X`` sets ``person.calibration.MODEL_ERROR_FLOOR`` for the
+(p >= 0.01: no "the model misses something" warning); the share of records whose ``f_h`` is called
+determined, and of those determined yet more than 10 % off (a confident wrong answer). ``--floor F,X`` sets
+``person.calibration.MODEL_ERROR_FLOOR`` for the
 run, for every variation model (relative for ``f_h``, absolute for ``xi_h``).
 
 Everything random comes from ``SeedSequence(--seed)`` through ``draw_people``;
@@ -72,7 +75,8 @@ def one(task) -> dict:
     row["f_h_error_pct"] = 100.0 * row["f_h_error"] / person["f_h"]
     d = result.to_dict()
     row["white"] = bool(d["ljung_box_p"] >= 0.01)  # no "the model misses something" warning
-    row.update(misfit_share=float(d["misfit_share"]), misfit=bool(d["misfit"]), f_h_determined=bool(d["f_h_determined"]))
+    row.update(misfit_share=float(d["misfit_share"]), misfit=bool(d["misfit"]),
+               f_h_determined=bool(d["f_h_determined"]))
     return row
 
 
@@ -86,21 +90,32 @@ def _coverage(rows) -> str:
     return " | ".join(cells)
 
 
+def _share(flags) -> str:
+    """``k/n`` of a boolean column."""
+    return f"{int(flags.sum())}/{len(flags)}"
+
+
 def summary(frame: pd.DataFrame) -> list:
     """Markdown table: one row per condition and generator."""
-    lines = ["| record | generator | records (failed) | f_h 90 % coverage, without / with floor | xi_h: without / with | "
-             "f_h signed error, median | f_h sd (calibrated), median | Ljung-Box p >= 0.01 |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| record | generator | records (failed) | f_h 90 % coverage, without / with floor | "
+             "xi_h: without / with | "
+             "f_h signed error, median | \\|f_h error\\|, median | xi_h signed error, median | "
+             "f_h sd (calibrated), median | Ljung-Box p >= 0.01 | f_h determined | determined, > 10 % off |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (condition, generator), rows in frame.groupby(["condition", "generator"], sort=False):
         ok = rows[rows["error"] == ""]
         if ok.empty:
-            lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows)}) | | | | | |")
+            lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows)}) |" + " |" * 9)
             continue
         lines.append(f"| {condition} | {generator} | {len(rows)} ({len(rows) - len(ok)}) | {_coverage(ok)} | "
-                     f"{ok['f_h_error_pct'].median():+.1f} % | {ok['f_h_sd'].median():.3f} Hz | "
-                     f"{ok['white'].mean():.0%} |")
+                     f"{ok['f_h_error_pct'].median():+.1f} % | {ok['f_h_error_pct'].abs().median():.1f} % | "
+                     f"{ok['xi_h_error'].median():+.3f} | {ok['f_h_sd'].median():.3f} Hz | {ok['white'].mean():.0%} | "
+                     f"{_share(ok['f_h_determined'])} | "
+                     f"{_share(ok['f_h_determined'] & (ok['f_h_error_pct'].abs() > 10))} |")
     ok = frame[frame["error"] == ""]
-    lines.append(f"| all | | {len(frame)} ({len(frame) - len(ok)}) | {_coverage(ok)} | | | {ok['white'].mean():.0%} |")
+    lines.append(f"| all | | {len(frame)} ({len(frame) - len(ok)}) | {_coverage(ok)} | | | | | "
+                 f"{ok['white'].mean():.0%} | {_share(ok['f_h_determined'])} | "
+                 f"{_share(ok['f_h_determined'] & (ok['f_h_error_pct'].abs() > 10))} |")
     return lines
 
 
@@ -111,12 +126,18 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=1, help="processes (default 1)")
     parser.add_argument("--floor", default=None, metavar="F,X",
                         help="model-error floor of f_h (relative) and xi_h for this run (default: the library's)")
+    parser.add_argument("--generators", default=",".join(person_accuracy.GENERATORS),
+                        help=f"comma-separated generators (default all: {','.join(person_accuracy.GENERATORS)})")
     parser.add_argument("--csv", type=Path, default=None, help="also write every record's row here")
     args = parser.parse_args(argv)
     floor = None if args.floor is None else tuple(float(v) for v in args.floor.split(","))
+    generators = [g.strip() for g in args.generators.split(",") if g.strip()]
+    unknown = sorted(set(generators) - set(person_accuracy.GENERATORS))
+    if unknown:
+        parser.error(f"--generators: {', '.join(unknown)} not among {', '.join(person_accuracy.GENERATORS)}")
     people = person_accuracy.draw_people(args.records, args.seed)
     tasks = [(person, condition, generator, floor) for condition in CONDITIONS
-             for generator in person_accuracy.GENERATORS for _, person in people.iterrows()]
+             for generator in generators for _, person in people.iterrows()]
     started = time.perf_counter()
     with ProcessPoolExecutor(max(1, args.jobs)) as pool:
         rows = list(tqdm(pool.map(one, tasks), total=len(tasks), unit="record", desc="records"))

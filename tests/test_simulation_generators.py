@@ -169,3 +169,23 @@ def test_command_line_names_every_generator(tmp_path, capsys):
         assert main(argv + ["--variation", name]) == 0
         assert f"{name} variation" in capsys.readouterr().out
         assert json.loads((tmp_path / "r_truth.json").read_text())["variations"]["generator"] == name
+
+
+def test_matern_generator_has_the_record_models_covariance_and_smooth_keeps_its_own():
+    # the processes of "matern" (exponential kernel) have the Matern-3/2 autocorrelation (1 + x) exp(-x) of the
+    # record-level model's smooth variation at the correlation time of "smooth"; "smooth" keeps exp(-tau^2 / C^2)
+    from smd_statespace.simulation.variation import (MATERN_E_FOLD, SMOOTH_CORRELATION_CYCLES, SMOOTH_GRID,
+                                                     _smooth_normals)
+    knots = np.random.default_rng(np.random.SeedSequence(17)).standard_normal((40000, 1))
+    lags = np.array([1, 2, 3])  # cycles (one knot per mean cycle)
+    x = lags * MATERN_E_FOLD / SMOOTH_CORRELATION_CYCLES
+    expected = {"exponential": (1 + x) * np.exp(-x), "gaussian": np.exp(-(lags / SMOOTH_CORRELATION_CYCLES) ** 2)}
+    for kernel, reach in (("exponential", 14), ("gaussian", 8)):
+        values = _smooth_normals(knots, reach, kernel)[:, 0]
+        measured = np.array([np.corrcoef(values[:-k], values[k:])[0, 1] for k in lags * SMOOTH_GRID])
+        np.testing.assert_allclose(measured, expected[kernel], atol=0.03)
+    assert abs(expected["exponential"][0] - expected["gaussian"][0]) > 0.05  # the two shapes are told apart
+    sim = simulate_bouncing(duration=5.0, seed=4, variation="matern")
+    assert sim.truth["variations"]["generator"] == "matern"
+    assert sim.truth["variations"]["correlation_cycles"] == SMOOTH_CORRELATION_CYCLES
+    assert not np.allclose(sim.record.force, simulate_bouncing(duration=5.0, seed=4, variation="smooth").record.force)

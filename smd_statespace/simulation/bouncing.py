@@ -84,8 +84,8 @@ from .sample import SAMPLE_CSV, SAMPLE_SETTINGS, SAMPLE_TRUTH, sample_path, samp
 from .settings import _check_simulation, _resolve_seed
 from .synthetic import SyntheticRecord, _measured_record
 from .truth import _truth
-from .variation import (TRUNCATION_SD, _cycles_frame, _draw_cycles, _smooth_cycles, _smooth_force, _smooth_geometry,
-                        _smooth_run_in, _smooth_states)
+from .variation import (SMOOTH_KERNELS, TRUNCATION_SD, _cycles_frame, _draw_cycles, _smooth_cycles, _smooth_force,
+                        _smooth_geometry, _smooth_run_in, _smooth_states)
 
 __all__ = [
     "DEFAULT_BLF",
@@ -144,7 +144,7 @@ def _smooth_record(settings, rng_blocks, run_in_knots, geometry, time):
     """``(cycles, states)`` of the smooth variation (``geometry`` from :func:`_smooth_geometry`)."""
     s = settings
     force = _smooth_force(rng_blocks, run_in_knots, geometry, s.f_b, s.fb_variation, s.a0, s.all_blf,
-                          s.all_phases, s.coef_variation)
+                          s.all_phases, s.coef_variation, SMOOTH_KERNELS[s.variation])
     first = int(np.floor(float(force.theta(force.pieces.x[0])) / (2.0 * np.pi))) + 1  # the run-in's first cycle
     t_start, t_end, frequency, a, b = _smooth_cycles(force, min(first, 0), s.duration)
     run_in = (t_start[0], t_end[0], frequency[0], a[0], b[0])
@@ -191,7 +191,7 @@ def simulate_bouncing(
 
     The COM obeys Eq. 2 under the biomechanical force of Eq. 4, integrated
     accurately (DOP853, ``rtol`` :data:`RTOL`), and the GRF is Eq. 3 plus
-    noise. The force varies from cycle to cycle in one of five ways
+    noise. The force varies from cycle to cycle in one of six ways
     (:data:`VARIATIONS`):
 
     ``variation="jumps"`` (default)
@@ -221,6 +221,11 @@ def simulate_bouncing(
         smooth cycle also averages the frequency over its length), and
         neighbouring cycles are alike (correlation about 0.85). One
         integration covers the run-in and the record.
+    ``variation="matern"``
+        As ``"smooth"``, with processes of Matern-3/2 covariance (the
+        record-level model's own smooth variation) of the same correlation
+        time: rougher, their spectrum falling as ``f^-4`` rather than
+        ``exp(-f^2)`` (:data:`~.variation.VARIATIONS`).
     ``variation="coefficients"``
         Each cycle ``j`` has its own frequency ``f_b (1 + eps_j)`` as with
         ``"jumps"``, and each Fourier coefficient is jittered on its own:
@@ -341,10 +346,10 @@ def simulate_bouncing(
         record; with ``"smooth"`` the knots take the place of the cycles in
         the fixed order of blocks, so effects still leave the other random
         numbers unchanged.
-    variation : {"jumps", "smooth", "coefficients", "pulses", "tempo"}
+    variation : {"jumps", "smooth", "coefficients", "pulses", "tempo", "matern"}
         Generator of the cycle-to-cycle variation (see above); the truth's
         ``variations["generator"]`` records it with its settings (with
-        ``"smooth"`` also ``correlation_cycles`` and
+        ``"smooth"`` and ``"matern"`` also ``correlation_cycles`` and
         ``correlation_time_s``; ``"coefficients"``: ``initial_state``;
         ``"pulses"``: ``contact_ratio``, ``pulse_height_g``,
         ``requested_blf``, ...; ``"tempo"``: ``ramp``, ``ramp_direction``,
@@ -367,12 +372,12 @@ def simulate_bouncing(
     n_samples = int(np.floor(s.duration * s.fs + 1e-9)) + 1
     time = np.arange(n_samples) / s.fs
     # Fixed-size blocks in a fixed order (see the module docstring).
-    if s.variation != "smooth":
+    if s.variation not in SMOOTH_KERNELS:
         shortest = 1.0 / (s.f_b * (1.0 + TRUNCATION_SD * s.fb_variation))
         longest = 1.0 / (s.f_b * (1.0 - TRUNCATION_SD * s.fb_variation))
         n_rows = int(np.ceil((s.duration + longest) / shortest)) + 2
     else:
-        geometry = _smooth_geometry(s.duration, s.f_b, s.fb_variation)
+        geometry = _smooth_geometry(s.duration, s.f_b, s.fb_variation, SMOOTH_KERNELS[s.variation])
         n_rows = geometry[1]
     if s.variation in GENERATORS:  # the generators of .generators: their own blocks, then the noise
         draw, make = GENERATORS[s.variation]

@@ -9,7 +9,7 @@ drift + e``, with ``u''`` of Eq. 2 under the enveloped, tiring force,
 :func:`scipy.integrate.solve_ivp` (DOP853, ``rtol`` :data:`~.dynamics.RTOL`), restarted at every jump of the
 force and every kink of the schedule:
 
-- ``F(tau)`` (g, Eq. 4) is a force of :func:`simulate_bouncing`'s ``"jumps"`` or ``"smooth"`` variation
+- ``F(tau)`` (g, Eq. 4) is a force of :func:`simulate_bouncing`'s ``"jumps"``, ``"smooth"`` or ``"matern"`` variation
   (:data:`LAB_VARIATIONS`), made by the same code (:mod:`.variation`) in the person's own time ``tau``;
 - ``S(t) = E(t) (1 - tire p(t))``: the envelope ``E`` is 0 while standing, a raised cosine up to 1 over
   ``ramp_up`` cycles, 1 through the bout, a raised cosine back to 0 over ``ramp_down`` cycles; ``p(t)``, the
@@ -41,13 +41,13 @@ from .force_shape import DEFAULT_BLF, default_phases
 from .generators import _normals
 from .settings import _resolve_seed
 from .synthetic import SyntheticRecord
-from .variation import (TRUNCATION_SD, _cycles_frame, _draw_cycles, _smooth_cycles, _smooth_force,
+from .variation import (SMOOTH_KERNELS, TRUNCATION_SD, _cycles_frame, _draw_cycles, _smooth_cycles, _smooth_force,
                         _smooth_geometry)
 
 __all__ = ["LAB_VARIATIONS", "LAB_CHANGES", "SWAY_BAND", "LabRanges", "LAB_RANGES", "simulate_lab_record",
            "draw_lab_settings", "simulate_typical_lab_record"]
 
-LAB_VARIATIONS = ("jumps", "smooth")
+LAB_VARIATIONS = ("jumps", "smooth", "matern")
 """Generators of the cycle-to-cycle force variation a lab record can use (those of :mod:`.variation`)."""
 
 LAB_CHANGES = ("drift", "step")
@@ -150,7 +150,7 @@ def _bout_force(rng, variation, span, f_b, blf, phases, fb_variation, coef_varia
 
     ``cycles`` is ``(t_start, t_end, f_b, a, b)`` in the person's time (``"smooth"``: cycle averages);
     ``pieces`` lists ``(tau_start, tau_end, force)``: one per cycle with ``"jumps"`` (the force jumps at its
-    boundaries), one for the whole span with ``"smooth"``.
+    boundaries), one for the whole span with ``"smooth"`` and ``"matern"``.
     """
     m = blf.size
     if variation == "jumps":
@@ -163,11 +163,11 @@ def _bout_force(rng, variation, span, f_b, blf, phases, fb_variation, coef_varia
         pieces = [(t_start[j], t_end[j], _CycleForce(t_start[j], frequency[j], 0.0, a[j], b[j]))
                   for j in range(t_start.size)]
         return (t_start, t_end, frequency, a, b), pieces
-    geometry = _smooth_geometry(span, f_b, fb_variation)
+    geometry = _smooth_geometry(span, f_b, fb_variation, SMOOTH_KERNELS[variation])
     n_knots = geometry[1]
     blocks = (rng.random(), _normals(rng, n_knots), _normals(rng, (n_knots, m)), _normals(rng, (n_knots, m)))
     force = _smooth_force(blocks, np.empty((0, 1 + 2 * m)), geometry, f_b, fb_variation, 0.0, blf, phases,
-                          coef_variation)
+                          coef_variation, SMOOTH_KERNELS[variation])
     cycles = _smooth_cycles(force, 0, span)
     return cycles, [(cycles[0][0], cycles[1][-1], force)]
 
@@ -392,7 +392,7 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
         ``BLF_1..BLF_n`` at the start of the bout (g, Eq. 5).
     phases : sequence of float, optional
         Harmonic phases (rad); default :func:`default_phases` (a realistic GRF shape).
-    variation : {"jumps", "smooth"}
+    variation : {"jumps", "smooth", "matern"}
         Cycle-to-cycle variation of the force, as in :func:`simulate_bouncing` (:data:`LAB_VARIATIONS`), with
         ``fb_variation`` (0-0.2) and ``coef_variation`` (0-1).
     fs : float

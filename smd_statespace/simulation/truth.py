@@ -40,7 +40,7 @@ def _truth(settings, seed_record, n_cycles, generator=None):
         "truncation_sd": TRUNCATION_SD,
         "generator": s.variation,
     }
-    if s.variation == "smooth":
+    if s.variation in ("smooth", "matern"):
         variations["correlation_cycles"] = SMOOTH_CORRELATION_CYCLES
         variations["correlation_time_s"] = SMOOTH_CORRELATION_CYCLES / s.f_b
     return {

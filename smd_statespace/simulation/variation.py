@@ -20,13 +20,13 @@ import pandas as pd
 from ..io import G
 from .dynamics import _CycleForce, _integrate_cycle, _periodic_state, _states_frame
 
-__all__ = ["TRUNCATION_SD", "VARIATIONS", "SMOOTH_CORRELATION_CYCLES", "SMOOTH_GRID", "SMOOTH_RUN_IN_DECAYS",
-           "SMOOTH_RUN_IN_MAX"]
+__all__ = ["TRUNCATION_SD", "VARIATIONS", "SMOOTH_KERNELS", "SMOOTH_CORRELATION_CYCLES", "SMOOTH_GRID",
+           "SMOOTH_RUN_IN_DECAYS", "SMOOTH_RUN_IN_MAX"]
 
 TRUNCATION_SD = 3.0
 """Cycle-to-cycle variations are normal, truncated at this many standard deviations."""
 
-VARIATIONS = ("jumps", "smooth", "coefficients", "pulses", "tempo")
+VARIATIONS = ("jumps", "smooth", "coefficients", "pulses", "tempo", "matern")
 """Generators of the cycle-to-cycle force variation (``variation`` of :func:`simulate_bouncing`).
 
 ``"jumps"``
@@ -57,7 +57,17 @@ VARIATIONS = ("jumps", "smooth", "coefficients", "pulses", "tempo")
     over the record plus a slow random wander of standard deviation
     ``fb_variation`` (periods of :data:`~.generators.TEMPO_WANDER_PERIOD` s
     and longer); no coefficient jitter.
+``"matern"``
+    As ``"smooth"``, but the processes have the Matern-3/2 covariance of the
+    record-level model's own smooth variation
+    (:mod:`smd_statespace.person.variation`): their spectrum falls as ``f^-4``
+    away from each harmonic, where ``"smooth"``'s falls as ``exp(-f^2)``. The
+    pair tells what the person's answer owes to the assumed shape of the
+    force's variation (``docs/person.md``).
 """
+
+SMOOTH_KERNELS = {"smooth": "gaussian", "matern": "exponential"}
+"""The kernel that makes each smooth generator's processes from its knots (:func:`_smooth_normals`)."""
 
 SMOOTH_CORRELATION_CYCLES = 2.5
 """Correlation time of the ``"smooth"`` variation, in mean bouncing cycles ``1 / f_b``.
@@ -94,6 +104,14 @@ SMOOTH_RUN_IN_MAX = 60.0
 
 _KERNEL_REACH = 6.0
 """The Gaussian kernel of the smooth processes is cut at this many standard deviations."""
+
+_EXPONENTIAL_REACH = 12.0
+"""The exponential kernel of the ``"matern"`` processes is cut at this many decay lengths (``exp(-12)``)."""
+
+MATERN_E_FOLD = 2.1462
+"""``x`` with ``(1 + x) exp(-x) = exp(-1)``: the Matern-3/2 autocorrelation ``(1 + tau / w) exp(-tau / w)`` is 1/e
+at ``tau = MATERN_E_FOLD w``, so the exponential kernel's length ``w = SMOOTH_CORRELATION_CYCLES / MATERN_E_FOLD``
+cycles gives ``"matern"`` the correlation time of ``"smooth"``."""
 
 
 # ---------------------------------------------------------------------------
@@ -135,7 +153,7 @@ def _cycles_frame(t_start, t_end, frequency, a0, a, b, blf):
 # the smooth variation (VARIATIONS, SMOOTH_CORRELATION_CYCLES)
 
 
-def _smooth_geometry(duration, f_b, fb_variation):
+def _smooth_geometry(duration, f_b, fb_variation, kernel="gaussian"):
     """Grid and knots of the smooth processes: ``(t_lo, n_knots, reach)``.
 
     The grid ``t_lo + k / (SMOOTH_GRID f_b)`` starts a whole number of mean
@@ -143,19 +161,24 @@ def _smooth_geometry(duration, f_b, fb_variation):
     after the latest possible end of the last (``duration`` plus the longest
     cycle); the knots, one per mean cycle, start ``reach`` knots before the
     grid and end ``reach`` knots after it. All of it depends only on
-    ``duration``, ``f_b`` and ``fb_variation``, so the number of random
-    numbers drawn does too.
+    ``duration``, ``f_b``, ``fb_variation`` and the ``kernel``
+    (:data:`SMOOTH_KERNELS`), so the number of random numbers drawn does too.
     """
     period = 1.0 / f_b
     longest = period / (1.0 - TRUNCATION_SD * fb_variation)
     before = int(np.ceil(longest / period)) + 1
     n_span = before + int(np.ceil((duration + longest) / period)) + 1
-    reach = int(np.ceil(_KERNEL_REACH * 0.5 * SMOOTH_CORRELATION_CYCLES))
+    reach = int(np.ceil(_KERNEL_REACH * 0.5 * SMOOTH_CORRELATION_CYCLES if kernel == "gaussian" else
+                        _EXPONENTIAL_REACH * SMOOTH_CORRELATION_CYCLES / MATERN_E_FOLD))
     return -before * period, n_span + 2 * reach + 1, reach
 
 
-def _smooth_normals(knots, reach):
-    """Gaussian-kernel smoothing of knot values onto the grid (:data:`SMOOTH_CORRELATION_CYCLES`).
+def _smooth_normals(knots, reach, kernel="gaussian"):
+    """Kernel smoothing of knot values onto the grid (:data:`SMOOTH_CORRELATION_CYCLES`).
+
+    ``kernel="gaussian"`` (``"smooth"``) or ``"exponential"`` (``"matern"``:
+    ``exp(-|t| / w)``, whose sum of white knots has the Matern-3/2 spectrum
+    ``(1 + (2 pi f w)^2)^-2``; :data:`MATERN_E_FOLD`).
 
     Parameters
     ----------
@@ -172,16 +195,19 @@ def _smooth_normals(knots, reach):
         sum of the knots divided by the root-sum-square of the weights (the
         knots' variance at every point), clipped at :data:`TRUNCATION_SD`.
     """
-    width = 0.5 * SMOOTH_CORRELATION_CYCLES * SMOOTH_GRID  # kernel SD in grid steps
     offsets = np.arange(-reach * SMOOTH_GRID, reach * SMOOTH_GRID + 1)
-    kernel = np.exp(-0.5 * (offsets / width) ** 2)
+    if kernel == "gaussian":
+        width = 0.5 * SMOOTH_CORRELATION_CYCLES * SMOOTH_GRID  # kernel SD in grid steps
+        weights = np.exp(-0.5 * (offsets / width) ** 2)
+    else:
+        weights = np.exp(-np.abs(offsets) / (SMOOTH_CORRELATION_CYCLES / MATERN_E_FOLD * SMOOTH_GRID))
     spikes = np.zeros((knots.shape[0] - 1) * SMOOTH_GRID + 1)
     spikes[::SMOOTH_GRID] = 1.0
-    scale = np.sqrt(np.convolve(spikes, kernel**2, mode="valid"))
+    scale = np.sqrt(np.convolve(spikes, weights**2, mode="valid"))
     values = np.empty((scale.size, knots.shape[1]))
     for column in range(knots.shape[1]):
         spikes[::SMOOTH_GRID] = knots[:, column]
-        values[:, column] = np.convolve(spikes, kernel, mode="valid") / scale
+        values[:, column] = np.convolve(spikes, weights, mode="valid") / scale
     return np.clip(values, -TRUNCATION_SD, TRUNCATION_SD)
 
 
@@ -262,7 +288,8 @@ def _smooth_run_in(system):
     return min(SMOOTH_RUN_IN_DECAYS * system.slowest_decay(), SMOOTH_RUN_IN_MAX)
 
 
-def _smooth_force(rng_blocks, run_in_knots, geometry, f_b, fb_variation, a0, blf, phases, coef_variation):
+def _smooth_force(rng_blocks, run_in_knots, geometry, f_b, fb_variation, a0, blf, phases, coef_variation,
+                  kernel="gaussian"):
     """The :class:`_SmoothForce` made from pre-drawn truncated standard normals at the knots.
 
     ``rng_blocks`` holds the start fraction and the knots of the record
@@ -275,7 +302,7 @@ def _smooth_force(rng_blocks, run_in_knots, geometry, f_b, fb_variation, a0, blf
     start_fraction, eps, amp_noise, phase_noise = rng_blocks
     t_lo, _, reach = geometry
     knots = np.concatenate([run_in_knots[::-1], np.column_stack([eps, amp_noise, phase_noise])])
-    values = _smooth_normals(knots, reach)
+    values = _smooth_normals(knots, reach, kernel)
     grid = t_lo - run_in_knots.shape[0] / f_b + np.arange(values.shape[0]) / (SMOOTH_GRID * f_b)
     spline = CubicSpline(grid, values, axis=0)
     integral = spline.antiderivative()
