@@ -110,6 +110,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import person_accuracy  # noqa: E402  (beside this script: the established people, the Wilson interval)
 from result_csv import append_row, open_csv  # noqa: E402  (beside this script: the resumable CSV)
 
+from smd_statespace.person.noise_floor import NOISE_FLOOR  # noqa: E402
+
 ROWS = ("lab", "twin", "clean", "change", "held_out")
 """The benchmark's rows, in the order of the tables."""
 
@@ -315,7 +317,8 @@ def span_ok(fit_start, fit_end, span: dict, f_b: float) -> bool:
 
 def run_record(task) -> dict:
     """Simulate and identify one record; never raises (a failure is the row's ``error``)."""
-    seed, row, k, people = task if len(task) == 4 else (*task, "standard")
+    seed, row, k, people, noise_floor = (*task, "standard", NOISE_FLOOR)[:5] if len(task) == 3 else (
+        (*task, NOISE_FLOOR) if len(task) == 4 else task)  # (seed, row, k[, people[, noise_floor]])
     out = {c: "" for c in COLUMNS}
     out.update(seed=seed, people=people, row=row, record=k, spawn_key=f"{GROUP[row]}.{k}", held_out=row in HELD_OUT)
     try:
@@ -350,7 +353,7 @@ def run_record(task) -> dict:
     try:
         from smd_statespace.person import identify_person
 
-        result = identify_person(synthetic.record)  # identify REC --mass M: every default
+        result = identify_person(synthetic.record, noise_floor=noise_floor)  # identify REC --mass M
         out["seconds"] = round(time.perf_counter() - start, 3)
         d = result.to_dict()
         low, high = (float(v) for v in result.intervals["f_h"])
@@ -568,6 +571,9 @@ def parse_args(argv=None):
     parser.add_argument("--resume", action="store_true",
                         help="go on with an existing --csv (fit the missing records and those that failed)")
     parser.add_argument("--quick", action="store_true", help="2 records per row, a temporary CSV: a smoke run")
+    parser.add_argument("--noise-floor", type=float, default=NOISE_FLOOR,
+                        help=f"identify_person's noise_floor (default {NOISE_FLOOR:g}; 0: the records as measured; "
+                             "give another --csv)")
     args = parser.parse_args(argv)
     if args.records is None:
         args.records = 2 if args.quick else 40
@@ -588,7 +594,7 @@ def main(argv=None):
     command = "python benchmarks/lab_records.py " + shlex.join(sys.argv[1:] if argv is None else argv)
     done = open_csv(args.csv, args.resume, COLUMNS, CSV_KEYS)
     # lab and twin of one person next to each other: a partial run has whole pairs
-    tasks = [(args.seed, row, k, args.people) for k in range(args.records) for row in args.rows
+    tasks = [(args.seed, row, k, args.people, args.noise_floor) for k in range(args.records) for row in args.rows
              if (args.seed, row, k, args.people) not in done]
     print(f"{len(tasks)} records to fit ({len(done)} in {args.csv}), {args.jobs} process(es)", file=sys.stderr)
     started = time.perf_counter()

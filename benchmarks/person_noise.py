@@ -42,6 +42,7 @@ import person_accuracy  # noqa: E402  (draw_people: the same people as the accur
 
 from smd_statespace.person import calibration as person_calibration  # noqa: E402
 from smd_statespace.person import identify_person  # noqa: E402
+from smd_statespace.person.noise_floor import NOISE_FLOOR  # noqa: E402
 from smd_statespace.simulation import simulate_bouncing  # noqa: E402
 
 CONDITIONS = (("100 Hz, 1 % BW", 100.0, 0.01), ("100 Hz, 0.3 % BW", 100.0, 0.003),
@@ -53,7 +54,7 @@ DURATION = 30.0
 
 def one(task) -> dict:
     """Simulate and identify one record; never raises."""
-    person, (label, fs, noise), generator, floor = task
+    person, (label, fs, noise), generator, floor, noise_floor = task
     if floor is not None:
         for floors in person_calibration.MODEL_ERROR_FLOOR.values():  # the same floor for every variation model
             floors.update(f_h=floor[0], xi_h=floor[1])
@@ -63,7 +64,7 @@ def one(task) -> dict:
         record = simulate_bouncing(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"],
                                    duration=DURATION, fs=fs, blf=blf, noise=noise, seed=int(person["sim_seed"]),
                                    variation=generator).record
-        result = identify_person(record)
+        result = identify_person(record, noise_floor=noise_floor)
     except Exception as exc:  # noqa: BLE001 - one record must never kill the study
         row["error"] = f"{type(exc).__name__}: {str(exc).splitlines()[0][:120]}"
         return row
@@ -128,6 +129,8 @@ def main(argv=None) -> int:
                         help="model-error floor of f_h (relative) and xi_h for this run (default: the library's)")
     parser.add_argument("--generators", default=",".join(person_accuracy.GENERATORS),
                         help=f"comma-separated generators (default all: {','.join(person_accuracy.GENERATORS)})")
+    parser.add_argument("--noise-floor", type=float, default=NOISE_FLOOR,
+                        help=f"identify_person's noise_floor (default {NOISE_FLOOR:g}; 0: the records as measured)")
     parser.add_argument("--csv", type=Path, default=None, help="also write every record's row here")
     args = parser.parse_args(argv)
     floor = None if args.floor is None else tuple(float(v) for v in args.floor.split(","))
@@ -136,7 +139,7 @@ def main(argv=None) -> int:
     if unknown:
         parser.error(f"--generators: {', '.join(unknown)} not among {', '.join(person_accuracy.GENERATORS)}")
     people = person_accuracy.draw_people(args.records, args.seed)
-    tasks = [(person, condition, generator, floor) for condition in CONDITIONS
+    tasks = [(person, condition, generator, floor, args.noise_floor) for condition in CONDITIONS
              for generator in generators for _, person in people.iterrows()]
     started = time.perf_counter()
     with ProcessPoolExecutor(max(1, args.jobs)) as pool:
@@ -147,7 +150,7 @@ def main(argv=None) -> int:
     used = (f"f_h {floor[0]:g} (relative), xi_h {floor[1]:g}" if floor else
             "; ".join(f"{v}: f_h {f['f_h']:g} (relative), xi_h {f['xi_h']:g}"
                       for v, f in person_calibration.MODEL_ERROR_FLOOR.items()))
-    print(f"model-error floor: {used}; seed {args.seed}")
+    print(f"model-error floor: {used}; noise floor {args.noise_floor:g} of body weight; seed {args.seed}")
     print("\n".join(summary(frame)))
     for _, row in frame[frame["error"] != ""].iterrows():
         print(f"failed: {row['condition']} {row['generator']} #{row['record']}: {row['error']}")

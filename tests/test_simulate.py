@@ -674,7 +674,7 @@ def test_variation_is_checked_and_on_the_command_line(tmp_path, capsys):
     from smd_statespace.cli import main
 
     for bad in ("smoth", None, 1):
-        with pytest.raises(OptionError, match=r"variation must be one of 'jumps', 'smooth', 'coefficients', 'pulses', 'tempo', got") as info:
+        with pytest.raises(OptionError, match=r"variation must be one of 'jumps', 'smooth', 'coefficients', 'pulses', 'tempo', 'matern', got") as info:
             simulate_bouncing(duration=2.0, variation=bad)
         assert repr(bad) in str(info.value) and "\n" not in str(info.value)
     argv = ["simulate", "--mass", "70", "--fb", "2", "--fh", "2.5", "--xi", "0.3", "--duration", "3", "--seed", "1",

@@ -138,6 +138,29 @@ def add_rate_argument(parser):
                              "were set; 0 keeps every sample, slower)")
 
 
+def add_noise_floor_argument(parser):
+    """``--noise-floor FRACTION``: a quieter record is fitted with white noise added up to this share of body weight."""
+    from ..person.noise_floor import MAX_NOISE_FLOOR, NOISE_FLOOR
+
+    parser.add_argument("--noise-floor", type=_noise_floor, default=NOISE_FLOOR, metavar="FRACTION",
+                        help=f"record estimator: a record whose noise per fitted sample is below this fraction of "
+                             f"body weight (default {NOISE_FLOOR:g}: 1 %% BW, where the intervals were calibrated; "
+                             f"0-{MAX_NOISE_FLOOR:g}) is fitted with white noise added up to it, seeded by the record, "
+                             "so that a quiet plate does not let details of the force's variation that no model "
+                             "describes set f_h and xi_h; 0 fits the record as measured")
+
+
+def _noise_floor(text):
+    """argparse type of ``--noise-floor`` (:func:`~smd_statespace.person.noise_floor.check_noise_floor`)."""
+    from ..person.noise_floor import check_noise_floor
+
+    try:
+        return check_noise_floor(float(text))
+    except (ValueError, OptionError):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a fraction of body weight from 0 to 0.05 "
+                                         "(e.g. 0.01 for 1 % BW; 0 fits the record as measured)") from None
+
+
 def add_span_argument(parser):
     """``--span START:END|auto|all``: the part of the record the person is identified from."""
     parser.add_argument("--span", type=_span, default="auto", metavar="START:END",

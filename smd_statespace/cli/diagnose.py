@@ -10,8 +10,8 @@ import pandas as pd
 
 from ..diagnostics.check import INITIAL_STATES
 from ..estimators import ESTIMATORS
-from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments,
-                     add_span_argument, build_model, check_record_level_options, estimator_options, out_dir,
+from .common import (add_model_arguments, add_noise_floor_argument, add_rate_argument, add_record_arguments,
+                     add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options, out_dir,
                      prepare_record, rate_of, read_person_record)
 from .identify import DEFAULT_ESTIMATOR
 
@@ -37,6 +37,7 @@ def add_diagnose(subparsers):
                              "every cycle with each candidate")
     add_rate_argument(parser)
     add_span_argument(parser)
+    add_noise_floor_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--candidate", action="append", default=[], metavar="NAME[:key=value,...]",
@@ -106,7 +107,8 @@ def run_person_diagnose(args) -> int:
     check_effects(added + (candidates or []), record)
     directory = out_dir(args.out)
     base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args),
-                           span=args.span, progress=not args.quiet, effects=added, measured_floor=not args.no_floor)
+                           span=args.span, progress=not args.quiet, effects=added, measured_floor=not args.no_floor,
+                           noise_floor=args.noise_floor)
     print(f"{record.source}: record-level model" + (f" with {', '.join(e.spec for e in base.effects)}"
                                                     if base.effects else ""))
     print(base.summary())

@@ -274,10 +274,12 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
         measured = record.read()
         if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row
             from ..person import identify_person
+            from ..person.noise_floor import NOISE_FLOOR
 
             person = identify_person(measured, n_harmonics=model.n_harmonics, check=check,
                                      rate=runner_options.get("rate", RECORD_RATE), effects=model.effects,
-                                     measured_floor=runner_options.get("measured_floor", True))
+                                     measured_floor=runner_options.get("measured_floor", True),
+                                     noise_floor=runner_options.get("noise_floor", NOISE_FLOOR))
             table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
         else:
             runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
@@ -359,8 +361,9 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     runner_options : dict, optional
         :class:`~smd_statespace.identify.runner.CycleRunner` options (``max_passes``,
         ``seed``, ``rate``, ``n_particles``, ...); with ``estimator="record"`` only ``rate`` (default
-        :data:`~smd_statespace.signals.RECORD_RATE`) and ``measured_floor`` (default True: see
-        :func:`~smd_statespace.person.fit.identify_person`) are used.
+        :data:`~smd_statespace.signals.RECORD_RATE`), ``measured_floor`` (default True) and ``noise_floor``
+        (default :data:`~smd_statespace.person.noise_floor.NOISE_FLOOR`) are used (see
+        :func:`~smd_statespace.person.fit.identify_person`).
     jobs : int
         Records identified in parallel processes (results do not depend on it); ignored with ``executor``.
     resume : bool

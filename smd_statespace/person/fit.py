@@ -34,6 +34,7 @@ from ..signals import RECORD_RATE, prepare_record
 from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
 from .model import VARIATIONS, Regressor, RecordModel
+from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, comparison_row,
                      fit_model, profile_interval)
 from .timing import TIMING_METHODS, estimate_timing
@@ -75,7 +76,7 @@ INTERVAL_METHODS = ("calibrated", "wald", "profile")
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type=WIDER_SANDWICH, drift=False, check=True,
                     rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto",
-                    check_change=True):
+                    check_change=True, noise_floor=NOISE_FLOOR):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -154,6 +155,12 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         compared (:func:`~smd_statespace.person.change.change_test`, ``result.change``): a person
         whose ``f_h`` or ``xi_h`` differs between them is said in words, and that parameter is
         not called determined. False skips the two fits.
+    noise_floor : float or None
+        Fraction of body weight (default :data:`~smd_statespace.person.noise_floor.NOISE_FLOOR`, 1 % BW):
+        a record whose measured noise per fitted sample is lower is fitted with white noise added up to it,
+        seeded by the record (:mod:`~smd_statespace.person.noise_floor`: a quiet plate otherwise lets details
+        of the force's variation that no variation model describes set ``f_h`` and ``xi_h``); ``result.notes``
+        says so. None (or 0) fits the record as measured.
     progress : bool
         Show a progress bar (tqdm) over the likelihood searches (one per variation model,
         ``TIMING_ITERATIONS + 1`` more for ``timing="model"`` and the winner's final fit, then the
@@ -204,6 +211,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
+    noise_floor = check_noise_floor(noise_floor)
     prepared, observed = _prepared(record, rate, span, regressors, check)
     record = prepared.record
     record_warnings = prepared.warnings + check_bouncing(record).raise_if_refused(override=not check)
@@ -211,7 +219,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     if prepared.trimmed:
         regressors += zero_drift(record.time)
     notes = list(prepared.notes)
-    y = record.force / record.mass - G  # Eq. 3
+    y, floor_notes = raise_to_floor(record.force / record.mass - G, observed, record.fs, noise_floor)  # Eq. 3
+    notes += floor_notes
     if timing not in ("model",) + TIMING_METHODS:
         raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
     first = "template" if timing == "model" else timing
@@ -249,7 +258,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         best = min(eligible, key=lambda i: comparison[i]["aic"])
         model, fitted = fits[best]
         if timing == "model":
-            model, fitted, refined = choose_with_own_timing(model_for, cycle_timing, fits, best, step)
+            suspect = {row["variation"] for row in comparison if row["on_bound"]}  # at the first timing
+            model, fitted, refined = choose_with_own_timing(model_for, cycle_timing, fits, best, step, suspect)
             comparison += refined
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "

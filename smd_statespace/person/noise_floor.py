@@ -1,0 +1,124 @@
+"""The noise floor: a record quieter than the model is trusted to is fitted with white noise added up to it.
+
+The record-level model describes how the force varies from cycle to cycle by a few smooth
+processes (:mod:`~smd_statespace.person.variation`). A real force varies in finer ways than
+that, and so do the simulator's generators. On a record with the noise of a quiet force plate
+(about 0.05-0.15 % of body weight per fitted sample) the likelihood reads ``f_h`` and ``xi_h``
+from those details: the person's high-frequency roll-off (``|GRF| ~ 2 xi_h f_h / f`` above the
+resonance) is the one part of the model that can suppress a misfit there, so ``xi_h`` comes out
+low and ``f_h`` high, with white-looking innovations (``docs/person.md``, "A quiet record").
+
+Measured (``benchmarks/person_noise.py``, ``benchmarks/lab_records.py``): on 30 s records of
+the ``smooth`` and ``matern`` generators at 0.1 % BW, ``xi_h`` -0.15 (median) with 90 %
+intervals covering it on 4-5 of 8 records; on lab exports of the ``smooth`` generator ``f_h``
+off by a median 11 % (+50 % at worst), two of eight called determined while 10 % off. The same
+records with white noise added up to 1 % BW: ``xi_h`` within its interval on 8 of 8, ``f_h``
+off by a median 6 %, none called determined while wrong. On records simulated from the
+model itself, 0.1 % BW gives unbiased ``xi_h``: the loss is the model's, not the estimator's.
+
+So a record whose measured noise (:func:`measured_noise`) is below :data:`NOISE_FLOOR` of body
+weight is fitted with independent normal noise added to make up the difference (the level at
+which the intervals were calibrated, :data:`~smd_statespace.person.calibration.CALIBRATION`),
+drawn from a generator seeded by the record's own samples: the same record gives the same
+answer. The result says so in its notes; ``noise_floor=None`` (``--noise-floor 0``) fits the
+record as measured.
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+
+from ..errors import OptionError
+from ..io import G
+
+__all__ = ["NOISE_FLOOR", "MAX_NOISE_FLOOR", "NOISE_BAND", "check_noise_floor", "measured_noise", "raise_to_floor"]
+
+NOISE_FLOOR = 0.01
+"""Default noise floor: the sd of the fitted samples' noise, as a fraction of body weight (1 % BW)."""
+
+MAX_NOISE_FLOOR = 0.05
+"""Largest noise floor accepted (5 % BW)."""
+
+NOISE_BAND = (25.0, 0.95)
+"""The band the measurement noise is read from: above 25 Hz (a bouncing force carries nothing there: six harmonics
+of 3.5 Hz, :data:`~smd_statespace.signals.RECORD_RATE`) and below 0.95 of the Nyquist frequency (the decimation's
+guard band); at least the upper half of the band below the Nyquist frequency when that starts above 25 Hz."""
+
+
+def check_noise_floor(noise_floor):
+    """``noise_floor`` as a float fraction of body weight (0 for None); an :class:`OptionError` naming it if invalid."""
+    if noise_floor is None:
+        return 0.0
+    if isinstance(noise_floor, bool) or not isinstance(noise_floor, (int, float)) or not (
+            0.0 <= noise_floor <= MAX_NOISE_FLOOR):
+        raise OptionError(f"noise_floor={noise_floor!r} must be a fraction of body weight from 0 to "
+                          f"{MAX_NOISE_FLOOR:g} (e.g. {NOISE_FLOOR:g} for 1 % BW), or None to fit the record as "
+                          "measured")
+    return float(noise_floor)
+
+
+def measured_noise(y, fs) -> float:
+    """Standard deviation (m/s^2) of the white measurement noise in ``y``, read from the band of :data:`NOISE_BAND`.
+
+    A Hann-windowed periodogram of ``y`` (``GRF / M_h - g`` at the fitted rate ``fs``, Hz), its mean
+    power over the band divided by the window's mean square: the variance of white noise. Power of
+    the force itself in the band (a record sampled too slowly for the band to be free of it) makes
+    the estimate larger, never smaller.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> t = np.arange(3000) / 100.0
+    >>> y = 3.0 * np.sin(2 * np.pi * 2.0 * t) + 0.02 * rng.standard_normal(t.size)
+    >>> round(measured_noise(y, 100.0), 3)
+    0.02
+    """
+    y = np.asarray(y, dtype=float)
+    window = np.hanning(y.size)
+    power = np.abs(np.fft.rfft((y - y.mean()) * window)) ** 2 / (y.size * np.mean(window**2))
+    frequency = np.fft.rfftfreq(y.size, 1.0 / fs)
+    nyquist = 0.5 * fs
+    low = min(NOISE_BAND[0], 0.5 * nyquist)
+    band = (frequency >= low) & (frequency <= NOISE_BAND[1] * nyquist)
+    return float(np.sqrt(np.mean(power[band]))) if band.sum() >= 8 else float("nan")
+
+
+def raise_to_floor(y, observed, fs, noise_floor) -> tuple:
+    """``y`` with white noise added up to ``noise_floor`` g of sd, and the note that says so.
+
+    Parameters
+    ----------
+    y : ndarray
+        ``GRF / M_h - g`` (m/s^2) at the fitted rate.
+    observed : ndarray of bool or None
+        The samples the likelihood uses (the noise is read from them and added to all).
+    fs : float
+        The fitted rate (Hz).
+    noise_floor : float
+        Fraction of body weight (:func:`check_noise_floor`); 0 leaves ``y`` as it is.
+
+    Returns
+    -------
+    y : ndarray
+        The samples to fit (``y`` itself when its noise is at the floor or above it, or unknown).
+    notes : list of str
+        One note when noise was added: the measured and added levels and how to fit without it.
+    """
+    if noise_floor <= 0.0:
+        return y, []
+    used = y if observed is None else y[np.asarray(observed, dtype=bool)]
+    measured = measured_noise(used, fs)
+    target = noise_floor * G
+    if not np.isfinite(measured) or measured >= target:
+        return y, []
+    added = float(np.sqrt(target**2 - measured**2))
+    digest = hashlib.sha256(np.ascontiguousarray(y, dtype=float).tobytes()).digest()
+    rng = np.random.default_rng(np.random.SeedSequence(int.from_bytes(digest[:16], "little")))
+    note = (f"the record is quieter ({100 * measured / G:.2g} % BW noise per fitted sample) than the "
+            f"{100 * noise_floor:g} % BW the model is trusted to: white noise of {100 * added / G:.2g} % BW was added "
+            "before the fit (drawn from the record's own samples, so the same record gives the same answer), so that "
+            "f_h and xi_h are not read from details of the force's variation that no variation model describes "
+            "(docs/person.md, 'A quiet record'); noise_floor=None in Python or --noise-floor 0 fits it as measured")
+    return y + added * rng.standard_normal(y.size), [note]
