@@ -2,6 +2,7 @@
 
 import inspect
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -471,9 +472,12 @@ def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys, monk
     bar = capsys.readouterr().err
     assert "identify (record)" in bar and f"{steps}/{steps}" in bar  # every search counted, none twice
     assert result.record.fs == pytest.approx(100.0) and result.model.y.size == sim.record.time.size // 10
-    assert result.notes == ["fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and one sample in 10 "
-                            "kept (the rate asked: 100 Hz; to keep every sample, rate=None in Python or --rate 0 on "
-                            "the command line)"]
+    assert result.notes[0] == ("fitted at 100 Hz: the record (1000 Hz) was low-pass filtered and one sample in 10 "
+                               "kept (the rate asked: 100 Hz; to keep every sample, rate=None in Python or --rate 0 "
+                               "on the command line)")
+    # decimated, 1 % BW per 1000 Hz sample is 0.32 % per fitted one (read as 0.4 %: the force's jumps at cycle
+    # starts reach the band the noise is read from): below the noise floor, which says so
+    assert len(result.notes) == 2 and re.search(r"white noise of 0\.9\d % BW was added", result.notes[1])
     assert "note: fitted at 100 Hz" in result.summary() and result.to_dict()["fs"] == pytest.approx(100.0)
     low, high = result.intervals["f_h"]
     assert low < 2.8 < high  # the person, from a tenth of the samples
