@@ -7,7 +7,8 @@ from smd_statespace.cli.main import main
 from smd_statespace.errors import OptionError
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
-from smd_statespace.person.noise_floor import NOISE_FLOOR, check_noise_floor, measured_noise, raise_to_floor
+from smd_statespace.person.noise_floor import (NOISE_FLOOR, check_noise_floor, measured_label, measured_noise,
+                                               noise_added, raise_to_floor)
 from smd_statespace.simulation import simulate_bouncing
 
 
@@ -60,7 +61,8 @@ def test_a_quiet_record_is_fitted_at_the_floor_and_as_measured_without_it():
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.3, duration=12.0, noise=0.001, seed=5)
     floored = identify_person(sim.record, check_change=False)
     assert floored.sigma == pytest.approx(NOISE_FLOOR * G, rel=0.1)
-    assert any("white noise of" in note for note in floored.notes)
+    assert any("white noise of" in note for note in floored.notes) and noise_added(floored.notes)
+    assert measured_label(floored.notes) == "measured + the noise floor's noise"  # the figures' legend
     measured = identify_person(sim.record, check_change=False, noise_floor=None)
     assert measured.sigma < 0.3 * NOISE_FLOOR * G  # the record as measured (its noise and the model's misfit)
-    assert not any("white noise of" in note for note in measured.notes)
+    assert not noise_added(measured.notes) and measured_label(measured.notes) == "measured"

@@ -35,7 +35,8 @@ import numpy as np
 from ..errors import OptionError
 from ..io import G
 
-__all__ = ["NOISE_FLOOR", "MAX_NOISE_FLOOR", "NOISE_BAND", "check_noise_floor", "measured_noise", "raise_to_floor"]
+__all__ = ["NOISE_FLOOR", "MAX_NOISE_FLOOR", "NOISE_BAND", "check_noise_floor", "measured_noise", "raise_to_floor",
+           "noise_added", "measured_label"]
 
 NOISE_FLOOR = 0.01
 """Default noise floor: the sd of the fitted samples' noise, as a fraction of body weight (1 % BW)."""
@@ -47,6 +48,20 @@ NOISE_BAND = (25.0, 0.95)
 """The band the measurement noise is read from: above 25 Hz (a bouncing force carries nothing there: six harmonics
 of 3.5 Hz, :data:`~smd_statespace.signals.RECORD_RATE`) and below 0.95 of the Nyquist frequency (the decimation's
 guard band); at least the upper half of the band below the Nyquist frequency when that starts above 25 Hz."""
+
+
+NOTE_START = "the record is quieter ("
+"""How :func:`raise_to_floor`'s note begins (:func:`noise_added` finds it in a result's notes)."""
+
+
+def noise_added(notes) -> bool:
+    """Whether a result's ``notes`` say the noise floor added noise to the samples fitted."""
+    return any(note.startswith(NOTE_START) for note in notes)
+
+
+def measured_label(notes) -> str:
+    """The legend label of the samples fitted: "measured", or that with the noise floor's noise in it."""
+    return "measured + the noise floor's noise" if noise_added(notes) else "measured"
 
 
 def check_noise_floor(noise_floor):
@@ -118,7 +133,7 @@ def raise_to_floor(y, observed, fs, noise_floor) -> tuple:
     added = float(np.sqrt(target**2 - measured**2))
     digest = hashlib.sha256(np.ascontiguousarray(y, dtype=float).tobytes()).digest()
     rng = np.random.default_rng(np.random.SeedSequence(int.from_bytes(digest[:16], "little")))
-    note = (f"the record is quieter ({100 * measured / G:.2g} % BW noise per fitted sample) than the "
+    note = (f"{NOTE_START}{100 * measured / G:.2g} % BW noise per fitted sample) than the "
             f"{100 * noise_floor:g} % BW the model is trusted to: white noise of {100 * added / G:.2g} % BW was added "
             "before the fit (drawn from the record's own samples, so the same record gives the same answer), so that "
             "f_h and xi_h are not read from details of the force's variation that no variation model describes "

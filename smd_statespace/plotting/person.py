@@ -26,6 +26,7 @@ from matplotlib.figure import Figure
 from scipy import signal
 
 from ..measures import fit_percent
+from ..person.noise_floor import measured_label
 
 __all__ = ["free_run", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
            "plot_held_out", "plot_floor_correlation", "plot_candidates"]
@@ -100,8 +101,10 @@ def _worst_window(time, residual, seconds) -> float:
     return float(time[int(np.argmax(energy))])
 
 
-def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None) -> Figure:
+def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None, measured="measured") -> Figure:
     """Measured against simulated runs ``[(color key, label, run)]``: the residuals, the worst window, the middle.
+
+    ``measured``: the legend label of ``y`` (:func:`~smd_statespace.person.noise_floor.measured_label`).
 
     ``one_step``: one-step predictions ``[(color key, label, prediction)]`` drawn as their errors in a first panel.
     Samples a run does not predict (NaN) are left out of its fit % and of the middle window.
@@ -126,7 +129,7 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None) -> F
     for ax, start, what in ((worst, starts[0], "free run, where the model without misses most"),
                             (middle, starts[1], "free run, middle")):
         shown = (time >= start) & (time <= start + seconds)
-        ax.plot(time[shown], y[shown], color="k", lw=1.4, label="measured")
+        ax.plot(time[shown], y[shown], color="k", lw=1.4, label=measured)
         for key, label, run in runs:
             ax.plot(time[shown], run[shown], color=COLORS.get(key, "tab:blue"), lw=1.0, label=label)
         ax.set(xlabel="time (s)", ylabel="GRF/M - g (m/s$^2$)")
@@ -147,7 +150,8 @@ def plot_compare(result, path=None, seconds: float = 3.0) -> Figure:
     """
     runs = [(key, _label(fitted), free_run(fitted)) for key, fitted in _pairs(result)]
     title = f"{_name(result)}: free-run simulation against the measurement"
-    return _save(_compare_figure(result.model.time, result.model.y, runs, title, seconds), path)
+    return _save(_compare_figure(result.model.time, result.model.y, runs, title, seconds,
+                                 measured=measured_label(result.notes)), path)
 
 
 def plot_held_out(diagnosis, name, path=None, seconds: float = 3.0) -> Figure:
@@ -169,7 +173,7 @@ def plot_held_out(diagnosis, name, path=None, seconds: float = 3.0) -> Figure:
         title = (f"{_name(diagnosis.base)}: the part outside {after['folds'][0]['start']:.1f}-"
                  f"{after['folds'][0]['end']:.1f} s predicted by the person fitted there (which holds the change)")
     return _save(_compare_figure(before["time"], before["measured"], runs, title, seconds, cut=before["cut"],
-                                 one_step=one_step), path)
+                                 one_step=one_step, measured=measured_label(diagnosis.base.notes)), path)
 
 
 def plot_floor_correlation(result, path=None, max_lag: float = 1.0) -> Figure:
@@ -225,7 +229,7 @@ def plot_person_fit(result, path=None, seconds=3.0, truth=None) -> Figure:
     for column, (first, label) in enumerate(((best, "best"), (worst, "worst"))):
         ax = fig.add_subplot(grid[0, column])
         window = slice(first, first + width)
-        ax.plot(t[window], y[window], color="0.3", lw=1.2, label="measured")
+        ax.plot(t[window], y[window], color="0.3", lw=1.2, label=measured_label(result.notes))
         ax.plot(t[window], (y - raw)[window], color="C1", lw=1.0, label="predicted one step ahead")
         ax.plot(t[window], raw[window], color="C3", lw=0.8, label="innovation")
         for b in result.model.timing.boundaries:
