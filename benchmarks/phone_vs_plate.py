@@ -37,6 +37,7 @@ from tqdm.auto import tqdm
 
 from smd_statespace.accelerometer import accelerometer_record
 from smd_statespace.person import identify_person
+from smd_statespace.person.noise_floor import NOISE_FLOOR
 from smd_statespace.simulation import DEFAULT_BLF
 from smd_statespace.simulation.phone import PHONE_DEFAULTS, simulate_phone
 
@@ -73,13 +74,13 @@ def one(task) -> dict:
         row["blf_1_truth"] = p["blf"][0]
         plate_record = phone.plate_record(fs=options["plate_rate"], noise=options["plate_noise"], seed=p["seed"] + 1,
                                           filtered=options["plate_filter"])
-        plate = identify_person(plate_record)
+        plate = identify_person(plate_record, noise_floor=options["noise_floor"])
         row.update({f"plate_{k}": v for k, v in _answer(plate, truth).items()})
         with tempfile.TemporaryDirectory() as folder:
             path, _ = phone.write(Path(folder) / "phone.csv")
             moment = time.perf_counter()
             record = accelerometer_record(path)
-            result = identify_person(record)
+            result = identify_person(record, noise_floor=options["noise_floor"])
             row["phone_seconds"] = time.perf_counter() - moment
         row.update({f"phone_{k}": v for k, v in _answer(result, truth).items()})
         row["tilt_estimated"] = record.extra["geometry"]["tilt_deg"]
@@ -126,6 +127,8 @@ def main(argv=None):
     parser.add_argument("--variation", default="jumps",
                         help="generator of the force's variation (default jumps: instant steps at cycle starts; "
                              "smooth: no steps)")
+    parser.add_argument("--noise-floor", type=float, default=NOISE_FLOOR,
+                        help=f"identify_person's noise_floor for both (default {NOISE_FLOOR:g}; 0: as measured)")
     parser.add_argument("--csv", type=Path, help="also write every person's row here")
     args = parser.parse_args(argv)
     options = {k: v for k, v in vars(args).items() if k not in ("people", "jobs", "csv")}

@@ -11,8 +11,8 @@ import pandas as pd
 from ..diagnostics.check import INITIAL_STATES
 from ..estimators import ESTIMATORS
 from .common import (add_model_arguments, add_noise_floor_argument, add_rate_argument, add_record_arguments,
-                     add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options, out_dir,
-                     prepare_record, rate_of, read_person_record)
+                     add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
+                     out_dir, prepare_record, rate_of, read_person_record)
 from .identify import DEFAULT_ESTIMATOR
 
 

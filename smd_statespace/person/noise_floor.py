@@ -47,8 +47,7 @@ MAX_NOISE_FLOOR = 0.05
 NOISE_BAND = (25.0, 0.95)
 """The band the measurement noise is read from: above 25 Hz (a bouncing force carries nothing there: six harmonics
 of 3.5 Hz, :data:`~smd_statespace.signals.RECORD_RATE`) and below 0.95 of the Nyquist frequency (the decimation's
-guard band); at least the upper half of the band below the Nyquist frequency when that starts above 25 Hz."""
-
+guard band); from half the Nyquist frequency instead where that is lower than 25 Hz (a record fitted below 50 Hz)."""
 
 NOTE_START = "the record is quieter ("
 """How :func:`raise_to_floor`'s note begins (:func:`noise_added` finds it in a result's notes)."""
