@@ -37,6 +37,10 @@ def test_raise_to_floor_adds_what_is_missing_reproducibly_and_nothing_above_it()
     assert np.array_equal(raised, again)  # seeded by the record: the same record, the same draw
     other, _ = raise_to_floor(_bouncing_like(fs, 0.01, seed=1), None, fs, NOISE_FLOOR)
     assert not np.allclose(other - _bouncing_like(fs, 0.01, seed=1), raised - quiet)
+    raw = np.arange(5.0)  # seeded by other samples (identify_person: the force as read), the same ones, the same draw
+    seeded = raise_to_floor(quiet, None, fs, NOISE_FLOOR, seed_from=raw)[0]
+    assert np.array_equal(seeded, raise_to_floor(quiet, None, fs, NOISE_FLOOR, seed_from=raw.copy())[0])
+    assert not np.allclose(seeded, raised)
     noisy = _bouncing_like(fs, 1.2 * target)
     assert raise_to_floor(noisy, None, fs, NOISE_FLOOR)[0] is noisy
     assert raise_to_floor(quiet, None, fs, 0.0) == (quiet, [])

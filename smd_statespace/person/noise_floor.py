@@ -101,7 +101,7 @@ def measured_noise(y, fs) -> float:
     return float(np.sqrt(np.mean(power[band]))) if band.sum() >= 8 else float("nan")
 
 
-def raise_to_floor(y, observed, fs, noise_floor) -> tuple:
+def raise_to_floor(y, observed, fs, noise_floor, seed_from=None) -> tuple:
     """``y`` with white noise added up to ``noise_floor`` g of sd, and the note that says so.
 
     Parameters
@@ -114,6 +114,10 @@ def raise_to_floor(y, observed, fs, noise_floor) -> tuple:
         The fitted rate (Hz).
     noise_floor : float
         Fraction of body weight (:func:`check_noise_floor`); 0 leaves ``y`` as it is.
+    seed_from : ndarray, optional
+        The samples whose bytes seed the draw (default ``y``): ``identify_person`` gives the force as
+        read from the file, which is the same on every machine, where ``y`` has been through the front
+        end's floating-point arithmetic.
 
     Returns
     -------
@@ -130,7 +134,7 @@ def raise_to_floor(y, observed, fs, noise_floor) -> tuple:
     if not np.isfinite(measured) or measured >= target:
         return y, []
     added = float(np.sqrt(target**2 - measured**2))
-    digest = hashlib.sha256(np.ascontiguousarray(y, dtype=float).tobytes()).digest()
+    digest = hashlib.sha256(np.ascontiguousarray(y if seed_from is None else seed_from, dtype=float).tobytes()).digest()
     rng = np.random.default_rng(np.random.SeedSequence(int.from_bytes(digest[:16], "little")))
     note = (f"{NOTE_START}{100 * measured / G:.2g} % BW noise per fitted sample) than the "
             f"{100 * noise_floor:g} % BW the model is trusted to: white noise of {100 * added / G:.2g} % BW was added "
