@@ -212,17 +212,15 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
     noise_floor = check_noise_floor(noise_floor)
-    measured_force = record.force  # as read: what the noise floor's draw is seeded by
     prepared, observed = _prepared(record, rate, span, regressors, check)
-    record = prepared.record
+    measured_force, record = record.force, prepared.record  # the force as read seeds the noise floor's draw
     record_warnings = prepared.warnings + check_bouncing(record).raise_if_refused(override=not check)
     regressors = [replace(r, values=v) for r, v in zip(regressors, prepared.extra)]
     if prepared.trimmed:
         regressors += zero_drift(record.time)
-    notes = list(prepared.notes)
     y, floor_notes = raise_to_floor(record.force / record.mass - G, observed, record.fs, noise_floor,  # Eq. 3
                                     seed_from=measured_force)
-    notes += floor_notes
+    notes = list(prepared.notes) + floor_notes
     if timing not in ("model",) + TIMING_METHODS:
         raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
     first = "template" if timing == "model" else timing
