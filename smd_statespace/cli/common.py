@@ -152,12 +152,12 @@ def add_noise_floor_argument(parser):
 
 def _noise_floor(text):
     """argparse type of ``--noise-floor`` (:func:`~smd_statespace.person.noise_floor.check_noise_floor`)."""
-    from ..person.noise_floor import check_noise_floor
+    from ..person.noise_floor import MAX_NOISE_FLOOR, check_noise_floor
 
     try:
         return check_noise_floor(float(text))
     except (ValueError, OptionError):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a fraction of body weight from 0 to 0.05 "
+        raise argparse.ArgumentTypeError(f"{text!r} is not a fraction of body weight from 0 to {MAX_NOISE_FLOOR:g} "
                                          "(e.g. 0.01 for 1 % BW; 0 fits the record as measured)") from None
 
 

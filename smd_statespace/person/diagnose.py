@@ -78,12 +78,12 @@ samples) without and with it, the gain's ``z`` against its noise from cycle to c
 halves without and with it; NaN when not validated."""
 
 
-def held_out_z(level: float, heavy_tailed: bool = True) -> float:
-    """How many sds of its own noise from cycle to cycle a candidate's held-out gain must reach
-    (:func:`~smd_statespace.person.validation.held_out_gain`). Where the person's innovations are heavy-tailed
-    (``heavy_tailed``: kurtosis over :data:`HEAVY_TAILS`), the one-sided normal point of its likelihood-ratio
-    test's ``level`` (3.26 at 0.01 over 18 tests), so that the held-out halves must show the improvement as
-    clearly as the whole record's test; else 0 (a gain is enough: the Gaussian densities are then a fair measure).
+def held_out_z(level: float) -> float:
+    """How many sds of its own noise from cycle to cycle a candidate's held-out gain must reach where the person's
+    innovations are heavy-tailed (kurtosis over :data:`HEAVY_TAILS`; elsewhere a positive gain is enough,
+    :func:`held_out`): the one-sided normal point of its likelihood-ratio test's ``level`` (3.26 at 0.01 over 18
+    tests), so that the held-out halves must show the improvement as clearly as the whole record's test
+    (:func:`~smd_statespace.person.validation.held_out_gain`).
 
     A gain that a few samples make is not an improvement: on clean lab-shaped records of a quiet plate a step of
     ``f_h`` gained +0.8 in log-likelihood over 887 held-out samples, 77 % of it from 10 of them, and a drift of
@@ -93,7 +93,7 @@ def held_out_z(level: float, heavy_tailed: bool = True) -> float:
     judged on one fold (a third of the record), and on the jumps generator (kurtosis near 3) true steps reached
     only 2.4: asked for everywhere, it lost 3 steps of 4 that a positive gain had found.
     """
-    return float(stats.norm.isf(level)) if heavy_tailed else 0.0
+    return float(stats.norm.isf(level))
 
 
 FREE_RUN_POINTS = 0.05

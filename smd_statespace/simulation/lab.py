@@ -493,7 +493,7 @@ class LabRanges:
     f_h: tuple = (1.4, 4.5)
     xi_h: tuple = (0.08, 0.8)
     blf: tuple = ((0.05, 0.45), (0.02, 0.3), (0.0, 0.1), (0.0, 0.04))
-    variation: tuple = ("jumps", "smooth")
+    variation: tuple = ("jumps", "smooth")  # not "matern": a study's generator, and the draws stay as they were
     fb_variation: tuple = (0.0, 0.05)
     coef_variation: tuple = (0.02, 0.2)
     fs: tuple = (500.0, 1000.0, 1200.0, 2000.0)
