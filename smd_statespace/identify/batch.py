@@ -344,6 +344,14 @@ def _prepare_folder(out: Path, settings: dict, resume: bool) -> Path:
     return parts
 
 
+def _one_search_thread():
+    """A batch's worker process runs one record's searches in one thread: the processes keep the cores busy
+    (:mod:`~smd_statespace.person.threads`)."""
+    from ..person.threads import THREADS_VARIABLE
+
+    os.environ[THREADS_VARIABLE] = "1"
+
+
 def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_options=None, jobs: int = 1,
               resume: bool = False, progress: bool = True, check: bool = True, executor=None) -> BatchSummary:
     """Identify every record, writing each finished one at once; see the module docstring.
@@ -396,7 +404,7 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
         if executor is not None and pending:
             _run_on(executor, pending, model, estimator, runner_options, check, parts, bar)
         elif jobs > 1 and len(pending) > 1:
-            with ProcessPoolExecutor(max_workers=jobs) as pool:
+            with ProcessPoolExecutor(max_workers=jobs, initializer=_one_search_thread) as pool:
                 _run_on(pool, pending, model, estimator, runner_options, check, parts, bar)
         else:
             for record in pending:

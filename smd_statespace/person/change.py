@@ -23,6 +23,7 @@ import numpy as np
 from .calibration import CALIBRATION, wald_interval
 from .judgement import DETERMINED_FRACTION, PRIOR_SD
 from .search import fit_model, information
+from .threads import thread_map
 from .validation import halves, part
 
 __all__ = ["CHANGE_MIN", "CHANGE_Z", "change_test", "compare_halves"]
@@ -41,7 +42,7 @@ At z >= 2.0, ``xi_h`` was named on a stationary 1000 Hz record whose innovations
 CHANGE_MIN = {"f_h": 0.04, "xi_h": 0.06}
 """Smallest difference that is called a change: 4 % of ``f_h``, 0.06 of ``xi_h`` (absolute)."""
 
-def change_test(model, params, level=0.9) -> dict | None:
+def change_test(model, params, level=0.9, threads=1) -> dict | None:
     """The person fitted on each half of the record, and whether ``f_h`` or ``xi_h`` differ between them.
 
     Parameters
@@ -52,6 +53,8 @@ def change_test(model, params, level=0.9) -> dict | None:
         Its estimate (the halves' searches start there).
     level : float
         Confidence level of the halves' intervals.
+    threads : int
+        The halves are fitted in up to this many threads (:mod:`~smd_statespace.person.threads`).
 
     Returns
     -------
@@ -66,14 +69,16 @@ def change_test(model, params, level=0.9) -> dict | None:
     cut = halves(model)
     if model.dynamics.model.effects or cut is None:
         return None
-    summaries = []
-    for keep, kept in cut:
-        half = part(model, keep, kept)
+
+    def fit_half(piece):
+        half = part(model, *piece)
         fitted = fit_model(half, params, quick=True)
         if not fitted["converged"] or half.person_at_bound(fitted["params"]):
             return None
-        summaries.append(_summary(half, fitted["params"], level))
-    return compare_halves(summaries)
+        return _summary(half, fitted["params"], level)
+
+    summaries = thread_map(fit_half, cut, threads)
+    return None if None in summaries else compare_halves(summaries)
 
 
 def _summary(model, params, level) -> dict:

@@ -64,37 +64,13 @@ from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
-from .validation import cross_validated_loglike, held_out_gain
+from .threads import search_threads, thread_map
+from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white, verdict,
+                      without_key)
 
 __all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "held_out_z", "PersonDiagnosis",
            "diagnose_person", "candidate_row", "held_out", "verdict", "less_white", "HELD_OUT", "label",
            "indistinguishable_from_zero", "without_key"]
-
-HELD_OUT = ("held_out_before", "held_out", "held_out_samples", "held_out_z", "held_out_one_step_fit_before",
-            "held_out_one_step_fit", "held_out_free_run_fit_before", "held_out_free_run_fit")
-"""A candidate row's held-out validation (:func:`held_out`): the held-out log-likelihood (over ``held_out_samples``
-samples) without and with it, the gain's ``z`` against its noise from cycle to cycle
-(:func:`~smd_statespace.person.validation.held_out_gain`), and the one-step and free-run fits (%) on the held-out
-halves without and with it; NaN when not validated."""
-
-
-def held_out_z(level: float) -> float:
-    """How many sds of its own noise from cycle to cycle a candidate's held-out gain must reach where the person's
-    innovations are heavy-tailed (kurtosis over :data:`HEAVY_TAILS`; elsewhere a positive gain is enough,
-    :func:`held_out`): the one-sided normal point of its likelihood-ratio test's ``level`` (3.26 at 0.01 over 18
-    tests), so that the held-out halves must show the improvement as clearly as the whole record's test
-    (:func:`~smd_statespace.person.validation.held_out_gain`).
-
-    A gain that a few samples make is not an improvement: on clean lab-shaped records of a quiet plate a step of
-    ``f_h`` gained +0.8 in log-likelihood over 887 held-out samples, 77 % of it from 10 of them, and a drift of
-    ``f_h`` +60 at 2.2 sds; both were proposed while the gain only had to be positive. True effects measured:
-    4.6 sds for a drift of ``f_h`` on the same generator (the harmonics proposed with it: 2.1),
-    6.4 for a spring stiffer on one side and 32 for extra harmonics on the jumps generator. But a step of ``f_h`` is
-    judged on one fold (a third of the record), and on the jumps generator (kurtosis near 3) true steps reached
-    only 2.4: asked for everywhere, it lost 3 steps of 4 that a positive gain had found.
-    """
-    return float(stats.norm.isf(level))
-
 
 FREE_RUN_POINTS = 0.05
 """A held-out free run's fit lower by more than this many points with a candidate is told in a note."""
@@ -106,24 +82,9 @@ SCREENED = 2
 ZERO_Z = 2.0
 """A candidate whose added parameters and harmonics are all within this many sds of zero is not proposed."""
 
-HEAVY_TAILS = 6.0
-"""A person whose innovations have a kurtosis over this (a Gaussian's is 3; its sd over 3000 samples 0.09) gets a
-note: the likelihood ratios assume Gaussian innovations. Measured: clean lab-shaped exports of a quiet plate (the
-force's jumps from cycle to cycle in the innovations, kurtosis up to 16) had 2 false alarms in 4. Over it a
-candidate's held-out gain must also be clear (:func:`held_out_z`)."""
-
 SCALE_NOTE = 1.5
 """A candidate whose likelihood ratio is scaled by more than this
 (:func:`~smd_statespace.person.robust.robust_scale`) gets a note in words."""
-
-LESS_WHITE = 1.0
-"""A candidate with which the innovations' Ljung-Box statistic ``Q`` rises by more than this many of its own sds is
-not proposed (less white: it does not take what the model misses). The sd is that of a non-central chi-square
-with the lags as degrees of freedom and ``Q`` without the candidate as its mean, ``sqrt(2 (lags + 2 (Q - lags)))``:
-13 at ``Q`` 62 (p 0.01 on 39 lags), 38 at ``Q`` 377 (p 1e-57). It replaces a fall of the p-value below a tenth of
-its value, which on a quiet plate's misfit (p 1e-57) turned a rise of ``Q`` by 3 % into "less white" and
-rejected a true drift of ``f_h`` (LR 45.9 on 1)."""
-
 
 def candidate_row(base, fitted, level: float) -> dict:
     """One candidate's row: the test, the person before and after, the effect's parameters, noise, whiteness."""
@@ -165,53 +126,6 @@ def candidate_row(base, fitted, level: float) -> dict:
                      and not row["zero"])
     row.update({key: math.nan for key in HELD_OUT}, held_out_worse=False, held_out_weak=False)
     return verdict(row)
-
-
-def verdict(row: dict) -> dict:
-    """``row`` with ``significant``: it ``passed`` its test and checks, and it predicts the held-out halves no worse
-    than the person without it; where it was not judged on held-out data, its innovations must not be less white.
-
-    Where held-out data judged it, whiteness does not veto it: on a record the model misses much elsewhere (a quiet
-    plate, Ljung-Box Q far above its lags) the statistic of heavy-tailed innovations is no measure of what a
-    candidate takes. A true drift of ``f_h`` raised Q 206 -> 257 there while it predicted the held-out halves
-    better by 131 (log-likelihood; the harmonics that were proposed instead, +31).
-    """
-    validated = bool(np.isfinite(row["held_out"]))
-    ok = (row["passed"] and not row["held_out_worse"] and not row["held_out_weak"]
-          and (validated or not row["less_white"]))
-    return {**row, "significant": bool(ok)}
-
-
-def less_white(before: dict, after: dict) -> bool:
-    """Whether the innovations' Ljung-Box statistic rose by more than :data:`LESS_WHITE` of its sds with a candidate
-    (``before``, ``after``: :meth:`~smd_statespace.person.results.PersonResult.test_pvalues`)."""
-    q, lags = before["ljung_box_q"], before["ljung_box_lags"]
-    spread = math.sqrt(2.0 * (lags + 2.0 * max(q - lags, 0.0)))
-    return bool(after["ljung_box_q"] - q > LESS_WHITE * spread)
-
-
-def held_out(row: dict, before, after, level: float, heavy_tailed: bool = True) -> dict:
-    """``row`` with the held-out validation without and with the candidate, and whether it predicts worse.
-
-    ``before``, ``after``: :func:`~smd_statespace.person.validation.cross_validated_loglike` of the person
-    without and with the candidate (None when the record cannot be halved or a half does not converge:
-    nothing is judged). A candidate whose one-step prediction of the held-out halves is less likely than
-    the person's without it (``held_out_worse``), or more likely by less than :func:`held_out_z` sds of the
-    gain at the test's ``level`` where the person's innovations are ``heavy_tailed`` (``held_out_weak``), is not
-    significant; the free run's fit on them is shown, not judged (a
-    harmonic whose phase varies from cycle to cycle is in the person and still lowers a template's free run).
-    """
-    if before is None or after is None:
-        return row
-    worse = bool(after["loglike"] < before["loglike"])
-    gain = held_out_gain(before, after)
-    weak = heavy_tailed and not worse and not gain["z"] >= held_out_z(level)  # NaN (too few cycles): not clear
-    return verdict({**row, "held_out_before": before["loglike"], "held_out": after["loglike"],
-            "held_out_samples": int(np.sum(np.isfinite(after["one_step"]))), "held_out_z": gain["z"],
-            "held_out_weak": weak,
-            "held_out_one_step_fit_before": before["one_step_fit"], "held_out_one_step_fit": after["one_step_fit"],
-            "held_out_free_run_fit_before": before["free_run_fit"], "held_out_free_run_fit": after["free_run_fit"],
-            "held_out_worse": worse})
 
 
 def indistinguishable_from_zero(base, fitted, estimates, z: float = ZERO_Z) -> bool:
@@ -445,12 +359,6 @@ def _ratio_text(test: dict) -> str:
     return f"LR {test['lr']:.1f}{scaled} (p {test['p_value']:.2g})"
 
 
-def without_key(name: str) -> str:
-    """The key of :attr:`PersonDiagnosis.validation` that holds the person without candidate ``name`` validated
-    on ``name``'s own cut (a candidate with a change in time: :func:`~smd_statespace.person.validation.halves`)."""
-    return f"without, on the cut of {name}"
-
-
 def _joint(base, fits: dict, names: list, level: float) -> dict:
     """Fit the two best candidates together and test each on top of the other."""
     first, second = names[:2]
@@ -478,7 +386,8 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     return out
 
 
-def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library=None) -> PersonDiagnosis:
+def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library=None,
+                    threads=None) -> PersonDiagnosis:
     """Identify the person with each candidate effect and test it by likelihood ratio.
 
     Parameters
@@ -499,14 +408,15 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     library : bool, optional
         Also screen the generic terms by score tests and fit the :data:`SCREENED` most significant
         (default: when ``candidates`` is None; given candidates are what the user asked for).
+    threads : int, optional
+        Threads for the candidates' fits and their held-out folds, which do not depend on each other
+        (:func:`~smd_statespace.person.threads.search_threads`: default two): the same diagnosis, sooner.
 
     Returns
     -------
     PersonDiagnosis
     """
-    from ..progress import tqdm
-
-    present = {label(effect) for effect in result.effects}
+    present, threads = {label(effect) for effect in result.effects}, search_threads(threads)
     screened, failed = pd.DataFrame(), {}
     if candidates is None:
         effects = [effect for name, cls in EFFECTS.items() if name not in present
@@ -529,33 +439,15 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
                  if label(term) not in taken and SAME_AS.get(term.kind) not in taken]
         tests += len(terms)  # Bonferroni counts every term screened, fitted or not
         try:
-            screened = screen(result, terms, alpha=alpha)
+            screened = screen(result, terms, alpha=alpha, threads=threads)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed["generic terms (score tests)"] = " ".join(str(exc).split())
         else:
             flagged = set(screened.index[screened["p_quick_holm"] < alpha][:SCREENED])
             effects += [effect for effect in terms if effect.spec in flagged]
     level = alpha / max(tests, 1)
-    fits, rows = {}, []
-    for effect in tqdm(effects, desc="diagnose (record)", unit="effect", disable=not progress, leave=False):
-        started = time.perf_counter()
-        try:
-            fitted = fit_effects(result, [effect], timing=False)
-        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
-            failed[label(effect)] = " ".join(str(exc).split())
-            continue
-        fits[label(effect)] = fitted
-        rows.append({**candidate_row(result, fitted, level), "seconds": time.perf_counter() - started})
-    validation = {}
-    heavy_tailed = bool(result.test_pvalues()["kurtosis"] > HEAVY_TAILS)  # a few samples can make a held-out gain
-    for i in [i for i, row in enumerate(rows) if row["passed"]]:  # the held-out check where the test passed
-        name = rows[i]["effect"]
-        breaks = tuple(moment for effect in fits[name].effects for moment in effect.breaks)
-        key = without_key(name) if breaks else "without"  # a change in time moves the cut (validation.halves)
-        if key not in validation:
-            validation[key] = cross_validated_loglike(result.model, result.params, breaks)
-        validation[name] = cross_validated_loglike(fits[name].model, fits[name].params, breaks)
-        rows[i] = held_out(rows[i], validation[key], validation[name], level, heavy_tailed)
+    fits, rows = _fit_candidates(result, effects, level, failed, threads, progress)
+    validation = held_out_checks(result, fits, rows, level, threads)
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha, screened=screened,
                                 tests=tests, validation=validation)
     significant = diagnosis.missing
@@ -568,7 +460,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
         name = diagnosis.missing[0]  # (after the joint test, which compares the screened fits)
         started = time.perf_counter()
         try:
-            fitted = fit_effects(result, fits[name].effects[len(result.effects):])
+            fitted = fit_effects(result, fits[name].effects[len(result.effects):], threads=threads)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed[name] = " ".join(str(exc).split())
         else:
@@ -578,3 +470,29 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
             rows[index] = verdict({**candidate_row(result, fitted, level), **screened,
                                    "seconds": rows[index]["seconds"] + time.perf_counter() - started})
     return diagnosis
+
+
+def _fit_candidates(result, effects, level: float, failed: dict, threads: int, progress: bool) -> tuple:
+    """Every candidate fitted with the person (one search each, at ``result``'s starts; in threads) and its row:
+    ``(fits by name, rows)``; a candidate whose fit fails is said in ``failed``."""
+    from ..progress import tqdm
+
+    fits, rows = {}, []
+    with tqdm(total=len(effects), desc="diagnose (record)", unit="effect", disable=not progress, leave=False) as bar:
+        def fit_candidate(effect):
+            started = time.perf_counter()
+            try:
+                return fit_effects(result, [effect], timing=False), time.perf_counter() - started
+            except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                return exc, None
+            finally:
+                bar.update()
+
+        for effect, (fitted, seconds) in zip(effects, thread_map(fit_candidate, effects, threads)):
+            if seconds is None:
+                failed[label(effect)] = " ".join(str(fitted).split())
+                continue
+            fits[label(effect)] = fitted
+            rows.append({**candidate_row(result, fitted, level), "seconds": seconds})
+    return fits, rows
+

@@ -228,7 +228,8 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     return out
 
 
-def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDWICH, progress=False, timing=True):
+def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDWICH, progress=False, timing=True,
+                threads=1):
     """Identify the person of ``result`` again with ``effects`` added to its model.
 
     Parameters
@@ -259,6 +260,8 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         hidden harmonics 5-6 the re-placed starts raised the log-likelihood with
         the harmonics by 170-700, Ljung-Box passed on 5 (0 at the person's
         starts) and ``f_h`` left its search bound on one (docs/person.md).
+    threads : int
+        Threads for the variation models' re-placed starts (:mod:`~smd_statespace.person.threads`).
 
     Returns
     -------
@@ -287,7 +290,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
     comparison, tested = result.comparison, fitted["loglike"]
     tested_df = model.unknowns(fitted["params"]) - result.model.unknowns(result.params)
     if timing and any(row.get("timing") == "re-placed" for row in result.comparison):
-        model, fitted, comparison = _with_own_timing(model, fitted, result, effects, progress)
+        model, fitted, comparison = _with_own_timing(model, fitted, result, effects, progress, threads)
         if model.approximate:  # the starts moved: the path is predicted again about them
             model, fitted, more, settled = _settle_path(model, fitted, result.loglike, progress)
             linearisations += more
@@ -345,7 +348,7 @@ def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -
     return model, fitted, linearisations, settled
 
 
-def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False) -> tuple:
+def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False, threads=1) -> tuple:
     """Re-place the cycle starts and choose the variation model again, with the effects in the model.
 
     The same procedure as :func:`~smd_statespace.person.fit.identify_person`'s
@@ -400,7 +403,7 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
             bar.update()
         first = variations.index(model.variation)
         chosen, chosen_fit, rows = choose_with_own_timing(model_for, model.timing, fits, first, bar.update,
-                                                          suspect=suspect)
+                                                          suspect=suspect, threads=threads)
     specs = [effect.spec for effect in effects]
     rows = [{**row, "effects": specs} for row in rows]
     return chosen, chosen_fit, rows

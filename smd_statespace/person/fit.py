@@ -37,6 +37,7 @@ from .model import VARIATIONS, Regressor, RecordModel
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, comparison_row,
                      fit_model, profile_interval)
+from .threads import search_threads
 from .timing import TIMING_METHODS, estimate_timing
 
 __all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person",
@@ -76,7 +77,7 @@ INTERVAL_METHODS = ("calibrated", "wald", "profile")
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type=WIDER_SANDWICH, drift=False, check=True,
                     rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto",
-                    check_change=True, noise_floor=NOISE_FLOOR):
+                    check_change=True, noise_floor=NOISE_FLOOR, threads=None):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -161,6 +162,11 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         seeded by the record (:mod:`~smd_statespace.person.noise_floor`: a quiet plate otherwise lets details
         of the force's variation that no variation model describes set ``f_h`` and ``xi_h``); ``result.notes``
         says so. None (or 0) fits the record as measured.
+    threads : int or None
+        Threads for the searches that do not depend on each other (each variation model's re-placed cycle
+        starts, the halves' fits; :mod:`~smd_statespace.person.threads`): the same answer, sooner on two
+        cores. None: :func:`~smd_statespace.person.threads.search_threads` (two, or the environment variable
+        ``SMD_STATESPACE_THREADS``).
     progress : bool
         Show a progress bar (tqdm) over the likelihood searches (one per variation model,
         ``TIMING_ITERATIONS + 1`` more for ``timing="model"`` and the winner's final fit, then the
@@ -211,7 +217,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
-    noise_floor = check_noise_floor(noise_floor)
+    noise_floor, threads = check_noise_floor(noise_floor), search_threads(threads)
     prepared, observed = _prepared(record, rate, span, regressors, check)
     measured_force, record = record.force, prepared.record  # the force as read seeds the noise floor's draw
     record_warnings = prepared.warnings + check_bouncing(record).raise_if_refused(override=not check)
@@ -259,21 +265,22 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         model, fitted = fits[best]
         if timing == "model":
             suspect = {row["variation"] for row in comparison if row["on_bound"]}  # at the first timing
-            model, fitted, refined = choose_with_own_timing(model_for, cycle_timing, fits, best, step, suspect)
+            model, fitted, refined = choose_with_own_timing(model_for, cycle_timing, fits, best, step, suspect,
+                                                            threads)
             comparison += refined
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                            "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
         change = None
         if check_change:
-            change = change_test(model, fitted["params"], level)
+            change = change_test(model, fitted["params"], level, threads)
             step()
         result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
                                comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
                                prepared=prepared)
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
-        result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress)
+        result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)
         if len(given) > len(effects_asked):  # the record brought its floor
             result.notes.append(_floor_note(result))
     return result

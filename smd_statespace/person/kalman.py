@@ -206,7 +206,7 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
         P[r1, r1] += D[i] * smooth_q[1, 1]
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                    smooth_phi, smooth_q, smooth_p0, observed):
     """Run the augmented Kalman filter over one record.

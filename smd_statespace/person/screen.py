@@ -45,6 +45,7 @@ from .extend import effect_model
 from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
 from .search import fit_model
+from .threads import thread_map
 
 __all__ = ["STEPS", "PREFILTER", "RELINEARISED", "generic_library", "score_test", "quick_ratio", "screen", "holm"]
 
@@ -160,7 +161,7 @@ def holm(p_values) -> np.ndarray:
     return out
 
 
-def screen(result, effects=None, alpha=None) -> pd.DataFrame:
+def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
     """Score-test every candidate of ``effects`` (default :func:`generic_library`) at ``result``, most
     significant first; with ``alpha``, the terms the score test does not rule out fitted quickly and tested
     by their likelihood ratio over the library.
@@ -180,14 +181,12 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
         ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` and ``p_holm`` (the robust p-values adjusted
         over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
         ``lr_scale`` (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm`` (of ``lr_quick /
-        lr_scale``), ordered as above.
+        lr_scale``), ordered as above. The tests, and the quick fits, run in up to ``threads`` threads
+        (:mod:`~smd_statespace.person.threads`), with the same table.
     """
     effects = generic_library(result) if effects is None else list(effects)
-    rows = []
-    for effect in effects:
-        row = score_test(result, effect)
-        rows.append({"effect": effect.spec, "label": label(effect), "physics": getattr(effect, "physics", effect.name),
-                     **row})
+    rows = [{"effect": effect.spec, "label": label(effect), "physics": getattr(effect, "physics", effect.name), **row}
+            for effect, row in zip(effects, thread_map(lambda effect: score_test(result, effect), effects, threads))]
     table = pd.DataFrame(rows).set_index("effect")
     table["p_holm"] = holm(table["p_robust"].to_numpy())
     table = table.sort_values("p_robust")
@@ -195,8 +194,8 @@ def screen(result, effects=None, alpha=None) -> pd.DataFrame:
         return table
     table["lr_quick"], table["estimate"], table["lr_scale"] = np.nan, np.nan, np.nan
     by_spec = {effect.spec: effect for effect in effects}
-    for spec in table.index[table["p_robust"] < PREFILTER]:
-        quick = quick_ratio(result, by_spec[spec])
+    fitted = list(table.index[table["p_robust"] < PREFILTER])
+    for spec, quick in zip(fitted, thread_map(lambda spec: quick_ratio(result, by_spec[spec]), fitted, threads)):
         table.loc[spec, ["lr_quick", "estimate", "lr_scale"]] = [quick[key] for key in ("lr_quick", "estimate",
                                                                                          "lr_scale")]
     scaled = (table["lr_quick"] / table["lr_scale"]).fillna(0.0).to_numpy()

@@ -476,7 +476,7 @@ def reaches_bound(model, params, z=BOUND_REACH) -> bool:
     return f_h + reach >= high or f_h - reach <= low
 
 
-def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()) -> tuple:
+def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=(), threads=1) -> tuple:
     """Re-place every variation model's cycle starts with its own fit (:func:`fit_timing`); keep the lowest AIC.
 
     The choice is made once each model has placed the cycle starts it likes: the starts are estimated as
@@ -498,8 +498,14 @@ def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()
     to full precision (:data:`FINAL_GAIN`), and its row carries that fit. On 40 records of five generators
     (``benchmarks/person_fits.py``, seed 77) the quick fits chose as the full-precision ones on all 40; the
     losers' final fits had taken 7 % of the fits' time.
+
+    The models' re-placements do not depend on each other: they run in up to ``threads`` threads
+    (:func:`~smd_statespace.person.threads.thread_map`), with the same results.
     """
-    finished = [fit_timing(model_for, timing, m.variation, first=(m, f), step=step) for m, f in fits]
+    from .threads import thread_map
+
+    finished = thread_map(lambda fit: fit_timing(model_for, timing, fit[0].variation, first=fit, step=step), fits,
+                          threads)
     rows = [comparison_row(m, f, "re-placed") for m, f in finished]
     inside = [i for i, row in enumerate(rows) if not row["on_bound"] and row["converged"]]
     # a model that ran onto a bound at the first timing is suspect even when the re-placed starts bring it in

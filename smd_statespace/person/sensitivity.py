@@ -113,7 +113,7 @@ def _write_rows(T, G, Y, U, X, corner):
             X[c, r] = Y[r, c]
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit(cache=True, nogil=True, fastmath=FASTMATH)
 def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                      smooth_phi, smooth_q, smooth_p0, observed, delta,
                      dyn, d_hx, d_Phi, d_Gam, d_offset, d_X_tr, d_y,

@@ -1,0 +1,78 @@
+"""Both cores for one record: a record's independent searches run side by side in threads.
+
+The compiled passes of the likelihood and its derivatives
+(:func:`~smd_statespace.person.kalman.augmented_pass`,
+:func:`~smd_statespace.person.sensitivity.sensitivity_pass`) release Python's global interpreter
+lock (numba's ``nogil``) and take about 70 % of a search's time. The searches of one record that do
+not depend on each other — each variation model re-placing its own cycle starts
+(:func:`~smd_statespace.person.search.choose_with_own_timing`), the person fitted on each half of
+the record (:func:`~smd_statespace.person.change.change_test`) — therefore run in threads, one per
+core, and give the same numbers as run one after the other: nothing is shared between them and
+nothing is drawn at random.
+
+A batch of records already keeps every core busy with one record per process
+(``identify FOLDER --jobs N``); its worker processes run their searches in one thread
+(:data:`THREADS_VARIABLE`).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+from ..errors import OptionError
+
+__all__ = ["THREADS_VARIABLE", "search_threads", "thread_map"]
+
+THREADS_VARIABLE = "SMD_STATESPACE_THREADS"
+"""Environment variable: the number of threads one record's searches use when ``threads`` is not given
+(default: two, or one on a single-core machine)."""
+
+
+def available_cores() -> int:
+    """Cores this process may run on (its CPU affinity where the system says, else the machine's count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def search_threads(threads=None) -> int:
+    """The number of threads for one record's independent searches.
+
+    Parameters
+    ----------
+    threads : int or None
+        As given (at least 1); None: :data:`THREADS_VARIABLE` if set, else ``min(2, cores)``
+        (there are at most two independent searches at a time).
+
+    Raises
+    ------
+    OptionError
+        ``threads``, or the environment variable, is not a whole number of at least 1.
+    """
+    source = "threads"
+    if threads is None:
+        setting = os.environ.get(THREADS_VARIABLE, "").strip()
+        if not setting:
+            return min(2, available_cores())
+        source, threads = f"environment variable {THREADS_VARIABLE}", setting
+    try:
+        count = int(threads)
+    except (TypeError, ValueError):
+        count = 0
+    if count < 1 or str(count) != str(threads).strip():
+        raise OptionError(f"{source} {threads!r} is not valid: give a whole number of threads, at least 1")
+    return count
+
+
+def thread_map(function, items, threads: int) -> list:
+    """``[function(item) for item in items]``, in up to ``threads`` threads; results in the order of ``items``.
+
+    An exception in any call is raised here, as the loop would raise it.
+    """
+    items = list(items)
+    if threads <= 1 or len(items) <= 1:
+        return [function(item) for item in items]
+    with ThreadPoolExecutor(max_workers=min(threads, len(items))) as pool:
+        return list(pool.map(function, items))
