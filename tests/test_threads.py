@@ -62,6 +62,7 @@ def test_identify_in_two_threads_equals_one(record):
     one = identify_person(record, threads=1)
     two = identify_person(record, threads=2)
     np.testing.assert_array_equal(one.params, two.params)
+    np.testing.assert_array_equal(one.cov, two.cov)  # the information's passes in threads too
     assert one.model.variation == two.model.variation
     assert [row["loglike"] for row in one.comparison] == [row["loglike"] for row in two.comparison]
     assert one.change is not None and one.change["z"] == two.change["z"]

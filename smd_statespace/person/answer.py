@@ -18,7 +18,7 @@ __all__ = ["person_result", "honest_intervals", "undetermined_interval"]
 
 
 def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, cov_type=WIDER_SANDWICH, comparison=(),
-                  record_warnings=(), notes=(), **extra):
+                  record_warnings=(), notes=(), threads=1, **extra):
     """The :class:`~smd_statespace.person.results.PersonResult` of a fitted record-level model.
 
     The covariance of the estimates (:func:`information`), the intervals of
@@ -27,7 +27,7 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     ``extra`` goes to the result (``before``, ``effects``, ``linearisations``, ``settled``).
     """
     params = fitted["params"]
-    cov, free = information(model, params, cov_type)
+    cov, free = information(model, params, cov_type, threads)
     factors = dict(CALIBRATION[model.variation])
     if intervals == "calibrated":
         scale = np.ones(params.size)

@@ -311,7 +311,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
                          comparison=comparison, record_warnings=warnings, notes=notes,
                          before=result, effects=tuple(effects), linearisations=linearisations,
                          settled=settled, tested_loglike=tested, tested_df=tested_df, change=root.change,
-                         prepared=root.prepared)
+                         prepared=root.prepared, threads=threads)
 
 
 def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -> tuple:

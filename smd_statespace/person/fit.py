@@ -37,7 +37,7 @@ from .model import VARIATIONS, Regressor, RecordModel
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, comparison_row,
                      fit_model, profile_interval)
-from .threads import search_threads
+from .threads import search_threads, thread_map
 from .timing import TIMING_METHODS, estimate_timing
 
 __all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person",
@@ -252,11 +252,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         step = bar.update
         # every variation model is fitted at the first cycle timing and compared by AIC there; with
         # timing="model" each then re-places the cycle starts with its own fit, and the choice is made again
-        fits = []
-        for name in names:
-            model = model_for(cycle_timing, name, None)
-            fits.append((model, fit_model(model, quick=timing == "model")))
-            step()
+        fits = thread_map(lambda name: _fitted(model_for(cycle_timing, name, None), timing == "model"), names, threads)
+        step(len(names))
         comparison = [comparison_row(m, f, "first") for m, f in fits]
         # a fit with f_h or xi_h on its search bound has not estimated them (a variation model that is
         # too flexible lets the person's resonance imitate a missing effect): it wins only if all do
@@ -277,13 +274,18 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
             step()
         result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
                                comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
-                               prepared=prepared)
+                               prepared=prepared, threads=threads)
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)
         if len(given) > len(effects_asked):  # the record brought its floor
             result.notes.append(_floor_note(result))
     return result
+
+
+def _fitted(model, quick: bool) -> tuple:
+    """``(model, its fit)``: :func:`~smd_statespace.person.search.fit_model` from the coarse start."""
+    return model, fit_model(model, quick=quick)
 
 
 def _floor_note(result) -> str:
