@@ -498,7 +498,8 @@ def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()
     4.46 Hz at its re-placed starts with a force variance thousands of times the noise's, and won by AIC:
     ``f_h`` +100 % and +60 %, intervals that missed (truth 2.99 and 2.79 Hz). The variation models named in
     ``suspect`` count as having sat on a bound at the first timing whatever their fits in ``fits`` did (those
-    the person's own fit ran onto a bound, when a floor is added: :func:`~smd_statespace.person.extend.fit_effects`).
+    the person's own fit ran onto a bound, when a floor is added: :func:`~smd_statespace.person.extend.fit_effects`),
+    and so does a model whose re-placements ran onto a bound (:func:`fit_timing`, which then stops re-placing).
 
     The choice is made on each model's best quick fit (:data:`QUICK_GAIN`); only the winner is then refitted
     to full precision (:data:`FINAL_GAIN`), and its row carries that fit. On 40 records of five generators
@@ -510,8 +511,10 @@ def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()
     """
     from .threads import thread_map
 
-    finished = thread_map(lambda fit: fit_timing(model_for, timing, fit[0].variation, first=fit, step=step), fits,
-                          threads)
+    chains = thread_map(lambda fit: fit_timing(model_for, timing, fit[0].variation, first=fit, step=step), fits,
+                        threads)
+    finished = [(m, f) for m, f, _ in chains]
+    suspect = set(suspect) | {m.variation for m, _, ran_onto_bound in chains if ran_onto_bound}
     rows = [comparison_row(m, f, "re-placed") for m, f in finished]
     inside = [i for i, row in enumerate(rows) if not row["on_bound"] and row["converged"]]
     # a model that ran onto a bound at the first timing is suspect even when the re-placed starts bring it in
@@ -526,12 +529,19 @@ def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()
     return model, fitted, rows
 
 
-def fit_timing(model_for, timing, variation, first=None, step=lambda: None):
+def fit_timing(model_for, timing, variation, first=None, step=lambda *_: None):
     """Fit with a phase template and re-place the cycle starts; returns the best ``(model, fit)`` by likelihood
-    (a quick fit: :func:`choose_with_own_timing` refits the winner to full precision).
+    (a quick fit: :func:`choose_with_own_timing` refits the winner to full precision) and whether a fit ran onto a
+    search bound of ``f_h`` or ``xi_h``.
+
+    A fit on such a bound ends the re-placements: the model has not estimated the person there, and
+    :func:`choose_with_own_timing` sets it aside as it sets aside one whose first fit did. (On a jumps
+    record the "smooth" model's second re-placement ran to ``xi_h`` = 3; its third took 17 more scoring
+    steps to stay there.)
 
     ``first``: the ``(model, fit)`` without phase template at ``timing`` when already made;
-    ``step`` is called after each of the ``TIMING_ITERATIONS + 1`` fits (a progress bar).
+    ``step`` is called after each of the ``TIMING_ITERATIONS + 1`` fits (a progress bar; with the
+    number of fits skipped when the re-placements end early).
     """
     base, fitted = first if first is not None else (None, None)
     if base is None:
@@ -558,6 +568,9 @@ def fit_timing(model_for, timing, variation, first=None, step=lambda: None):
         params = fitted["params"]
         if fitted["loglike"] > best[1]["loglike"]:
             best = (model, fitted)
+        if model.person_at_bound(params):
+            step(TIMING_ITERATIONS - iteration)
+            return best + (True,)
         if iteration < TIMING_ITERATIONS:
             timing = corrected_timing(model, params)
-    return best
+    return best + (False,)
