@@ -84,7 +84,8 @@ import smd_statespace  # noqa: E402
 from smd_statespace import article  # noqa: E402
 from smd_statespace.estimators import ESTIMATORS, cycle_data, get_estimator  # noqa: E402
 from smd_statespace.model import DISCRETISATIONS, SMDModel  # noqa: E402
-from smd_statespace.identify.runner import DETERMINED_RATIO, CycleRunner  # noqa: E402
+from smd_statespace.determined import DETERMINED_FRACTION  # noqa: E402
+from smd_statespace.identify.runner import CycleRunner  # noqa: E402
 from smd_statespace.signals import Cycle, preprocess  # noqa: E402
 from smd_statespace.simulation import DEFAULT_BLF, sample_population, simulate_bouncing  # noqa: E402
 
@@ -758,9 +759,9 @@ def write_report(path: Path, args, command: str, people: pd.DataFrame, truth: pd
         f"{model.options['coefficient_range']}.",
         f"- Runner: `CycleRunner(max_passes={args.max_passes}, tolerance={args.tolerance:g})`; estimator "
         f"options: pf {args.particles} particles, others at their defaults. A parameter is 'determined' when its "
-        f"posterior sd is below {DETERMINED_RATIO:g} of its prior sd (`f_h`: "
-        f"{DETERMINED_RATIO * np.diff(model.options['f_h_range'])[0] / np.sqrt(12):.3f} Hz, `xi_h`: "
-        f"{DETERMINED_RATIO * np.diff(model.options['xi_h_range'])[0] / np.sqrt(12):.3f}).",
+        f"posterior sd is below {DETERMINED_FRACTION:g} of its prior sd (`f_h`: "
+        f"{DETERMINED_FRACTION * np.diff(model.options['f_h_range'])[0] / np.sqrt(12):.3f} Hz, `xi_h`: "
+        f"{DETERMINED_FRACTION * np.diff(model.options['xi_h_range'])[0] / np.sqrt(12):.3f}).",
         "",
         "## Main table",
         "",

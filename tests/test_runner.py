@@ -10,7 +10,8 @@ from smd_statespace.errors import OptionError
 from smd_statespace.estimators import Estimator, EstimatorFailure, FilterResult, GaussianStart
 from smd_statespace.model import SMDModel
 from smd_statespace.identify.plausibility import MAX_BLF, PRIOR_MARGIN, implausible_reasons
-from smd_statespace.identify.runner import DETERMINED_RATIO, CycleRunner, converged
+from smd_statespace.determined import DETERMINED_FRACTION
+from smd_statespace.identify.runner import CycleRunner, converged
 from smd_statespace.signals import preprocess
 from smd_statespace.simulation import simulate_bouncing
 
@@ -191,7 +192,7 @@ def test_impossible_cycles_are_flagged_never_determined_and_left_out_of_the_summ
     determined = [c for c in ok.columns if c.endswith("_determined")]
     assert not ok.loc[bad, determined].any().any()       # never determined, whatever the filter claims
     assert ok.loc[~bad, determined].all().all()
-    assert (ok.loc[bad, "f_h_width_ratio"] < DETERMINED_RATIO).all()  # the filter's own claim stays readable
+    assert (ok.loc[bad, "f_h_width_ratio"] < DETERMINED_FRACTION).all()  # the filter's own claim stays readable
     skipped = table[table.status == "skipped"]
     assert len(skipped) and not skipped.implausible.any()
 

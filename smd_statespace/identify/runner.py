@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..determined import DETERMINED_FRACTION
 from ..errors import OptionError
 from ..estimators import ESTIMATORS, EstimatorFailure, FilterResult, cycle_data, get_estimator
 from ..io import Record
@@ -48,9 +49,6 @@ from ..signals import RECORD_RATE, Preprocessed, check_rate, decimate_record, de
 DEFAULT_ESTIMATOR = "ekf"
 """Estimator used when none is named: fast, deterministic and, with repeated passes, honest about its
 widths (docs/benchmarks.md measures every estimator; the article's particle filter is over-confident)."""
-
-DETERMINED_RATIO = 0.25
-"""A parameter is 'determined' by a cycle when its posterior sd is below this fraction of its prior sd."""
 
 CONVERGENCE_FLOOR = {"f_h": 0.0, "xi_h": 0.05, "blf": 0.02}
 """Magnitudes below which the ±tolerance rule is applied to the floor instead (xi_h in -, BLF in g),
@@ -77,7 +75,7 @@ def summarise(model: SMDModel, result: FilterResult, mass: float) -> dict:
         out[f"{name}_sd"] = float(sd[i])
     for name in ("f_h", "xi_h"):
         out[f"{name}_width_ratio"] = float(ratio[model.index(name)])
-        out[f"{name}_determined"] = bool(ratio[model.index(name)] < DETERMINED_RATIO)
+        out[f"{name}_determined"] = bool(ratio[model.index(name)] < DETERMINED_FRACTION)
     for i in range(1, model.n_harmonics + 1):
         ia, ib = model.index(f"a{i}"), model.index(f"b{i}")
         a, b = mean[ia], mean[ib]
@@ -85,7 +83,7 @@ def summarise(model: SMDModel, result: FilterResult, mass: float) -> dict:
         out[f"blf_{i}"] = value
         # Delta method: sd of sqrt(a^2 + b^2) from the coefficients' sds.
         out[f"blf_{i}_sd"] = float(np.hypot(a * sd[ia], b * sd[ib]) / value) if value > 0 else float(np.hypot(sd[ia], sd[ib]))
-        out[f"blf_{i}_determined"] = bool(max(ratio[ia], ratio[ib]) < DETERMINED_RATIO)
+        out[f"blf_{i}_determined"] = bool(max(ratio[ia], ratio[ib]) < DETERMINED_FRACTION)
     derived = model.derived(mean, mass)
     out["k_h"], out["c_h"] = float(derived["k_h"]), float(derived["c_h"])
     out["log_likelihood"] = float(result.log_likelihood)

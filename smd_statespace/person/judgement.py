@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..determined import DETERMINED_FRACTION
+
 __all__ = ["DETERMINED_FRACTION", "F_B_COINCIDENCE", "MISFIT_SHARE", "PRIOR_SD", "VARIATION_AIC_CLOSE",
            "VARIATION_DISAGREEMENT", "WHITENESS_ALPHA", "XI_H_RESONANCE_MIMIC", "mimicked_harmonic",
            "plausible_variations", "stands_in_for_force", "variation_disagreement"]
@@ -21,9 +23,6 @@ __all__ = ["DETERMINED_FRACTION", "F_B_COINCIDENCE", "MISFIT_SHARE", "PRIOR_SD",
 PRIOR_SD = {"f_h": 3.0 / np.sqrt(12.0), "xi_h": 1.0 / np.sqrt(12.0)}
 """Yardstick widths: the sd of the article's uniform initial ranges (``f_h`` 1-4 Hz, ``xi_h`` 0-1)."""
 
-DETERMINED_FRACTION = 0.25
-"""A parameter is 'determined' when its standard error is below this fraction of :data:`PRIOR_SD`
-(the same rule as the per-cycle table)."""
 
 WHITENESS_ALPHA = 0.01
 """Level at which the Ljung-Box test's rejection is reported as a warning."""

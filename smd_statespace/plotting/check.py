@@ -17,6 +17,7 @@ from scipy import stats
 
 from ..diagnostics.check import PEAK_FALSE_ALARM
 from ..errors import OptionError
+from .save import save
 
 __all__ = ["plot_fit", "plot_diagnostics"]
 
@@ -90,9 +91,7 @@ def plot_fit(check, path=None, cycles=None):
     axes[3].set_xlabel("time (s)")
     fig.suptitle(f"{Path(str(getattr(check.preprocessed, 'source', ''))).name}: identified model vs measurement "
                  f"({check.n_cycles} cycles, median $f_b$ {check.f_b:.2f} Hz)", fontsize=12, x=0.08, ha="left")
-    if path is not None:
-        fig.savefig(path, dpi=100)
-    return fig
+    return save(fig, path, 100)
 
 def _cycle_marks(check, ax, t):
     starts = [c.t_start for c in check.cycles if t[0] <= c.t_start <= t[-1]]
@@ -148,9 +147,7 @@ def plot_diagnostics(check, path=None, lags=None):
     name = Path(str(getattr(check.preprocessed, "source", ""))).name
     fig.suptitle(f"{name}: model diagnostics. Free-simulation fit {check.fit_percent:.1f} %, residual RMS "
                  f"{check.residual_rms_bw:.2f} % BW, {check.n_cycles} cycles", fontsize=12, x=0.07, ha="left")
-    if path is not None:
-        fig.savefig(path, dpi=100)
-    return fig
+    return save(fig, path, 100)
 
 def _plot_innovations(check, ax):
     """Panel (1): standardised innovations over time, with cycle starts."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from ..simulation.crowd import N_HARMONICS, Crowd
+from .save import save
 
 __all__ = ["plot_crowd"]
 
@@ -62,6 +63,4 @@ def plot_crowd(crowd: Crowd, path=None, n_people=3, window=4.0) -> Figure:
     ax_spec.set_ylabel("amplitude (kN)")
     ax_spec.set_title("Spectrum of the total dynamic force (dotted: $k f_b$)", fontsize=10)
     fig.tight_layout()
-    if path is not None:
-        fig.savefig(path, dpi=90)
-    return fig
+    return save(fig, path, 90)

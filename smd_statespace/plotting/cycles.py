@@ -13,6 +13,7 @@ from matplotlib.figure import Figure
 
 from ..io import truth_values
 from ..identify.plausibility import flagged
+from .save import save
 
 PARAMETER_LABELS = {
     "f_h": r"$f_h$ (Hz)",
@@ -26,10 +27,8 @@ PARAMETER_LABELS = {
 }
 
 
-def _save(fig: Figure, path):
-    if path is not None:
-        fig.savefig(path, dpi=110)
-    return fig
+DPI = 110
+"""Dots per inch of this module's figures."""
 
 
 def plot_convergence(history, cycle: int, tolerance: float = 0.05, path=None, names=("f_h", "xi_h", "blf_1",
@@ -66,7 +65,7 @@ def plot_convergence(history, cycle: int, tolerance: float = 0.05, path=None, na
     axes[0].legend(fontsize=7, loc="best")
     fig.suptitle(f"Convergence over repeated passes, cycle {cycle}", fontsize=11)
     fig.tight_layout()
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
@@ -117,7 +116,7 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
     records = f"{ok['record'].nunique()} records, " if "record" in ok else ""
     fig.suptitle(f"Parameters per cycle ({records}{estimator}; bars ±1 sd)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("f_h", "xi_h", "blf_1", "blf_2"),
@@ -159,7 +158,7 @@ def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("
     axes[-1].set_xlabel("time (s)")
     fig.suptitle(f"{title} (bars ±1 sd)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def plot_before_after(before, after, path=None, seconds: float = 2.0) -> Figure:
@@ -198,4 +197,4 @@ def plot_before_after(before, after, path=None, seconds: float = 2.0) -> Figure:
         ax.legend(fontsize=8, loc="upper right")
     fig.suptitle("Free simulation without and with the added effect(s)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
-    return _save(fig, path)
+    return save(fig, path, DPI)

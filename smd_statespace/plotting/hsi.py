@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from .. import article
 from ..simulation.floor import FloorModel
 from ..studies.hsi import REPORTED, HSIStudy
+from .save import save
 
 __all__ = ["plot_floor", "plot_parameters"]
 
@@ -74,9 +75,7 @@ def plot_floor(study: HSIStudy, path=None) -> Figure:
     ax_spec.set_title("Spectrum (dotted: harmonics $k f_b$; dashed red: plate modes of Table 3)", fontsize=10)
     ax_spec.legend(fontsize=8, loc="lower left")
     fig.tight_layout()
-    if path is not None:
-        fig.savefig(path, dpi=90)
-    return fig
+    return save(fig, path, 90)
 
 
 def plot_parameters(study: HSIStudy, path=None) -> Figure:
@@ -127,6 +126,4 @@ def plot_parameters(study: HSIStudy, path=None) -> Figure:
                  f"{study.settings['estimator']} per cycle with the rigid-floor model (and with floor_mode)",
                  fontsize=10)
     fig.tight_layout(rect=(0, 0.07, 1, 0.97))
-    if path is not None:
-        fig.savefig(path, dpi=90)
-    return fig
+    return save(fig, path, 90)

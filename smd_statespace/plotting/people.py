@@ -13,7 +13,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from ..identify.plausibility import flagged
-from .cycles import PARAMETER_LABELS, _save
+from .cycles import DPI, PARAMETER_LABELS
+from .save import save
 
 __all__ = ["plot_people"]
 
@@ -78,4 +79,4 @@ def plot_people(table: pd.DataFrame, path=None, names=("f_h", "xi_h", "blf_1", "
     axes[-1].set_xlabel(r"bouncing frequency $f_b$ (Hz)")
     fig.suptitle(f"One person per record ({len(ok)} people, record-level model)", fontsize=11, x=0.02, ha="left")
     fig.tight_layout()
-    return _save(fig, path)
+    return save(fig, path, DPI)

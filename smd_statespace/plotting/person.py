@@ -27,6 +27,7 @@ from scipy import signal
 
 from ..measures import fit_percent
 from ..person.noise_floor import measured_label
+from .save import save
 
 __all__ = ["free_run", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
            "plot_held_out", "plot_floor_correlation", "plot_candidates"]
@@ -34,10 +35,8 @@ __all__ = ["free_run", "plot_person_fit", "plot_person_diagnostics", "plot_spect
 COLORS = {"without": "tab:red", "with": "tab:blue"}
 
 
-def _save(fig: Figure, path):
-    if path is not None:
-        fig.savefig(path, dpi=110)
-    return fig
+DPI = 110
+"""Dots per inch of this module's figures."""
 
 
 def _name(result) -> str:
@@ -90,7 +89,7 @@ def plot_spectrum(result, path=None) -> Figure:
     ax.set(xlabel="frequency (Hz)", ylabel="innovation PSD (1/Hz)", xlim=(0, min(0.5 * fs, 12 * f_b)))
     ax.legend(fontsize=8, loc="upper right")
     ax.set_title(f"{_name(result)}: innovations' spectrum; dashed: multiples of f_b = {f_b:.2f} Hz", fontsize=10)
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def _worst_window(time, residual, seconds) -> float:
@@ -150,8 +149,8 @@ def plot_compare(result, path=None, seconds: float = 3.0) -> Figure:
     """
     runs = [(key, _label(fitted), free_run(fitted)) for key, fitted in _pairs(result)]
     title = f"{_name(result)}: free-run simulation against the measurement"
-    return _save(_compare_figure(result.model.time, result.model.y, runs, title, seconds,
-                                 measured=measured_label(result.notes)), path)
+    return save(_compare_figure(result.model.time, result.model.y, runs, title, seconds,
+                                measured=measured_label(result.notes)), path, DPI)
 
 
 def plot_held_out(diagnosis, name, path=None, seconds: float = 3.0) -> Figure:
@@ -172,8 +171,8 @@ def plot_held_out(diagnosis, name, path=None, seconds: float = 3.0) -> Figure:
     if len(after["folds"]) == 1:  # a change in time: only the half that holds it was fitted (validation.halves)
         title = (f"{_name(diagnosis.base)}: the part outside {after['folds'][0]['start']:.1f}-"
                  f"{after['folds'][0]['end']:.1f} s predicted by the person fitted there (which holds the change)")
-    return _save(_compare_figure(before["time"], before["measured"], runs, title, seconds, cut=before["cut"],
-                                 one_step=one_step, measured=measured_label(diagnosis.base.notes)), path)
+    return save(_compare_figure(before["time"], before["measured"], runs, title, seconds, cut=before["cut"],
+                                one_step=one_step, measured=measured_label(diagnosis.base.notes)), path, DPI)
 
 
 def plot_floor_correlation(result, path=None, max_lag: float = 1.0) -> Figure:
@@ -201,7 +200,7 @@ def plot_floor_correlation(result, path=None, max_lag: float = 1.0) -> Figure:
     ax.set(xlabel="lag of the floor acceleration (s)", ylabel="correlation")
     ax.legend(fontsize=8, loc="upper right")
     ax.set_title(f"{_name(result)}: innovations against the measured floor acceleration", fontsize=10)
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def plot_person_fit(result, path=None, seconds=3.0, truth=None) -> Figure:
@@ -254,7 +253,7 @@ def plot_person_fit(result, path=None, seconds=3.0, truth=None) -> Figure:
            title=f"every cycle's load factors (smoother); lines and bands: template, {result.level:.0%} interval"
            + ("; dashed: truth" if any(k.startswith("blf_") for k in truth) else ""))
     bx.legend(loc="upper right", fontsize=8, ncol=4)
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def plot_person_diagnostics(result, path=None, lags=None) -> Figure:
@@ -270,7 +269,7 @@ def plot_person_diagnostics(result, path=None, lags=None) -> Figure:
     series.set(xlabel="time (s)", title="standardised innovations")
     correlogram.set(xlabel=f"lag (samples of {1.0 / result.record.fs:g} s)")
     fig.subplots_adjust(hspace=0.35)  # room for the time axis' label above the Q-Q panel's title
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def plot_candidates(diagnosis, path=None) -> Figure:
@@ -314,4 +313,4 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     right.set(xlabel="likelihood ratio / its scale (black: its test's level)",
               title="candidates fitted with the person")
     fig.suptitle(f"{_name(diagnosis.base)}: is an effect missing? blue: proposed", fontsize=10)
-    return _save(fig, path)
+    return save(fig, path, DPI)

@@ -10,6 +10,7 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from ..io import G
+from .save import save
 
 __all__ = ["plot_preprocessed"]
 
@@ -61,9 +62,7 @@ def plot_preprocessed(pre, path=None, zoom_cycles=3) -> Figure:
         handles, labels = ax_lines.get_legend_handles_labels()
         ax_text.legend(handles, labels, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=3, fontsize=8,
                        frameon=False, borderaxespad=0.15, handlelength=1.6, columnspacing=1.2)
-    if path is not None:
-        fig.savefig(path, dpi=100)
-    return fig
+    return save(fig, path, 100)
 
 
 def _rows(pre) -> list:

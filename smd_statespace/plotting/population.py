@@ -17,6 +17,7 @@ from matplotlib.ticker import MaxNLocator
 from .. import article
 from .cycles import PARAMETER_LABELS
 from ..population import PARAMETERS, TrendResult
+from .save import save
 
 MAX_POINTS = 1500
 """Most cycles drawn as dots per panel of :func:`plot_trends` (an even subsample beyond that)."""
@@ -36,10 +37,8 @@ def _collect_legend(axes, handles: list, labels: list):
     return handles, labels
 
 
-def _save(fig: Figure, path):
-    if path is not None:
-        fig.savefig(path, dpi=100)
-    return fig
+DPI = 100
+"""Dots per inch of this module's figures."""
 
 
 def _band_range(stats) -> tuple:
@@ -165,7 +164,7 @@ def plot_trends(stats, path=None) -> Figure:
         ax.set_xlabel("bouncing frequency $f_b$ (Hz)")
     _trends_legend_and_title(fig, axes[:len(parameters)], stats)
     fig.tight_layout(rect=(0, 0, 1, 1.0 - 0.52 / fig.get_figheight()))
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def plot_histograms(stats, parameter: str, path=None, published: bool = True) -> Figure:
@@ -242,4 +241,4 @@ def plot_histograms(stats, parameter: str, path=None, published: bool = True) ->
     fig.suptitle(f"{_label(parameter)} per bouncing-frequency band{note}", fontsize=11, x=0.01, ha="left",
                  y=1.0 - 0.06 / fig.get_figheight(), va="top")
     fig.tight_layout(rect=(0, 0, 1, 1.0 - 0.32 / fig.get_figheight()))
-    return _save(fig, path)
+    return save(fig, path, DPI)

@@ -18,7 +18,8 @@ from matplotlib.figure import Figure
 from scipy import signal
 
 from ..io import G
-from .person import _save
+from .person import DPI
+from .save import save
 
 __all__ = ["PART_COLORS", "plot_record_parts"]
 
@@ -60,7 +61,7 @@ def plot_record_parts(prepared, path=None) -> Figure:
     said = next((note for note in prepared.notes if note.startswith(("bouncing", "span"))), "the whole record fitted")
     top.set_title(f"{Path(str(original.source)).name}: {said.split(';')[0]}", fontsize=9, loc="left")
     _spectrum(bottom, prepared)
-    return _save(fig, path)
+    return save(fig, path, DPI)
 
 
 def _spectrum(ax, prepared):
