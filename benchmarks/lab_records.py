@@ -152,6 +152,10 @@ CHANGE_KINDS = ("drift", "step")
 """``change`` of the ``change`` row's records, alternately (record ``k`` gets ``CHANGE_KINDS[k % 2]``)."""
 
 CHANGE_WARNING = "the person changes during the record"
+
+FORCE_OR_PERSON = "the person or the force changes during the record"
+"""The words where only a ``xi_h`` that changes in time was found: a person's damping that changes, or a force that
+fades (``tire``), which such a ``xi_h`` stands in for; counted apart from :data:`CHANGE_WARNING`."""
 """The start of the warning that names a change of the person (``result.warnings``)."""
 
 def _default_level() -> float:
@@ -194,7 +198,8 @@ COLUMNS = (
     # the fit
     "f_h_est", "f_h_err_pct", "f_h_low", "f_h_high", "covered", "determined", "xi_h_est", "xi_h_err",
     "xi_h_determined", "xi_h_low", "xi_h_high", "xi_h_covered", "ljung_box_p", "variation_model", "n_cycles",
-    "fit_start", "fit_end", "span_ok", "span_note", "n_warnings", "change_named", "change_warning", "sim_seconds",
+    "fit_start", "fit_end", "span_ok", "span_note", "n_warnings", "change_named", "force_or_person", "change_warning",
+    "sim_seconds",
     "seconds", "error",
 )
 """One CSV row per record."""
@@ -348,7 +353,7 @@ def run_record(task) -> dict:
         f_h_start, f_h_end = truth["f_h_start"], truth["f_h_end"]
     out.update(change_time=change_time, f_h_true=truth["f_h"], f_h_start=f_h_start, f_h_end=f_h_end,
                xi_h_true=truth["xi_h"], bouncing_start=span["bouncing_start_s"], full_start=span["full_start_s"],
-               full_end=span["full_end_s"], bouncing_end=span["bouncing_end_s"])
+               full_end=span["full_end_s"], bouncing_end=span["bouncing_end_s"], force_or_person=False)
     start = time.perf_counter()
     try:
         from smd_statespace.person import identify_person
@@ -359,6 +364,7 @@ def run_record(task) -> dict:
         low, high = (float(v) for v in result.intervals["f_h"])
         warnings = list(result.warnings)
         named = [w for w in warnings if w.startswith(CHANGE_WARNING)]
+        out["force_or_person"] = any(w.startswith(FORCE_OR_PERSON) for w in warnings)
         notes = [n for n in result.notes if "fitted (" in n or n.startswith("bouncing")]
         fit_start, fit_end = float(result.record.time[0]), float(result.record.time[-1])
         out.update(
@@ -389,7 +395,8 @@ def load_rows(path: Path, seed: int, rows, n: int, people: str = "standard") -> 
                   & (frame["record"] < n)]
     frame = frame.drop_duplicates(["row", "record"], keep="last")
     frame["error"] = frame["error"].fillna("").astype(str)
-    for name in ("covered", "determined", "change_named", "span_ok", "held_out", "xi_h_determined", "xi_h_covered"):
+    for name in ("covered", "determined", "change_named", "force_or_person", "span_ok", "held_out", "xi_h_determined",
+                 "xi_h_covered"):
         if name not in frame:  # a CSV written before the column was
             continue
         frame[name] = frame[name].map({True: True, False: False, "True": True, "False": False})
@@ -439,17 +446,18 @@ def row_summary(frame: pd.DataFrame, row: str) -> list:
     misses = int((det & ~covered).sum())
     among = " / ".join(_determined_where(frame, row, other) for other in ("twin", "clean"))
     named = _share(int(ok["change_named"].astype(bool).sum()), len(ok))
+    either = _share(int(ok["force_or_person"].astype(bool).sum()), len(ok)) if "force_or_person" in ok else "—"
     wrong_span = int((~ok["span_ok"].astype(bool)).sum())
     seconds = f"{ok['seconds'].astype(float).median():.1f}" if len(ok) else "—"
     return [row + (" (held out)" if row in HELD_OUT else ""), f"{n} ({failed})",
             f"{_pct(err)} / {_pct(err[det])}", f"{_worst(err)} / {_worst(err[det])}", coverage, str(misses),
-            _share(int(det.sum()), len(ok)), among, named, str(wrong_span), seconds]
+            _share(int(det.sum()), len(ok)), among, named, either, str(wrong_span), seconds]
 
 
 HEADER = ("row", "records (failed)", "f_h median abs error %: all / determined", "worst: all / determined",
           f"f_h {100 * LEVEL:g} % interval coverage (95 % Wilson)", "confident misses", "f_h determined",
           "determined where the twin / the clean record is", f"says \"{CHANGE_WARNING}\"",
-          "span outside the bout", "median s")
+          f"says \"{FORCE_OR_PERSON}\"", "span outside the bout", "median s")
 
 
 def _table(header, body) -> list:

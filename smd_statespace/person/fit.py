@@ -26,7 +26,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..applicability import check_bouncing, check_clipping
-from ..errors import CycleError, OptionError, RecordError
+from ..errors import CycleError, OptionError, RecordError, SMDInputError
 from ..io import G, Record
 from ..progress import tqdm
 from ..signals import RECORD_RATE, prepare_record
@@ -35,6 +35,7 @@ from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
 from .model import VARIATIONS, Regressor, RecordModel
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
+from .screen import time_change
 from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, comparison_row,
                      fit_model, profile_interval)
 from .threads import search_threads, thread_map
@@ -275,11 +276,30 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
                                comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
                                prepared=prepared, threads=threads)
+        result = _changed_in_time(result, threads) if change is not None else result
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)
         if len(given) > len(effects_asked):  # the record brought its floor
             result.notes.append(_floor_note(result))
+    return result
+
+
+def _changed_in_time(result, threads: int):
+    """``result`` with the halves' test of a person who changes joined by the score tests of ``f_h`` and ``xi_h``
+    changing in time (:func:`~smd_statespace.person.screen.time_change`, ``result.change["time"]``): a parameter
+    either names is not determined and its interval spans the halves' (:func:`honest_intervals`);
+    ``result.change["by_halves"]`` keeps what the halves named."""
+    try:
+        tests = time_change(result, threads=threads)
+    except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:  # the fit stands; the check is said
+        result.notes.append(f"the score tests of a change in time failed ({' '.join(str(exc).split())})")
+        return result
+    change = result.change
+    change["time"], change["by_halves"] = tests, list(change["changed"])
+    change["changed"] = [name for name in ("f_h", "xi_h") if name in change["changed"] or name in tests["changed"]]
+    if result.narrow_intervals:
+        result.intervals.update(honest_intervals(result))
     return result
 
 

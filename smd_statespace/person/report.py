@@ -263,21 +263,31 @@ def _unit(unit: str) -> str:
 
 
 def change_words(change) -> str:
-    """The warning that names a person who changes, with both halves' numbers ("" when none changed)."""
+    """The warning that names a person who changes, with both halves' numbers and the score test that found it, if
+    one did ("" when none changed)."""
     if not change or not change["changed"]:
         return ""
     first, second = change["halves"]
     parts = []
+    tests = change.get("time", {"terms": [], "changed": []})
     for name in change["changed"]:
         unit = " Hz" if name == "f_h" else ""
-        parts.append(f"{name} {first[name]:.3g}{unit} ({first[f'{name}_low']:.3g}-{first[f'{name}_high']:.3g}) in "
-                     f"{first['start']:.1f}-{first['end']:.1f} s, {second[name]:.3g}{unit} "
-                     f"({second[f'{name}_low']:.3g}-{second[f'{name}_high']:.3g}) in {second['start']:.1f}-"
+        found = [term for term in tests["terms"] if term["parameter"] == name and name in tests["changed"]][:1]
+        evidence = "".join(f"{term['physics']} fits the record better (score test of {term['term']}: p {term['p']:.1g}, "
+                           f"{term['p_holm']:.1g} over {len(tests['terms'])} terms of a change in time); "
+                           for term in found)
+        parts.append(f"{evidence}{name} {first[name]:.3g}{unit} ({first[f'{name}_low']:.3g}-"
+                     f"{first[f'{name}_high']:.3g}) in {first['start']:.1f}-{first['end']:.1f} s, {second[name]:.3g}"
+                     f"{unit} ({second[f'{name}_low']:.3g}-{second[f'{name}_high']:.3g}) in {second['start']:.1f}-"
                      f"{second['end']:.1f} s ({abs(change['z'][name]):.1f} sd apart)")
     prefix = {"f_h": "f", "xi_h": "xi"}  # the generic terms of a parameter that changes in time
     kinds = ", ".join(f"term:{prefix[name]}_{shape}" for name in change["changed"] if name in prefix
                       for shape in ("step", "drift"))
-    return ("the person changes during the record: " + "; ".join(parts) + ". One SMD model does not describe the "
+    # a xi_h that drifts stands in for a force that fades as well: alone, it does not say that the person changed
+    force_too = change["changed"] == ["xi_h"] and "xi_h" not in change.get("by_halves", change["changed"])
+    return (f"the person{' or the force' if force_too else ''} changes during the record: " + "; ".join(parts) +
+            ". One SMD model does not describe the "
             "whole record: read the halves, not one value; a parameter that varies in time (tiring, warming up, a "
-            f"change of stance) is the likely missing piece: diagnose tries it as a step or a drift ({kinds}), or "
+            "change of stance; a force that fades shows as a drifting xi_h) is the likely missing piece: diagnose "
+            f"tries it as a step or a drift ({kinds}), or "
             "identify parts separately with --span START:END")

@@ -47,7 +47,8 @@ from .score import cycle_sums, profile_out, score
 from .search import fit_model
 from .threads import thread_map
 
-__all__ = ["STEPS", "PREFILTER", "RELINEARISED", "generic_library", "score_test", "quick_ratio", "screen", "holm"]
+__all__ = ["STEPS", "PREFILTER", "RELINEARISED", "CHANGE_ALPHA", "TIME_KINDS", "generic_library", "score_test",
+           "quick_ratio", "screen", "holm", "time_change"]
 
 STEPS = (1.0 / 3.0, 0.5, 2.0 / 3.0)
 """Where the library's steps in time are, as fractions of the record (one term each: a step elsewhere is
@@ -60,17 +61,31 @@ RELINEARISED = 1
 """How many times :func:`quick_ratio` linearises a nonlinear term again about its quick fit's own path."""
 
 
+TIME_KINDS = ("f_drift", "f_step", "xi_drift", "xi_step")
+"""The generic terms of a person who changes during the record (:func:`time_change`)."""
+
+CHANGE_ALPHA = 0.01
+"""Family-wise level of :func:`time_change`'s score tests (Holm over the time terms).
+
+Measured on lab-shaped records (``simulate_lab_record``, 3 people): clean people, smallest robust p-value over the
+8 time terms 0.024-0.31 (Holm 0.19 or more); ``f_h`` drifting or stepping 8 % over the bout, 3e-9 to 3e-5 on a term
+of ``f_h``; a force that fades by 30 % (``tire``), 9e-10 to 3e-7 on a term of ``xi_h``. The halves' test
+(:func:`~smd_statespace.person.change.change_test`) named none of these 9 changes."""
+
+
 def generic_library(result, kinds=None) -> list:
     """Every generic term (:data:`~smd_statespace.effects.generic.TERMS`, or those in ``kinds``) scaled to the
     record of the fitted ``result``: the RMS compression and rate its person predicts, and its fitted span's
     start and length; a step at each of :data:`STEPS`."""
-    path = result.predicted_path()
-    rms = np.sqrt(np.mean(path[:, :2] ** 2, axis=0))
-    scales = {"restoring": float(rms[0]), "damping": float(rms[1])}
+    kinds = list(TERMS if kinds is None else kinds)
+    scales = {}
+    if any(TERMS[kind][0] != "time" for kind in kinds):  # the path scales the terms in u and u'
+        rms = np.sqrt(np.mean(result.predicted_path()[:, :2] ** 2, axis=0))
+        scales = {"restoring": float(rms[0]), "damping": float(rms[1])}
     time = result.model.time
     length, start = float(time[-1] - time[0]), float(time[0])
     out = []
-    for kind in (TERMS if kinds is None else kinds):
+    for kind in kinds:
         family = TERMS[kind][0]
         if family == "time":
             out += [GenericTerm(kind, scale=length, start=start, at=at)
@@ -204,3 +219,28 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
     passed = table["p_quick_holm"] < alpha
     return pd.concat([table[passed].assign(_scaled=scaled[passed.to_numpy()]).sort_values("_scaled", ascending=False)
                       .drop(columns="_scaled"), table[~passed]])
+
+
+def time_change(result, alpha: float = CHANGE_ALPHA, threads: int = 1) -> dict:
+    """Is the record one unchanging person? Score tests of ``f_h`` and ``xi_h`` changing in time, at the fit.
+
+    Every term of :data:`TIME_KINDS` (a drift over the fitted span, a step at each of :data:`STEPS`) is
+    score-tested at the fitted ``result`` (:func:`screen`: the robust, cycle-clustered statistic; no fit), the
+    p-values adjusted by Holm over them. A parameter with a term below ``alpha`` changes during the record. A
+    person who tires, warms up or changes stance is found here where the record's halves, each fitted on its
+    own, are too short to tell their ``f_h`` apart; so is a force that fades, which a ``xi_h`` that drifts
+    stands in for.
+
+    Returns
+    -------
+    dict
+        ``terms``: per term its ``term`` (:func:`~smd_statespace.effects.generic.label`), ``physics``,
+        ``parameter`` (``f_h`` or ``xi_h``), ``p`` (robust) and ``p_holm``, smallest first; ``changed``: the
+        parameters that change; ``alpha``.
+    """
+    table = screen(result, generic_library(result, TIME_KINDS), threads=threads)
+    terms = [{"term": row["label"], "physics": row["physics"], "parameter": "f_h" if row["label"].startswith(
+        "term:f_") else "xi_h", "p": float(row["p_robust"]), "p_holm": float(row["p_holm"])}
+             for _, row in table.iterrows()]
+    flagged = {term["parameter"] for term in terms if term["p_holm"] < alpha}
+    return {"terms": terms, "changed": [name for name in ("f_h", "xi_h") if name in flagged], "alpha": alpha}

@@ -1,0 +1,36 @@
+"""A person who changes during the record, found by score tests of f_h and xi_h changing in time."""
+
+import pytest
+
+from smd_statespace.person import identify_person
+from smd_statespace.person.screen import CHANGE_ALPHA, TIME_KINDS
+from smd_statespace.simulation import simulate_bouncing
+from smd_statespace.simulation.lab import simulate_lab_record
+
+
+def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
+    """f_h steps by 8 % in the middle of the bout: the halves alone do not tell it (0.9 sd apart on this record);
+    the score tests do, and f_h is then not called determined."""
+    lab = simulate_lab_record(mass=70, f_b=2.2, f_h=2.8, xi_h=0.3, f_h_change=0.08, change="step", seed=7)
+    person = identify_person(lab.record)
+    tests = person.change["time"]
+    assert len(tests["terms"]) == 8 and {t["term"].split("@")[0] for t in tests["terms"]} == {
+        f"term:{kind}" for kind in TIME_KINDS}
+    assert tests["changed"] == ["f_h"] and person.change["changed"] == ["f_h"]
+    best = tests["terms"][0]
+    assert best["parameter"] == "f_h" and best["p_holm"] < CHANGE_ALPHA
+    assert not person.determined("f_h")
+    low, high = person.intervals["f_h"]
+    for half in person.change["halves"]:  # the interval spans both halves'
+        assert low <= half["f_h_low"] and half["f_h_high"] <= high
+    words = next(w for w in person.warnings if w.startswith("the person changes during the record"))
+    assert f"score test of {best['term']}" in words and "term:f_step, term:f_drift" in words
+
+
+def test_a_person_who_does_not_change_is_not_said_to():
+    person = identify_person(simulate_bouncing(mass=70, f_b=2.1, f_h=2.6, xi_h=0.3, duration=20, seed=8).record)
+    tests = person.change["time"]
+    assert tests["changed"] == [] and person.change["changed"] == []
+    assert min(t["p_holm"] for t in tests["terms"]) >= CHANGE_ALPHA
+    assert not any(w.startswith("the person changes") for w in person.warnings)
+    assert person.to_dict()["change"]["time"]["alpha"] == pytest.approx(CHANGE_ALPHA)
