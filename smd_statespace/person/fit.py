@@ -156,7 +156,9 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         True (default): the person is fitted again on each half of the record and the halves
         compared (:func:`~smd_statespace.person.change.change_test`, ``result.change``): a person
         whose ``f_h`` or ``xi_h`` differs between them is said in words, and that parameter is
-        not called determined. False skips the two fits.
+        not called determined; so is one that score tests of a drift or a step in time, made at the
+        fitted person, find (:func:`~smd_statespace.person.screen.time_change`,
+        ``result.change["time"]``). False skips the two fits and the tests.
     noise_floor : float or None
         Fraction of body weight (default :data:`~smd_statespace.person.noise_floor.NOISE_FLOOR`, 1 % BW):
         a record whose measured noise per fitted sample is lower is fitted with white noise added up to it,
