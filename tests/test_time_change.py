@@ -25,6 +25,7 @@ def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
         assert low <= half["f_h_low"] and half["f_h_high"] <= high
     words = next(w for w in person.warnings if w.startswith("the person changes during the record"))
     assert f"score test of {best['term']}" in words and "term:f_step, term:f_drift" in words
+    assert f"a change in time: smallest p {best['p_holm']:.2g} ({best['term']}" in person.summary()
 
 
 def test_a_person_who_does_not_change_is_not_said_to():
@@ -33,4 +34,5 @@ def test_a_person_who_does_not_change_is_not_said_to():
     assert tests["changed"] == [] and person.change["changed"] == []
     assert min(t["p_holm"] for t in tests["terms"]) >= CHANGE_ALPHA
     assert not any(w.startswith("the person changes") for w in person.warnings)
+    assert "  one person? halves f_h" in person.summary()  # the tests were made, and said so
     assert person.to_dict()["change"]["time"]["alpha"] == pytest.approx(CHANGE_ALPHA)

@@ -12,7 +12,7 @@ from ..io import G
 from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
 from .phone_report import phone_words
 
-__all__ = ["CONFOUNDED", "change_words", "person_warnings", "ratio_words", "result_dict", "summary_text", "table_row"]
+__all__ = ["CONFOUNDED", "change_words", "one_person_line", "person_warnings", "ratio_words", "result_dict", "summary_text", "table_row"]
 
 
 CONFOUNDED = 0.9
@@ -217,6 +217,8 @@ def summary_text(result, verbose=False) -> str:
         f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
         f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
     ]
+    one = one_person_line(result.change)
+    lines += [one] if one else []
     if verbose:
         lines.insert(3, f"  intervals: {result.interval_method}; BLF sds with the person's uncertainty "
                         "(sd_given_person in person.json)")
@@ -260,6 +262,20 @@ def ratio_words(result) -> str:
 def _unit(unit: str) -> str:
     """A unit as printed after a value: `` Hz``, nothing for a dimensionless one (``"-"``)."""
     return "" if unit in ("-", "") else f" {unit}"
+
+
+def one_person_line(change) -> str:
+    """The summary's line of the tests of one unchanging person: the halves' z and the smallest score-test p-value of
+    a change in time (Holm over the terms); "" when they were not made."""
+    if not change:
+        return ""
+    parts = [f"halves {', '.join(f'{name} {abs(z):.1f} sd apart' for name, z in change['z'].items())}"]
+    tests = change.get("time")
+    if tests and tests["terms"]:
+        best = tests["terms"][0]
+        parts.append(f"a change in time: smallest p {best['p_holm']:.2g} ({best['term']}, Holm over "
+                     f"{len(tests['terms'])} score tests; a change below {tests['alpha']:g})")
+    return "  one person? " + "; ".join(parts)
 
 
 def change_words(change) -> str:
