@@ -12,7 +12,8 @@ from ..io import G
 from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
 from .phone_report import phone_words
 
-__all__ = ["CONFOUNDED", "change_words", "one_person_line", "person_warnings", "ratio_words", "result_dict", "summary_text", "table_row"]
+__all__ = ["CONFOUNDED", "change_words", "one_person_line", "person_warnings", "ratio_words", "result_dict",
+           "summary_text", "table_row"]
 
 
 CONFOUNDED = 0.9
@@ -288,10 +289,10 @@ def change_words(change) -> str:
     tests = change.get("time", {"terms": [], "changed": []})
     for name in change["changed"]:
         unit = " Hz" if name == "f_h" else ""
-        found = [term for term in tests["terms"] if term["parameter"] == name and name in tests["changed"]][:1]
-        evidence = "".join(f"{term['physics']} fits the record better (score test of {term['term']}: p {term['p']:.1g}, "
-                           f"{term['p_holm']:.1g} over {len(tests['terms'])} terms of a change in time); "
-                           for term in found)
+        found = next((term for term in tests["terms"] if term["parameter"] == name), None)  # smallest p first
+        evidence = "" if name not in tests["changed"] else (
+            f"{found['physics']} fits the record better (score test of {found['term']}: p {found['p']:.1g}, "
+            f"{found['p_holm']:.1g} over {len(tests['terms'])} terms of a change in time); ")
         parts.append(f"{evidence}{name} {first[name]:.3g}{unit} ({first[f'{name}_low']:.3g}-"
                      f"{first[f'{name}_high']:.3g}) in {first['start']:.1f}-{first['end']:.1f} s, {second[name]:.3g}"
                      f"{unit} ({second[f'{name}_low']:.3g}-{second[f'{name}_high']:.3g}) in {second['start']:.1f}-"

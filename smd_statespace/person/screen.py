@@ -242,9 +242,10 @@ def time_change(result, alpha: float = CHANGE_ALPHA, threads: int = 1) -> dict:
         ``parameter`` (``f_h`` or ``xi_h``), ``p`` (robust) and ``p_holm``, smallest first; ``changed``: the
         parameters that change; ``alpha``.
     """
-    table = screen(result, generic_library(result, TIME_KINDS), threads=threads)
-    terms = [{"term": row["label"], "physics": row["physics"], "parameter": "f_h" if row["label"].startswith(
-        "term:f_") else "xi_h", "p": float(row["p_robust"]), "p_holm": float(row["p_holm"])}
-             for _, row in table.iterrows()]
+    library = generic_library(result, TIME_KINDS)
+    parameter = {term.spec: "f_h" if term.kind.startswith("f_") else "xi_h" for term in library}
+    table = screen(result, library, threads=threads)
+    terms = [{"term": row["label"], "physics": row["physics"], "parameter": parameter[spec],
+              "p": float(row["p_robust"]), "p_holm": float(row["p_holm"])} for spec, row in table.iterrows()]
     flagged = {term["parameter"] for term in terms if term["p_holm"] < alpha}
     return {"terms": terms, "changed": [name for name in ("f_h", "xi_h") if name in flagged], "alpha": alpha}

@@ -22,6 +22,7 @@ from scipy import optimize, stats
 
 from ..errors import OptionError, SMDInputError
 from .model import RecordModel
+from .threads import thread_map
 from .timing import CycleTiming
 
 __all__ = ["COV_TYPES", "WIDER_SANDWICH", "FitError", "fit_model", "information", "profile_interval",
@@ -251,8 +252,6 @@ def _hessian(model: RecordModel, params, index, steps, threads=1):
     models) in 55-60 % of the time. The passes run in up to ``threads`` threads.
     """
     from .score import score
-
-    from .threads import thread_map
 
     def gradient(column):  # the columns' passes do not depend on each other: in threads
         point = params.copy()
@@ -509,8 +508,6 @@ def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()
     The models' re-placements do not depend on each other: they run in up to ``threads`` threads
     (:func:`~smd_statespace.person.threads.thread_map`), with the same results.
     """
-    from .threads import thread_map
-
     chains = thread_map(lambda fit: fit_timing(model_for, timing, fit[0].variation, first=fit, step=step), fits,
                         threads)
     finished = [(m, f) for m, f, _ in chains]

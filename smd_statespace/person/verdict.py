@@ -118,16 +118,15 @@ def held_out_checks(result, fits: dict, rows: list, level: float, threads: int) 
     """The held-out check of every candidate whose test passed (its row updated in place); returns the
     cross-validations by name (``"without"``, or :func:`without_key` where a change in time moves the cut)."""
     heavy_tailed = bool(result.test_pvalues()["kurtosis"] > HEAVY_TAILS)  # a few samples can make a held-out gain
-    passed, judged = [i for i, row in enumerate(rows) if row["passed"]], {}
-    for i in passed:
+    pairs, judged = [], {}  # (row, its name, the key of the person without it on the same cut); what to validate
+    for i in [i for i, row in enumerate(rows) if row["passed"]]:
         name = rows[i]["effect"]
         breaks = tuple(moment for effect in fits[name].effects for moment in effect.breaks)
         key = without_key(name) if breaks else "without"  # a change in time moves the cut (validation.halves)
         judged.setdefault(key, (result.model, result.params, breaks))
         judged[name] = (fits[name].model, fits[name].params, breaks)
+        pairs.append((i, name, key))
     validation = dict(zip(judged, thread_map(lambda key: cross_validated_loglike(*judged[key]), judged, threads)))
-    for i in passed:
-        name = rows[i]["effect"]
-        key = without_key(name) if judged[name][2] else "without"
+    for i, name, key in pairs:
         rows[i] = held_out(rows[i], validation[key], validation[name], level, heavy_tailed)
     return validation
