@@ -3,7 +3,8 @@
 import pytest
 
 from smd_statespace.person import identify_person
-from smd_statespace.person.screen import CHANGE_ALPHA, TIME_KINDS
+from smd_statespace.person.extend import fit_effects
+from smd_statespace.person.screen import CHANGE_ALPHA, TIME_KINDS, generic_library
 from smd_statespace.simulation import simulate_bouncing
 from smd_statespace.simulation.lab import simulate_lab_record
 
@@ -26,6 +27,11 @@ def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
     words = next(w for w in person.warnings if w.startswith("the person changes during the record"))
     assert f"score test of {best['term']}" in words and "term:f_step, term:f_drift" in words
     assert f"a change in time: smallest p {best['p_holm']:.2g} ({best['term']}" in person.summary()
+    # the step added, as diagnose proposes it: the model has the change, the answer no longer warns of it
+    step = next(term for term in generic_library(person, ["f_step"]) if term.at == 0.5)
+    stepped = fit_effects(person, [step])
+    assert stepped.change["changed"] == [] and person.change["changed"] == ["f_h"]
+    assert not any(w.startswith("the person changes") for w in stepped.warnings)
 
 
 def test_a_person_who_does_not_change_is_not_said_to():

@@ -113,6 +113,14 @@ class GenericTerm(Effect):
         return f"c_{self.kind}"
 
     @property
+    def changes(self) -> str | None:
+        """The person's parameter a time term lets change during the record (``"f_h"`` or ``"xi_h"``); None for
+        the terms in the compression and its rate."""
+        if self.family != "time":
+            return None
+        return "f_h" if self.kind.startswith("f_") else "xi_h"
+
+    @property
     def breaks(self) -> tuple[float, ...]:
         """Where a step is (s, ``start + at T``); none for the other kinds."""
         return (self.start + self.at * self.scale,) if self.kind.endswith("step") else ()

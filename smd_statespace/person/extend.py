@@ -310,8 +310,20 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
     return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
                          comparison=comparison, record_warnings=warnings, notes=notes,
                          before=result, effects=tuple(effects), linearisations=linearisations,
-                         settled=settled, tested_loglike=tested, tested_df=tested_df, change=root.change,
+                         settled=settled, tested_loglike=tested, tested_df=tested_df,
+                         change=_change_left(root.change, effects),
                          prepared=root.prepared, threads=threads)
+
+
+def _change_left(change, effects):
+    """``change`` (the tests of one unchanging person, made without effects) less the parameters whose change a
+    time term among ``effects`` now models (:attr:`~smd_statespace.effects.generic.GenericTerm.changes`): once
+    the model has the drift or the step, the person's answer no longer warns of it nor withholds "determined"
+    for it."""
+    modelled = {getattr(effect, "changes", None) for effect in effects} - {None}
+    if not change or not modelled & set(change["changed"]):
+        return change
+    return {**change, "changed": [name for name in change["changed"] if name not in modelled]}
 
 
 def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -> tuple:

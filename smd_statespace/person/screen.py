@@ -243,7 +243,7 @@ def time_change(result, alpha: float = CHANGE_ALPHA, threads: int = 1) -> dict:
         parameters that change; ``alpha``.
     """
     library = generic_library(result, TIME_KINDS)
-    parameter = {term.spec: "f_h" if term.kind.startswith("f_") else "xi_h" for term in library}
+    parameter = {term.spec: term.changes for term in library}
     table = screen(result, library, threads=threads)
     terms = [{"term": row["label"], "physics": row["physics"], "parameter": parameter[spec],
               "p": float(row["p_robust"]), "p_holm": float(row["p_holm"])} for spec, row in table.iterrows()]
