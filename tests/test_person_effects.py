@@ -20,7 +20,8 @@ from smd_statespace.cli import main
 from smd_statespace.effects import make_effect
 from smd_statespace.io import G
 from smd_statespace.model import SMDModel
-from smd_statespace.person.dynamics import PersonDynamics, expm_stack
+from smd_statespace.person.discretisation import expm_stack
+from smd_statespace.person.dynamics import PersonDynamics
 from smd_statespace.person.model import RecordModel
 from smd_statespace.person.timing import CycleTiming
 
@@ -49,7 +50,7 @@ def test_expm_stack_matches_scipy():
 def test_exponentials_of_the_person_alone_match_scipy_singular_and_negative_stiffness_too():
     """The 2 x 2 path of ``exponentials`` (written out) against scipy's expm of Van Loan's block, for springs of
     positive, zero (a singular A) and negative stiffness, over- and under-damped, at 100 Hz and 1000 Hz."""
-    from smd_statespace.person.dynamics import exponentials
+    from smd_statespace.person.discretisation import exponentials
 
     rng = np.random.default_rng(np.random.SeedSequence(46))
     omega = 2 * np.pi * rng.uniform(0.5, 8.0, 40)
@@ -506,3 +507,28 @@ def test_a_candidate_whose_terms_are_all_near_zero_is_not_evidence():
     assert not indistinguishable_from_zero(*fits([0.04, 0.0002], [0.003, 0.0003], []))  # one harmonic is there
     assert indistinguishable_from_zero(*fits([], [], [[3.0, 2.0]]))  # c_q 3 +- 2: within 2 sd of none
     assert not indistinguishable_from_zero(*fits([], [], [[9.0, 1.0]]))
+
+
+def test_harmonic_gains_of_the_person_alone_match_a_linear_solve():
+    """The compiled 2 x 2 gains (Cramer's rule) against numpy's solve of ``(j nu I - A) g = (exp(j nu dt) I - Phi) b``,
+    with one ``A`` shared by every cycle rate and with an ``A`` per sample."""
+    from smd_statespace.person.discretisation import exponentials, harmonic_gains
+
+    rng = np.random.default_rng(np.random.SeedSequence(47))
+    K, dt = 30, 0.01
+    A = np.zeros((K, 2, 2))
+    A[:, 0, 1] = 1.0
+    A[:, 1, 0] = -(2 * np.pi * rng.uniform(1.0, 5.0, K)) ** 2
+    A[:, 1, 1] = -rng.uniform(0.5, 8.0, K)
+    b = np.column_stack([np.zeros(K), np.ones(K)]) + rng.normal(0, 0.1, (K, 2))
+    nu = 2 * np.pi * rng.uniform(1.5, 3.5, K)[:, None] * np.arange(1, 5)
+    phi, _ = exponentials(A, dt)
+    for shared in (True, False):
+        a, p, bb = (A[:1], phi[:1], b[:1]) if shared else (A, phi, b)
+        gains = harmonic_gains(a, p, bb, nu, dt)
+        for k in range(K):
+            r = 0 if shared else k
+            for i in range(nu.shape[1]):
+                lhs = 1j * nu[k, i] * np.eye(2) - a[r]
+                rhs = (np.exp(1j * nu[k, i] * dt) * np.eye(2) - p[r]) @ bb[r]
+                np.testing.assert_allclose(gains[k, i], np.linalg.solve(lhs, rhs), rtol=1e-12, atol=1e-15)

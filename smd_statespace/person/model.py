@@ -57,7 +57,8 @@ import numpy as np
 from ..errors import OptionError
 from ..io import G
 from . import kalman
-from .dynamics import PersonDynamics, exponentials, harmonic_gains
+from .discretisation import exponentials, harmonic_gains
+from .dynamics import PersonDynamics
 from .system import RecordSystem, Regressor, integrated_white_noise, matern32_step, regressor_steps, step_mean
 from .timing import CycleTiming
 from .variation import VARIATIONS

@@ -133,7 +133,7 @@ class _Discretisation:
     """
 
     def __init__(self, model: RecordModel, params):
-        from .dynamics import exponentials, harmonic_gains
+        from .discretisation import exponentials, harmonic_gains
 
         self.lin = lin = _linearise(model, params)
         dt = model.dt
@@ -166,7 +166,7 @@ def _dynamics_derivative(model: RecordModel, params, j, h, base: _Discretisation
       central differences.
     """
     from ..io import G
-    from .dynamics import expm_stack
+    from .discretisation import expm_stack
     from .system import integrated_white_noise, regressor_steps, step_mean
 
     up, down = params.copy(), params.copy()
