@@ -81,8 +81,8 @@ def test_missing_masses_and_files_are_named(records, tmp_path):
 
 def test_failures_are_contained_and_jobs_do_not_change_results(records, tmp_path):
     found = collect_records(records, manifest=records / "manifest.csv")
-    one = run_batch(found, tmp_path / "one", runner_options=OPTIONS, progress=False)
-    two = run_batch(found, tmp_path / "two", runner_options=OPTIONS, jobs=2, progress=False)
+    one = run_batch(found, tmp_path / "one", estimator="ekf", runner_options=OPTIONS, progress=False)
+    two = run_batch(found, tmp_path / "two", estimator="ekf", runner_options=OPTIONS, jobs=2, progress=False)
     assert one.failed_records == ["flat.csv"] and one.identified == 4
     table = results(tmp_path / "one")
     flat = table[table["record"] == "flat.csv"]
@@ -99,7 +99,7 @@ def test_failures_are_contained_and_jobs_do_not_change_results(records, tmp_path
     assert (ok.loc[flagged, "implausible_reason"].fillna("").astype(str).str.len() > 0).all()
     assert (f"({one.implausible} of them implausible)" in one.line()) == (one.implausible > 0)
     # Each record's rows are those of identifying it alone (seed from its name, not its position).
-    alone = run_batch([found[2]], tmp_path / "alone", runner_options=OPTIONS, progress=False)
+    alone = run_batch([found[2]], tmp_path / "alone", estimator="ekf", runner_options=OPTIONS, progress=False)
     assert alone.identified == 1
     single = results(tmp_path / "alone")
     within = table[table["record"] == found[2].name].reset_index(drop=True)[single.columns]
@@ -109,17 +109,19 @@ def test_failures_are_contained_and_jobs_do_not_change_results(records, tmp_path
 def test_resume_keeps_finished_records_and_refuses_other_settings(records, tmp_path):
     found = collect_records(records, manifest=records / "manifest.csv")
     out = tmp_path / "run"
-    run_batch(found[:2], out, runner_options=OPTIONS, progress=False)  # as if killed after two records...
+    # as if killed after two records...
+    run_batch(found[:2], out, estimator="ekf", runner_options=OPTIONS, progress=False)
     (out / "results.csv").unlink()
     with pytest.raises(OptionError, match="the records differ"):
-        run_batch(found, out, runner_options=OPTIONS, resume=True, progress=False)
+        run_batch(found, out, estimator="ekf", runner_options=OPTIONS, resume=True, progress=False)
     with pytest.raises(OptionError, match="holds a previous batch run"):
-        run_batch(found[:2], out, runner_options=OPTIONS, progress=False)
+        run_batch(found[:2], out, estimator="ekf", runner_options=OPTIONS, progress=False)
     with pytest.raises(OptionError, match="the options differ"):
-        run_batch(found[:2], out, runner_options=dict(OPTIONS, max_passes=3), resume=True, progress=False)
+        run_batch(found[:2], out, estimator="ekf", runner_options=dict(OPTIONS, max_passes=3), resume=True,
+                  progress=False)
     with pytest.raises(OptionError, match="no run in"):
-        run_batch(found, tmp_path / "empty", runner_options=OPTIONS, resume=True, progress=False)
-    again = run_batch(found[:2], out, runner_options=OPTIONS, resume=True, progress=False)
+        run_batch(found, tmp_path / "empty", estimator="ekf", runner_options=OPTIONS, resume=True, progress=False)
+    again = run_batch(found[:2], out, estimator="ekf", runner_options=OPTIONS, resume=True, progress=False)
     assert again.resumed == 2 and again.identified == 0
 
 
@@ -127,7 +129,7 @@ def test_resume_keeps_finished_records_and_refuses_other_settings(records, tmp_p
 def test_sigkill_mid_run_then_resume_gives_the_clean_results(tmp_path):
     """A real process killed with SIGKILL after its first record; --resume completes it, nothing lost or doubled."""
     folder = write_records(tmp_path / "records", 6, duration=10.0)
-    argv = ["identify", str(folder), "--mass", "65", "--max-passes", "2", "--seed", "5", "--quiet"]
+    argv = ["identify", str(folder), "--mass", "65", "--estimator", "ekf", "--max-passes", "2", "--seed", "5", "--quiet"]
     killed = tmp_path / "killed"
     process = subprocess.Popen([sys.executable, "-m", "smd_statespace", *argv, "--out", str(killed)],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -151,7 +153,8 @@ def test_sigkill_mid_run_then_resume_gives_the_clean_results(tmp_path):
 
 
 def test_cli_batch_reports_each_bad_file_and_exits_1(records, tmp_path, capsys):
-    status = main(["identify", str(records), "--manifest", str(records / "manifest.csv"), "--max-passes", "2",
+    status = main(["identify", str(records), "--manifest", str(records / "manifest.csv"), "--estimator", "ekf",
+                   "--max-passes", "2",
                    "--out", str(tmp_path / "o"), "--quiet"])
     captured = capsys.readouterr()
     assert status == 1
@@ -167,19 +170,20 @@ def test_a_new_run_rewrites_settings_left_in_its_folder(records, tmp_path):
     out = tmp_path / "run"
     out.mkdir()
     (out / "run.json").write_text('{"records": [], "options": {}}')  # left by something else, no parts
-    run_batch(found, out, runner_options=OPTIONS, progress=False)
-    again = run_batch(found, out, runner_options=OPTIONS, resume=True, progress=False)  # compared with the new
+    run_batch(found, out, estimator="ekf", runner_options=OPTIONS, progress=False)
+    # compared with the new settings
+    again = run_batch(found, out, estimator="ekf", runner_options=OPTIONS, resume=True, progress=False)
     assert again.resumed == 1
 
 
 @pytest.mark.slow
 def test_record_estimator_batch_command_gives_one_person_per_record_that_stats_reads(records, tmp_path, capsys):
     """The documented study path through the command line (docs/batch.md): ``identify FOLDER --manifest M
-    --estimator record --jobs 2`` writes one person per record and the people's figure, fails the flat record
+    --jobs 2`` (the record-level person, by default as for one record) writes one person per record and the people's figure, fails the flat record
     in one line (exit 1, no traceback), resumes without refitting; ``stats`` reads the table as people."""
     out = tmp_path / "people"
-    argv = ["identify", str(records), "--manifest", str(records / "manifest.csv"), "--estimator", "record",
-            "--out", str(out), "--jobs", "2", "--quiet"]
+    argv = ["identify", str(records), "--manifest", str(records / "manifest.csv"), "--out", str(out), "--jobs", "2",
+            "--quiet"]
     assert main(argv) == 1  # flat.csv fails; the others are people
     printed = capsys.readouterr()
     assert "Traceback" not in printed.err and "flat.csv" in printed.err and len(printed.err.strip().splitlines()) == 1

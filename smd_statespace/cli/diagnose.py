@@ -13,7 +13,7 @@ from ..estimators import ESTIMATORS
 from .common import (add_model_arguments, add_noise_floor_argument, add_rate_argument, add_record_arguments,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
                      out_dir, prepare_record, rate_of, read_person_record)
-from .identify import DEFAULT_ESTIMATOR
+from ..identify.runner import DEFAULT_ESTIMATOR
 
 
 def add_diagnose(subparsers):

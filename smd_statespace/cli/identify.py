@@ -50,10 +50,10 @@ def add_identify(subparsers):
     parser.add_argument("--resume", action="store_true",
                         help="continue a killed batch run in --out: finished records are kept, not recomputed")
     parser.add_argument("--estimator", choices=["record"] + sorted(ESTIMATORS), default=None,
-                        help="record (default for one record: one f_h, xi_h for the whole record, noise levels by "
-                             "maximum likelihood; writes DIR/person.json) or a per-cycle estimator: pf (the "
-                             f"article's particle filter), rbpf, ukf, ekf or grid (default for a batch: "
-                             f"{DEFAULT_ESTIMATOR})")
+                        help="record (default, for one record and for a batch: one f_h, xi_h per record, noise "
+                             "levels by maximum likelihood; writes DIR/person.json, or one row per record) or a "
+                             "per-cycle estimator, the article's method: pf (its particle filter), rbpf, ukf, ekf "
+                             "or grid")
     parser.add_argument("--variation", choices=("auto", "independent", "smooth", "both", "random_walk"),
                         default="auto",
                         help="record estimator: how the force coefficients vary: independent (they jump at every "
@@ -272,12 +272,10 @@ def run_identify(args) -> int:
     if args.units is not None and not args.accelerometer:
         raise OptionError("--units applies to an accelerometer record (--accelerometer)")
     floor = "adds a floor only with --effect"
-    if is_batch(args):
-        args.estimator = args.estimator or ("record" if args.accelerometer else DEFAULT_ESTIMATOR)
-        check_record_level_options(args, floor)
-        return run_batch_identify(args)
-    args.estimator = args.estimator or "record"
+    args.estimator = args.estimator or "record"  # one record or many: the person, the per-cycle method by name
     check_record_level_options(args, floor)
+    if is_batch(args):
+        return run_batch_identify(args)
     if args.mass is None and not args.accelerometer:
         raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
     if args.estimator == "record":

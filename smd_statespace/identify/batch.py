@@ -15,9 +15,12 @@ segmented, or whose identification fails numerically, gets one row with
 keep ``status`` "ok" but are flagged ``implausible`` with the reason (see
 :mod:`smd_statespace.identify.plausibility`); the summary counts them too.
 
-With ``estimator="record"`` every record gives one row, the person from the
-whole record (:func:`~smd_statespace.person.identify_person`; deterministic),
-with the flags ``implausible`` and ``model_adequate`` that ``stats`` reads.
+By default (``estimator="record"``, as for one record) every record gives one
+row, the person from the whole record
+(:func:`~smd_statespace.person.identify_person`; deterministic), with the
+flags ``implausible`` and ``model_adequate`` that ``stats`` reads. A
+per-cycle estimator (``"ekf"``, ``"pf"``, ...) gives the article's table
+instead, one row per cycle.
 
 Reproducible: every cycle's random stream is derived from the seed, the
 record's name (:func:`record_key`) and the cycle's index, never from the
@@ -27,8 +30,8 @@ on ``jobs`` or on where a run was interrupted.
 Layout of ``OUT``::
 
     run.json          version, options, seed and the records (a resumed run must match it)
-    parts/NAME.csv    one finished record each (all its cycles, a ``record`` column first)
-    results.csv       every record's cycles, in the run's record order (written at the end)
+    parts/NAME.csv    one finished record each (its person, or all its cycles; a ``record`` column first)
+    results.csv       every record's rows, in the run's record order (written at the end)
 """
 
 from __future__ import annotations
@@ -49,8 +52,6 @@ from ..errors import OptionError, RecordError, SMDInputError
 from ..io import check_mass
 from ..progress import tqdm
 from .plausibility import implausible_ok
-from .runner import DEFAULT_ESTIMATOR
-
 RECORD_ESTIMATOR = "record"
 """The estimator name of the record-level model (:func:`~smd_statespace.person.identify_person`):
 one row per record (the person) instead of one per cycle."""
@@ -352,7 +353,7 @@ def _one_search_thread():
     os.environ[THREADS_VARIABLE] = "1"
 
 
-def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_options=None, jobs: int = 1,
+def run_batch(records, out, model=None, estimator=RECORD_ESTIMATOR, runner_options=None, jobs: int = 1,
               resume: bool = False, progress: bool = True, check: bool = True, executor=None) -> BatchSummary:
     """Identify every record, writing each finished one at once; see the module docstring.
 
@@ -365,9 +366,10 @@ def run_batch(records, out, model=None, estimator=DEFAULT_ESTIMATOR, runner_opti
     model : SMDModel, optional
         Default ``SMDModel()``.
     estimator : str
-        Estimator name (default :data:`~smd_statespace.identify.runner.DEFAULT_ESTIMATOR`).
+        ``"record"`` (default: the person from each whole record, one row each, as ``identify`` gives for one
+        record) or a per-cycle estimator (``"ekf"``, ``"pf"``, ...: the article's method, one row per cycle).
     runner_options : dict, optional
-        :class:`~smd_statespace.identify.runner.CycleRunner` options (``max_passes``,
+        A per-cycle estimator's :class:`~smd_statespace.identify.runner.CycleRunner` options (``max_passes``,
         ``seed``, ``rate``, ``n_particles``, ...); with ``estimator="record"`` only ``rate`` (default
         :data:`~smd_statespace.signals.RECORD_RATE`), ``measured_floor`` (default True) and ``noise_floor``
         (default :data:`~smd_statespace.person.noise_floor.NOISE_FLOOR`) are used (see
