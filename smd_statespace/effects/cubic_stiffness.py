@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import check_range
-from ..model.core import F_H, TWO_PI, U, Slot
+from ..model import equations
+from ..model.core import F_H, U, XI_H, Slot
 from ..model.effect import Effect
 
 __all__ = ["CubicStiffness"]
@@ -47,9 +48,9 @@ class CubicStiffness(Effect):
                      description="cubic stiffness coefficient", linear=False),)
 
     def acceleration(self, model, x, t, inputs):
-        omega = TWO_PI * x[..., F_H]
         compression = x[..., U] - model.floor_motion(x, t, inputs)[0]  # the leg acts on u - z (Section 6)
-        return -(omega**2) * model.value(x, "beta_3") * compression**3
+        spring = equations.smd_acceleration(1.0, 0.0, x[..., F_H], x[..., XI_H], 0.0)  # -omega_h^2, Eq. 2's
+        return spring * model.value(x, "beta_3") * compression**3
 
     STIFFNESS_CHANGE = 2.0
     """Largest change of the leg's stiffness at the record's RMS displacement that ``diagnose`` searches:

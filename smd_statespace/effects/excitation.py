@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model import equations
+
 __all__ = ["Multisine", "ambient_floor_excitation", "ambient_line_count"]
 
 
@@ -48,8 +50,7 @@ def ambient_floor_excitation(rms, f_f, xi_f, duration, phases):
     if rms == 0.0:
         return None
     frequencies = 0.5 * f_f + np.arange(len(phases)) / duration
-    omega, omega_f = 2.0 * np.pi * frequencies, 2.0 * np.pi * f_f
-    gain = omega**2 / np.abs(omega_f**2 - omega**2 + 2j * xi_f * omega_f * omega)  # |z''| per unit e
+    gain = np.abs(equations.acceleration_frf(frequencies, f_f, xi_f))  # |z''| per unit e: an SDOF's, as Eq. 2's
     amplitude = rms / np.sqrt(0.5 * np.sum(gain**2))
     return Multisine(frequencies, np.full(frequencies.size, amplitude), phases)
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from .. import article
 from ..errors import OptionError, check_range
+from ..model import equations
 from ..model.core import F_H, TWO_PI, XI_H, Slot
 from ..model.effect import Effect, slot_count, spec_value
 from .excitation import ambient_floor_excitation, ambient_line_count
@@ -468,20 +469,17 @@ class FloorMode(Effect):
         return inputs.signal("floor_disp", t), inputs.signal("floor_vel", t)
 
     def acceleration(self, model, x, t, inputs):
-        omega = TWO_PI * x[..., F_H]
         z, z_dot = self.floor_motion(model, x, t, inputs)
-        return omega**2 * z + 2.0 * x[..., XI_H] * omega * z_dot  # Section 6: spring and damper on u - z
+        # Section 6: the spring and damper of Eq. 2 act on u - z; Eq. 2 gave their u, u' terms, these are the rest
+        return equations.smd_acceleration(-z, -z_dot, x[..., F_H], x[..., XI_H], 0.0)
 
     def acceleration_jacobian(self, model, x, t, inputs):
-        omega = TWO_PI * x[..., F_H]
-        xi = x[..., XI_H]
         z, z_dot = self.floor_motion(model, x, t, inputs)
+        eq2 = equations.acceleration_derivatives(-z, -z_dot, x[..., F_H], x[..., XI_H])
         jac = np.zeros(x.shape)
-        jac[..., F_H] = TWO_PI * (2.0 * omega * z + 2.0 * xi * z_dot)
-        jac[..., XI_H] = 2.0 * omega * z_dot
+        jac[..., F_H], jac[..., XI_H] = eq2["f_h"], eq2["xi_h"]
         if self.modal:
-            jac[..., model.index("z")] = omega**2
-            jac[..., model.index("z_dot")] = 2.0 * xi * omega
+            jac[..., model.index("z")], jac[..., model.index("z_dot")] = -eq2["u"], -eq2["u_dot"]
         return jac
 
     def slot_rates(self, model, x, t, inputs, acc):

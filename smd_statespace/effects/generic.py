@@ -39,7 +39,8 @@ import math
 import numpy as np
 
 from ..errors import OptionError
-from ..model.core import F_H, TWO_PI, U, U_DOT, XI_H, Slot
+from ..model import equations
+from ..model.core import F_H, U, U_DOT, XI_H, Slot
 from ..model.effect import Effect
 
 __all__ = ["TERMS", "SAME_AS", "GenericTerm", "label"]
@@ -132,10 +133,11 @@ class GenericTerm(Effect):
 
     def acceleration(self, model, x, t, inputs):
         c = model.value(x, self.coefficient)
-        omega = TWO_PI * x[..., F_H]
         displacement, velocity = model.floor_motion(x, t, inputs)
         r, rate = x[..., U] - displacement, x[..., U_DOT] - velocity
-        spring, damper = omega**2, 2.0 * x[..., XI_H] * omega
+        # the terms are sized by the person's own spring and damper per unit mass, w_h^2 and 2 xi_h w_h (Eq. 2's)
+        spring = -equations.smd_acceleration(1.0, 0.0, x[..., F_H], x[..., XI_H], 0.0)
+        damper = -equations.smd_acceleration(0.0, 1.0, x[..., F_H], x[..., XI_H], 0.0)
         kind, s = self.kind, self.scale
         if self.family == "time":
             since = np.asarray(t, dtype=float) - self.start

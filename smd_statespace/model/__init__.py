@@ -21,9 +21,11 @@ module                  what it holds
 """
 
 from .core import (DISCRETISATIONS, F_H, OBSERVATIONS, ONE_WORD_PER_DOUBLE, TWO_PI, U, U_DOT, XI_H, CycleInputs,
-                   Prior, SMDModel, Slot, acceleration_frf, blf, c_h, k_h, smd_acceleration)
+                   Prior, SMDModel, Slot, acceleration_derivatives, acceleration_frf, blf, c_h, k_h,
+                   smd_acceleration)
 from .effect import Effect
 
 __all__ = ["SMDModel", "Slot", "CycleInputs", "Prior", "Effect", "k_h", "c_h", "blf", "acceleration_frf", "smd_acceleration",
+           "acceleration_derivatives",
            "TWO_PI", "U", "U_DOT", "F_H",
            "XI_H", "DISCRETISATIONS", "OBSERVATIONS", "ONE_WORD_PER_DOUBLE"]

@@ -63,7 +63,9 @@ from ..errors import OptionError, check_range
 from ..io import G
 from .discretisation import step, step_jacobian
 from .effect import Effect, FloorMotion, HarmonicOrders
-from .equations import acceleration_frf, blf, c_h, k_h, smd_acceleration  # noqa: F401 (importable from here too)
+from . import equations
+from .equations import (acceleration_derivatives, acceleration_frf, blf, c_h, k_h,  # noqa: F401 (importable here too)
+                        smd_acceleration)
 from .inputs import TWO_PI, CycleInputs
 from .prior import ONE_WORD_PER_DOUBLE, Prior  # noqa: F401 (importable from here too)
 from .slots import F_H, U, U_DOT, XI_H, Slot, base_slots  # noqa: F401 (Slot importable from here too)
@@ -358,7 +360,7 @@ class SMDModel:
         """
         x = np.asarray(x, dtype=float)
         u, v = x[..., U], x[..., U_DOT]
-        acc = smd_acceleration(u, v, x[..., F_H], x[..., XI_H], self.force(x, t, inputs))  # Eq. 2, Eq. 10
+        acc = equations.smd_acceleration(u, v, x[..., F_H], x[..., XI_H], self.force(x, t, inputs))  # Eq. 2, 10
         for effect in self.effects:
             acc = acc + _checked_shape(effect.acceleration(self, x, t, inputs), acc.shape, effect, "acceleration")
         return acc
@@ -366,16 +368,13 @@ class SMDModel:
     def acceleration_jacobian(self, x, t, inputs: CycleInputs):
         """Derivative of :meth:`acceleration` with respect to the state, shape ``x.shape``."""
         x = np.asarray(x, dtype=float)
-        u, v = x[..., U], x[..., U_DOT]
-        omega = TWO_PI * x[..., F_H]
-        xi = x[..., XI_H]
+        eq2 = equations.acceleration_derivatives(x[..., U], x[..., U_DOT], x[..., F_H], x[..., XI_H])  # Eq. 2's own
         jac = np.zeros(x.shape)
-        jac[..., U] = -omega**2
-        jac[..., U_DOT] = -2.0 * xi * omega
-        jac[..., F_H] = TWO_PI * (-2.0 * omega * u - 2.0 * xi * v)
-        jac[..., XI_H] = -2.0 * omega * v
+        for column, name in ((U, "u"), (U_DOT, "u_dot"), (F_H, "f_h"), (XI_H, "xi_h")):
+            jac[..., column] = eq2[name]
         start = self._index["a0"]
-        jac[..., start:start + 1 + 2 * self.n_harmonics] = G * self.fourier_basis(t, inputs)
+        jac[..., start:start + 1 + 2 * self.n_harmonics] = (G * np.asarray(eq2["force_g"])[..., None]
+                                                            * self.fourier_basis(t, inputs))
         for effect in self.effects:
             jac = jac + _checked_shape(effect.acceleration_jacobian(self, x, t, inputs), jac.shape, effect,
                                        "acceleration_jacobian")

@@ -4,12 +4,20 @@
 function                         what it computes
 ================================ ==================================================
 :func:`smd_acceleration`         the COM acceleration of Eq. 2, the one place it is written
-:func:`acceleration_frf`         Eq. 2's frequency response from force to acceleration
+:func:`acceleration_derivatives` its derivatives, taken from it (unit inputs, a complex step)
+:func:`acceleration_frf`         Eq. 2's frequency response from force to acceleration, taken from it
 :func:`k_h`, :func:`c_h`         leg stiffness and damping (Eq. 17, 18)
 :func:`blf`                      biomechanical load factor (Eq. 5)
 ================================ ==================================================
 
 They are re-exported by :mod:`smd_statespace.model.core` and :mod:`smd_statespace.model`.
+
+Every other place that needs Eq. 2 calls :func:`smd_acceleration` through this module
+(``equations.smd_acceleration``), its derivatives and frequency response included, so that a change
+made here reaches every path: the per-cycle estimators' model and Jacobian, the record-level model,
+the simulators (on a rigid floor, on a floor, a lab's export), the floor effect and the plausibility
+rules (``tests/test_equation_once.py`` changes it here and checks each of them). Only the particle
+filter's compiled kernel keeps a twin, tested against it.
 """
 
 from __future__ import annotations
@@ -77,8 +85,45 @@ def smd_acceleration(u, u_dot, f_h, xi_h, force_g):
     return -omega**2 * u - 2.0 * np.asarray(xi_h) * omega * u_dot + force_g  # Eq. 2
 
 
+COMPLEX_STEP = 1e-20
+"""Imaginary step of :func:`acceleration_derivatives` (exact to rounding: no difference is taken)."""
+
+
+def acceleration_derivatives(u, u_dot, f_h, xi_h) -> dict:
+    """Derivatives of :func:`smd_acceleration` (Eq. 2), taken from it rather than written again.
+
+    Eq. 2 is linear in ``u``, ``u'`` and ``g F``: their coefficients are its values at unit inputs. Its
+    derivatives in ``f_h`` and ``xi_h`` are complex steps (``Im f(p + i h) / h``, Squire & Trapp 1998),
+    exact to rounding.
+
+    Parameters
+    ----------
+    u, u_dot : float or ndarray
+        COM displacement (m) and velocity (m/s).
+    f_h, xi_h : float or ndarray
+        SMD natural frequency (Hz) and damping ratio (-). Arrays broadcast.
+
+    Returns
+    -------
+    dict
+        ``u`` (1/s^2), ``u_dot`` (1/s), ``force_g`` (-), ``f_h`` (m/s^2 per Hz) and ``xi_h`` (m/s^2): the
+        partial derivatives of ``u''``.
+    """
+    f_h, xi_h = np.asarray(f_h, dtype=float), np.asarray(xi_h, dtype=float)
+    return {
+        "u": smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0),
+        "u_dot": smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0),
+        "force_g": smd_acceleration(0.0, 0.0, f_h, xi_h, 1.0),
+        "f_h": np.imag(smd_acceleration(u, u_dot, f_h + 1j * COMPLEX_STEP, xi_h, 0.0)) / COMPLEX_STEP,
+        "xi_h": np.imag(smd_acceleration(u, u_dot, f_h, xi_h + 1j * COMPLEX_STEP, 0.0)) / COMPLEX_STEP,
+    }
+
+
 def acceleration_frf(frequency, f_h, xi_h):
     """Frequency response of Eq. 2 from force (in g) to COM acceleration (in g).
+
+    From the coefficients of :func:`smd_acceleration` (``u'' = k u + c u' + e g F``): ``u = U e^{i w t}``
+    gives ``-w^2 U = k U + i w c U + e g C``.
 
     Parameters
     ----------
@@ -96,8 +141,10 @@ def acceleration_frf(frequency, f_h, xi_h):
         ``g C e^{i w t}`` of ``g F`` produces ``H g C e^{i w t}`` in ``u''``.
     """
     omega = 2.0 * np.pi * np.asarray(frequency, dtype=float)
-    omega_h = 2.0 * np.pi * f_h
-    return -(omega**2) / (omega_h**2 - omega**2 + 2j * xi_h * omega_h * omega)
+    k = smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0)  # -w_h^2
+    c = smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0)  # -2 xi_h w_h
+    e = smd_acceleration(0.0, 0.0, f_h, xi_h, 1.0)  # 1
+    return -(omega**2) * e / (-k - omega**2 - 1j * c * omega)
 
 
 def blf(a, b):

@@ -21,7 +21,7 @@ import pandas as pd
 from ..effects import build_effect, make_effect
 from ..errors import OptionError
 from ..io import G, check_mass
-from ..model import CycleInputs, SMDModel, smd_acceleration
+from ..model import CycleInputs, SMDModel, equations
 from .effect_adapter import for_simulation, force_harmonics
 
 __all__ = ["RTOL", "ATOL", "integrate_response"]
@@ -157,7 +157,7 @@ class _System:
 
     def rates(self, x, force_g, t):
         """``(dx/dt, u'')`` for states ``x`` (shape (n_state, ...)) under input ``g F`` at time(s) ``t``."""
-        acc = smd_acceleration(x[0], x[1], self.f_h, self.xi_h, force_g)  # Eq. 2
+        acc = equations.smd_acceleration(x[0], x[1], self.f_h, self.xi_h, force_g)  # Eq. 2
         if self.model is None:
             return np.stack(np.broadcast_arrays(x[1], acc)), acc
         x = np.asarray(x, dtype=float)
@@ -174,7 +174,7 @@ class _System:
     def rhs(self, t, x, force):
         """Time derivative of the state ``x`` (shape (n_state,)) at time ``t`` (s)."""
         u, v = x[0], x[1]
-        acc = smd_acceleration(u, v, self.f_h, self.xi_h, G * force.scalar(t))  # Eq. 2
+        acc = equations.smd_acceleration(u, v, self.f_h, self.xi_h, G * force.scalar(t))  # Eq. 2
         if self.model is None:  # the fast path of the base model
             return np.array([v, acc])
         full = self.template.copy()

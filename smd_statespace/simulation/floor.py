@@ -59,7 +59,7 @@ import pandas as pd
 from .. import article
 from ..errors import OptionError
 from ..io import G, check_mass, make_record
-from ..model import c_h, k_h, smd_acceleration
+from ..model import c_h, equations, k_h
 
 __all__ = ["FloorModel", "system_matrices", "coupled_frf", "batch_response", "coupled_response", "simulate_on_floor"]
 
@@ -224,7 +224,8 @@ def system_matrices(mass, f_h, xi_h, floor: FloorModel | None = None):
     phi = np.asarray(floor.shape)
     # person row: Eq. 2 on the motion relative to the floor, u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + g F,
     # z = sum phi_k q_k; its coefficients are Eq. 2's derivatives
-    stiffness_row, damping_row = smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0), smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0)
+    stiffness_row = equations.smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0)
+    damping_row = equations.smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0)
     person = np.zeros(n)
     person[0], person[1] = stiffness_row, damping_row
     person[2::2], person[3::2] = -stiffness_row * phi, -damping_row * phi

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import OptionError
 from ..io import G, check_mass, make_record
-from ..model import acceleration_frf, c_h, k_h, smd_acceleration
+from ..model import c_h, equations, k_h
 from .dynamics import ATOL, RTOL, _CycleForce, _number, _vector
 from .force_shape import DEFAULT_BLF, default_phases
 from .generators import _normals
@@ -196,7 +196,7 @@ def _integrate(schedule, pieces, time):
 
     def rhs(t, x, force):
         scale, tau, f_h, xi_h = schedule.at(t)
-        return [x[1], smd_acceleration(x[0], x[1], f_h, xi_h, G * scale * force.scalar(tau))]  # Eq. 2
+        return [x[1], equations.smd_acceleration(x[0], x[1], f_h, xi_h, G * scale * force.scalar(tau))]  # Eq. 2
 
     states = np.zeros((2, time.size))
     force_bio = np.zeros(time.size)
@@ -211,7 +211,7 @@ def _integrate(schedule, pieces, time):
         scale, tau = schedule.arrays(time[inside])[:2]
         force_bio[inside] = G * scale * force(tau)
     _, _, f_h, xi_h = schedule.arrays(time)
-    u_ddot = smd_acceleration(states[0], states[1], f_h, xi_h, force_bio)  # Eq. 2
+    u_ddot = equations.smd_acceleration(states[0], states[1], f_h, xi_h, force_bio)  # Eq. 2
     return states[0], states[1], u_ddot, force_bio, f_h, xi_h
 
 
@@ -550,7 +550,7 @@ def _peak_g(s):
     worst = 0.0
     for f_h in (s["f_h"], s["f_h"] * (1.0 + s["f_h_change"])):
         for xi_h in (s["xi_h"], s["xi_h"] * (1.0 + s["xi_h_change"])):
-            worst = max(worst, float(blf @ np.abs(acceleration_frf(orders * s["f_b"], f_h, xi_h))))
+            worst = max(worst, float(blf @ np.abs(equations.acceleration_frf(orders * s["f_b"], f_h, xi_h))))
     return worst * (1.0 + 2.0 * s["coef_variation"])
 
 
