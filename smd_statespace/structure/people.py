@@ -110,8 +110,8 @@ def _time(duration, fs):
     return np.arange(int(np.floor(float(duration) * float(fs) + 1e-9)) + 1) / float(fs)
 
 
-def _settings(f_b, phase_spread, seed):
-    return {"f_b": float(f_b), "phase_spread": float(phase_spread), "fb_variation": CROWD_SETTINGS["fb_variation"],
+def _settings(f_b, phase_spread, seed, fs, duration):
+    return {"f_b": float(f_b), "fs": float(fs), "duration": float(duration), "phase_spread": float(phase_spread), "fb_variation": CROWD_SETTINGS["fb_variation"],
             "coef_variation": CROWD_SETTINGS["coef_variation"], "seed": seed}
 
 
@@ -175,7 +175,7 @@ def draw_occupants(model: ModalModel, n, active_share=1.0, f_b=2.0, duration=30.
     if n - n_active:
         table.loc[~is_active, "mass"] = draw_people(n - n_active, f_b, seed=passive_seed)["mass"].to_numpy()
         table.loc[~is_active, "f_h"], table.loc[~is_active, "xi_h"] = PASSIVE["f_h"], PASSIVE["xi_h"]
-    return Occupants(table, time, grf, cycles, _settings(f_b, phase_spread, root.entropy))
+    return Occupants(table, time, grf, cycles, _settings(f_b, phase_spread, root.entropy, fs, duration))
 
 
 def _people_column(frame, name, path, low=0.0, strict=True):
@@ -261,4 +261,4 @@ def _complete(table, f_b, duration, fs, phase_spread, seed, entropy):
                             phase_spread)[0] for i, row in zip(rows.index, rows.itertuples())]
     grf = (rigid_floor_grf(rows["mass"], rows["f_h"], rows["xi_h"], cycles, time) if len(rows)
            else np.empty((0, time.size)))
-    return Occupants(table, time, grf, cycles, _settings(f_b, phase_spread, entropy))
+    return Occupants(table, time, grf, cycles, _settings(f_b, phase_spread, entropy, fs, duration))
