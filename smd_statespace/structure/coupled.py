@@ -215,7 +215,10 @@ def _newton(coupling, s, scale, tolerance, max_iterations, mode):
     """One root of ``det D(s) = 0`` near ``s``."""
     for _ in range(max_iterations):
         stiffness = coupling.dynamic_stiffness(np.array(s), scale)
-        step = 1.0 / np.trace(np.linalg.solve(stiffness, coupling.stiffness_derivative(s, scale)))
+        try:
+            step = 1.0 / np.trace(np.linalg.solve(stiffness, coupling.stiffness_derivative(s, scale)))
+        except np.linalg.LinAlgError:  # D(s) exactly singular: s is a root
+            return s
         s = s - step
         if abs(step) <= tolerance * abs(s):
             return s
