@@ -170,8 +170,8 @@ def analyse_structure(model: ModalModel, occupants: Occupants, points=None) -> S
     coupling = Coupling(model, table["point_index"].to_numpy(), table["mass"].to_numpy(), table["f_h"].to_numpy(),
                         table["xi_h"].to_numpy())
     rows = antinodes(model) if points is None else model.index(points, source="--points")
-    solution = solve(coupling, occupants.modal_loads(model), occupants.settings["fs"])
     occupied = occupied_eigenvalues(coupling)
+    solution = solve(coupling, occupants.modal_loads(model), occupants.settings["fs"], occupied)
     check = None
     if coupling.n_people <= DENSE_CHECK:
         dense = coupled_eigenvalues(coupling)

@@ -118,9 +118,10 @@ class ModalModel:
         return Path(modes_path), Path(shapes_path)
 
 
-def _read_csv(path, label):
+def _read_csv(path, label, **options):
+    """A CSV file as a DataFrame, or a one-line :class:`RecordError` saying why it cannot be read."""
     try:
-        return pd.read_csv(path)
+        return pd.read_csv(path, **options)
     except FileNotFoundError:
         raise RecordError(f"{label} {path}: no such file") from None
     except (OSError, ValueError, pd.errors.ParserError) as exc:

@@ -38,7 +38,7 @@ from ..errors import OptionError, RecordError
 from ..io import G
 from ..simulation.crowd import CROWD_SETTINGS, draw_people, simulate_crowd
 from ..simulation.person_forces import person_cycles, rigid_floor_grf
-from .modes import ModalModel
+from .modes import ModalModel, _read_csv
 
 __all__ = ["PASSIVE", "Occupants", "draw_occupants", "read_occupants", "PEOPLE_COLUMNS"]
 
@@ -215,12 +215,7 @@ def read_occupants(path, model: ModalModel, f_b=2.0, duration=30.0, fs=200.0, se
         Active people whose rigid-floor GRF dips below zero are kept (they
         are given, not drawn); :meth:`Occupants.contact_lost` counts them.
     """
-    try:
-        frame = pd.read_csv(path, dtype={"point": str})
-    except FileNotFoundError:
-        raise RecordError(f"--people {path}: no such file") from None
-    except (OSError, ValueError, pd.errors.ParserError) as exc:
-        raise RecordError(f"--people {path}: not a readable CSV ({' '.join(str(exc).split())})") from None
+    frame = _read_csv(path, "--people", dtype={"point": str})
     if "point" not in frame.columns:
         raise RecordError(f"{path}: missing column 'point' (columns: {', '.join(PEOPLE_COLUMNS)}; only point "
                           "is required)")

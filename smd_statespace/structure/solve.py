@@ -87,12 +87,12 @@ class Solution:
         return out
 
 
-def _slowest_decay(coupling: Coupling) -> float:
+def _slowest_decay(coupling: Coupling, occupied=None) -> float:
     """Smallest decay rate (1/s) among the empty modes, the occupied ones and the people's own."""
     model = coupling.model
     rates = [model.damping * model.omega]
     if coupling.n_people:
-        rates.append(-occupied_eigenvalues(coupling).real)
+        rates.append(-(occupied_eigenvalues(coupling) if occupied is None else np.asarray(occupied)).real)
         omega = 2 * np.pi * coupling.f_h
         xi = coupling.xi_h
         slow = np.where(xi < 1, xi * omega, omega * (xi - np.sqrt(np.maximum(xi**2 - 1, 0.0))))
@@ -100,7 +100,7 @@ def _slowest_decay(coupling: Coupling) -> float:
     return float(np.min(np.concatenate([np.atleast_1d(r) for r in rates])))
 
 
-def solve(coupling: Coupling, loads, fs) -> Solution:
+def solve(coupling: Coupling, loads, fs, occupied=None) -> Solution:
     """Coupled and force-only modal accelerations under the modal loads ``loads`` (structure at rest at ``t = 0``).
 
     Parameters
@@ -112,6 +112,8 @@ def solve(coupling: Coupling, loads, fs) -> Solution:
         :meth:`~smd_statespace.structure.people.Occupants.modal_loads`.
     fs : float
         Sampling frequency (Hz); every mode must be below ``fs / 2``.
+    occupied : complex array_like, optional
+        The occupied eigenvalues if known (:func:`~.coupled.occupied_eigenvalues`), for the padding.
 
     Returns
     -------
@@ -123,7 +125,7 @@ def solve(coupling: Coupling, loads, fs) -> Solution:
         raise OptionError(f"solve: loads need {model.n_modes} rows (one per mode), got {loads.shape[0]}")
     model.check_rate(fs)
     samples = loads.shape[1]
-    decay = _slowest_decay(coupling)
+    decay = _slowest_decay(coupling, occupied)
     padded = sp_fft.next_fast_len(samples + int(np.ceil(np.log(1 / DECAY) / decay * fs)), real=True)
     if padded > MAX_SAMPLES:
         raise OptionError(f"structure: the slowest mode decays at {decay:.3g} 1/s, too slowly for the frequency-domain "
