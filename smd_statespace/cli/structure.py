@@ -79,8 +79,9 @@ def run_structure(args) -> int:
 
     model = _model(args)
     model.check_rate(args.rate, source=args.modes or f"--example {args.example}")
-    if args.active > 1:
-        raise OptionError(f"--active must be a share from 0 to 1, got {args.active:g}")
+    for option, value in (("--active", args.active), ("--phase-spread", args.phase_spread)):
+        if value > 1:
+            raise OptionError(f"{option} must be a fraction from 0 to 1, got {value:g}")
     points = None if args.points is None else [p.strip() for p in args.points.split(",") if p.strip()]
     if points is not None:
         model.index(points, source="--points")
@@ -89,7 +90,7 @@ def run_structure(args) -> int:
         raise OptionError("--draws K > 1 needs --people N (random crowds), not a people table")
     directory = out_dir(args.out)
     seed = np.random.SeedSequence(args.seed)
-    options = {"f_b": args.fb, "duration": args.duration, "fs": args.rate, "phase_spread": min(args.phase_spread, 1.0)}
+    options = {"f_b": args.fb, "duration": args.duration, "fs": args.rate, "phase_spread": args.phase_spread}
     occupants = (draw_occupants(model, args.people, args.active, seed=seed, **options) if drawn
                  else read_occupants(args.people, model, seed=seed, **options))
     result = analyse_structure(model, occupants, points)

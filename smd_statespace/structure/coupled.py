@@ -145,7 +145,9 @@ class Coupling:
         """``dD/ds`` (N s/m) at scalar ``s``, shape (m, m)."""
         model = self.model
         numerator, denominator = self.k + self.c * s, s * s + self.c * s + self.k
-        term = (2 * s * numerator + s * s * self.c) / denominator - s * s * numerator * (2 * s + self.c) / denominator**2
+        # d/ds of s^2 T(s) = s^2 numerator / denominator
+        term = ((2 * s * numerator + s * s * self.c) / denominator
+                - s * s * numerator * (2 * s + self.c) / denominator**2)
         out = scale * (term @ self._outer).reshape(model.n_modes, model.n_modes)
         out[np.diag_indices(model.n_modes)] += model.modal_mass * (2 * s + 2 * model.damping * model.omega)
         return out

@@ -111,8 +111,10 @@ def _time(duration, fs):
 
 
 def _settings(f_b, phase_spread, seed, fs, duration):
-    return {"f_b": float(f_b), "fs": float(fs), "duration": float(duration), "phase_spread": float(phase_spread), "fb_variation": CROWD_SETTINGS["fb_variation"],
-            "coef_variation": CROWD_SETTINGS["coef_variation"], "seed": seed}
+    """The settings an :class:`Occupants` records."""
+    return {"f_b": float(f_b), "fs": float(fs), "duration": float(duration), "phase_spread": float(phase_spread),
+            "fb_variation": CROWD_SETTINGS["fb_variation"], "coef_variation": CROWD_SETTINGS["coef_variation"],
+            "seed": seed}
 
 
 def _split(seed):
