@@ -94,7 +94,8 @@ class StructureResult:
             item = {"point": row.point}
             for model in ("force_only", "coupled"):
                 item[model] = {name: float(getattr(row, f"{model}_{name}")) for name in MEASURES}
-            item["coupled_over_force_only"] = {name: float(getattr(row, f"ratio_{name}")) for name in MEASURES}
+            ratios = {name: float(getattr(row, f"ratio_{name}")) for name in MEASURES}
+            item["coupled_over_force_only"] = {name: (v if np.isfinite(v) else None) for name, v in ratios.items()}
             rows.append(item)
         settings = self.occupants.settings
         return {
