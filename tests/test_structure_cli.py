@@ -113,3 +113,25 @@ def test_monte_carlo_on_a_dask_cluster_gives_the_serial_table():
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         clustered = monte_carlo(spec, 2, seed=3, executor=client.get_executor())
     pd.testing.assert_frame_equal(serial, clustered)
+
+
+def test_identified_people_come_from_their_person_json(tmp_path):
+    """A row naming a person.json (identify's answer: f_h, xi_h, f_b, blf_i, k_h) takes its values; cells given in
+    people.csv win; a missing file is one line naming the row and column."""
+    from smd_statespace.model import k_h
+    from smd_statespace.structure.people import read_occupants
+
+    person = {"f_h": 2.7, "xi_h": 0.33, "f_b": 2.1, "blf_1": 0.42, "blf_2": 0.11, "blf_3": 0.03,
+              "k_h": float(k_h(2.7, 72.0)), "warnings": []}
+    (tmp_path / "anna").mkdir()
+    (tmp_path / "anna" / "person.json").write_text(json.dumps(person), encoding="utf-8")
+    people = write(tmp_path / "people.csv", "point,mass_kg,xi_h,person_json\nx15,,,anna/person.json\n"
+                                            "x10,80,0.5,anna/person.json\n")
+    table = read_occupants(people, beam(), duration=3.0, seed=1).table
+    first, second = table.iloc[0], table.iloc[1]
+    assert (first["f_h"], first["xi_h"], first["f_b"], first["blf1"]) == (2.7, 0.33, 2.1, 0.42)
+    assert first["mass"] == pytest.approx(72.0, rel=1e-12)
+    assert (second["mass"], second["xi_h"], second["f_h"]) == (80.0, 0.5, 2.7)
+    missing = write(tmp_path / "bad.csv", "point,person_json\nx15,nobody/person.json\n")
+    with pytest.raises(RecordError, match="row 1, column person_json"):
+        read_occupants(missing, beam(), duration=3.0, seed=1)

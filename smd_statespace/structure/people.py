@@ -18,8 +18,11 @@ Where the parameters come from
   (:func:`~smd_statespace.simulation.crowd.draw_people`) and the passive SMD
   :data:`PASSIVE`;
 - a ``people.csv`` (:func:`read_occupants`): ``point`` and any of ``mass_kg, f_h,
-  xi_h, active`` (0/1, default 1), ``f_b``, ``blf_1, blf_2, blf_3``; an empty
-  cell is drawn as above.
+  xi_h, active`` (0/1, default 1), ``f_b``, ``blf_1, blf_2, blf_3`` and
+  ``person_json``, the ``person.json`` that ``smd-statespace identify`` wrote for
+  that person (a path relative to the people file): its ``f_h``, ``xi_h``,
+  ``f_b``, ``blf_1..3`` and, when the mass was known, the mass behind its
+  ``k_h`` (Eq. 17) fill the row's empty cells; a cell still empty is drawn as above.
 
 The active people's forces on a rigid floor (their GRFs, Eq. 3) are computed
 exactly by :mod:`smd_statespace.simulation.person_forces`; on the structure they
@@ -29,13 +32,16 @@ response to the structure's motion (:mod:`.coupled`).
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ..errors import OptionError, RecordError
 from ..io import G
+from ..model import k_h
 from ..simulation.crowd import CROWD_SETTINGS, draw_people, simulate_crowd
 from ..simulation.person_forces import person_cycles, rigid_floor_grf
 from .modes import ModalModel, _read_csv
@@ -54,8 +60,12 @@ people are the article's own, Table 2). The values are as an open-source
 implementation of Route 2 uses them (``getCrowdStructureResponse.m``), not
 checked here against the guide's text."""
 
-PEOPLE_COLUMNS = ("point", "mass_kg", "f_h", "xi_h", "active", "f_b", "blf_1", "blf_2", "blf_3")
-"""Columns of ``people.csv``: ``point`` is required, the others may be missing or empty (drawn)."""
+PEOPLE_COLUMNS = ("point", "mass_kg", "f_h", "xi_h", "active", "f_b", "blf_1", "blf_2", "blf_3", "person_json")
+"""Columns of ``people.csv``: ``point`` is required, the others may be missing or empty (taken from the row's
+``person_json`` if it names one, otherwise drawn)."""
+
+FROM_PERSON_JSON = {"f_h": "f_h", "xi_h": "xi_h", "f_b": "f_b", "blf1": "blf_1", "blf2": "blf_2", "blf3": "blf_3"}
+"""People-table columns filled from an identified person's ``person.json`` (``identify``'s answer), by its keys."""
 
 
 @dataclass
@@ -233,8 +243,34 @@ def read_occupants(path, model: ModalModel, f_b=2.0, duration=30.0, fs=200.0, se
                           "f_b": _people_column(frame, "f_b", path)})
     for k in (1, 2, 3):
         table[f"blf{k}"] = _people_column(frame, f"blf_{k}", path, strict=False)
+    _fill_from_person_json(frame, table, path)
     root, (_, active_seed, _) = _split(seed)
     return _complete(table, f_b, duration, fs, phase_spread, active_seed, root.entropy)
+
+
+def _fill_from_person_json(frame, table, path):
+    """Empty cells of ``table`` filled from the ``person.json`` each row of ``frame`` names (column ``person_json``)."""
+    if "person_json" not in frame.columns:
+        return
+    for row, name in enumerate(frame["person_json"]):
+        if pd.isna(name) or not str(name).strip():
+            continue
+        file = Path(path).parent / str(name).strip()
+        try:
+            person = json.loads(file.read_text(encoding="utf-8"))
+            values = {column: float(person[key]) for column, key in FROM_PERSON_JSON.items() if key in person}
+            if "k_h" in person and "f_h" in person:
+                values["mass"] = float(person["k_h"]) / float(k_h(float(person["f_h"]), 1.0))  # Eq. 17
+        except (OSError, ValueError, TypeError, AttributeError) as exc:
+            raise RecordError(f"{path} row {row + 1}, column person_json: {file} is not a readable person.json "
+                              f"({' '.join(str(exc).split())})") from None
+        bad = [column for column, value in values.items() if not (np.isfinite(value) and value >= 0)]
+        if bad or values.get("f_h", 1.0) <= 0 or values.get("xi_h", 1.0) <= 0:
+            raise RecordError(f"{path} row {row + 1}, column person_json: {file} has an invalid "
+                              f"{(bad or ['f_h or xi_h'])[0]}; f_h and xi_h must be > 0, the others >= 0")
+        for column, value in values.items():
+            if np.isnan(table.at[row, column]):
+                table.at[row, column] = value
 
 
 def _complete(table, f_b, duration, fs, phase_spread, seed, entropy):
