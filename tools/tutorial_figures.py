@@ -29,6 +29,9 @@ FIGURES = {
     "tutorial-identify.md": {"parameters.png": "tutorial_parameters.png"},
     "tutorial-compare.md": {"compare.png": "tutorial_compare.png"},
     "tutorial-floor.md": {"floor.png": "tutorial_floor.png"},
+    "tutorial-structure.md": {"beam_crowd/structure_frf.png": "structure_frf.png",
+                              "beam_crowd/structure_rms.png": "structure_rms.png",
+                              "sdof_draws/structure_draws.png": "structure_draws.png"},
     "tutorial-missing-physics.md": {"spectrum_before_after.png": "tutorial_missing_spectrum.png",
                                     "held_out.png": "tutorial_missing_held_out.png"},
 }

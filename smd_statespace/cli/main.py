@@ -9,19 +9,21 @@ Errors: every :class:`~smd_statespace.errors.SMDInputError` and every usage
 error becomes one line on stderr, ``smd-statespace: error: <message>``, and
 exit status 2; success is 0.
 
-============ ================================================================
-command      what it does
-============ ================================================================
-``simulate`` write a synthetic GRF record (Eq. 2-4) and the truth behind it
-``demo``     the pipeline on the shipped sample: record, cycles, COM signals
-             (Eq. 3), the augmented-state model (Eq. 7-16) and a figure
-``stats``    population statistics of many identified cycles: bands, Eq. 19
-             skew-normal fits in the layout of Table 2, trends (Section 5)
-``crowd``    crowd load: N people drawn from Table 2, each one's GRF (SMD
-             model, rigid floor) and the total force, spectrum, figure
-``hsi``      human-structure interaction (Section 6): one person on the
-             Table 3 plate vs a rigid floor, identified, against Table 4
-============ ================================================================
+============= ================================================================
+command       what it does
+============= ================================================================
+``simulate``  write a synthetic GRF record (Eq. 2-4) and the truth behind it
+``demo``      the pipeline on the shipped sample: record, cycles, COM signals
+              (Eq. 3), the augmented-state model (Eq. 7-16) and a figure
+``stats``     population statistics of many identified cycles: bands, Eq. 19
+              skew-normal fits in the layout of Table 2, trends (Section 5)
+``crowd``     crowd load: N people drawn from Table 2, each one's GRF (SMD
+              model, rigid floor) and the total force, spectrum, figure
+``hsi``       human-structure interaction (Section 6): one person on the
+              Table 3 plate vs a rigid floor, identified, against Table 4
+``structure`` a crowd of SMD people on a structure's modes (modes.csv,
+              shapes.csv): occupied modes, responses coupled vs force-only
+============= ================================================================
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import os
 import sys
 
 from .. import __version__
-from . import compare, crowd, demo, diagnose, hsi, identify, simulate, stats
+from . import compare, crowd, demo, diagnose, hsi, identify, simulate, stats, structure
 from .common import PROG
 from ..effects import load_effects_file, load_installed_effects
 from ..errors import SMDInputError
@@ -80,6 +82,7 @@ COMMANDS = [
     (stats.add_stats, stats.run_stats),
     (crowd.add_crowd, crowd.run_crowd),
     (hsi.add_hsi, hsi.run_hsi),
+    (structure.add_structure, structure.run_structure),
 ]
 """``(add, run)`` pairs, one per subcommand, in the order ``--help`` lists them."""
 
