@@ -16,6 +16,8 @@ from smd_statespace.model.inputs import CycleInputs
 from smd_statespace.person.dynamics import PersonDynamics
 from smd_statespace.simulation import simulate_bouncing, simulate_lab_record
 from smd_statespace.simulation.floor import FloorModel, coupled_frf, system_matrices
+from smd_statespace.structure.coupled import Coupling, state_matrix
+from smd_statespace.structure.modes import sdof
 
 F_H, XI_H, FASTER = 2.5, 0.3, 1.1
 
@@ -44,6 +46,7 @@ def _paths(f_h):
         "record-level, a nonlinear effect along a path": cubic.linearise(f_h, XI_H, {"beta_3": 800.0}, nominal).A,
         "frequency response": equations.acceleration_frf(np.linspace(0.5, 8, 40), f_h, XI_H),
         "person on a floor: matrices": np.concatenate([m.ravel() for m in system_matrices(70, f_h, XI_H, floor)]),
+        "a crowd on a structure's modes": state_matrix(Coupling(sdof(), [0, 0], [70.0, 80.0], [f_h, 2 * f_h], [XI_H, 0.4])),
         "simulator": plain.record.force,
         "lab export simulator": lab.record.force,
     }

@@ -53,7 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import OptionError
-from ..model import smd_acceleration
+from ..model import equations
 from .modes import ModalModel
 
 __all__ = ["person_coefficients", "transmissibility", "Coupling", "state_matrix", "coupled_eigenvalues",
@@ -71,8 +71,8 @@ def person_coefficients(f_h, xi_h):
     f_h, xi_h : float or ndarray
         SMD natural frequency (Hz) and damping ratio (-).
     """
-    return (-smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0),  # Eq. 2 on a unit displacement
-            -smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0))  # Eq. 2 on a unit velocity
+    return (-equations.smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0),  # Eq. 2 on a unit displacement
+            -equations.smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0))  # Eq. 2 on a unit velocity
 
 
 def transmissibility(s, k, c):
