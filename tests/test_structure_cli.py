@@ -32,7 +32,7 @@ def test_the_command_writes_the_summary_the_response_and_the_figures(files, tmp_
     assert summary["people"] == {"total": 3, "active": 2, "mass_kg": pytest.approx(summary["people"]["mass_kg"]),
                                  "contact_lost": 0}
     point = summary["points"][0]
-    assert point["point"] == "x15" and set(point["coupled"]) == {"peak", "rms_1s_max", "vdv"}
+    assert point["point"] == "x15" and set(point["coupled"]) == {"peak", "rms_1s_max", "vdv", "rms_1s_max_wb", "vdv_wb"}
     assert point["coupled"]["peak"] > 0 and point["force_only"]["peak"] > 0
     response = pd.read_csv(out / "response.csv")
     assert list(response.columns[:3]) == ["time", "x15_coupled", "x15_force_only"] and len(response) == 1201

@@ -25,7 +25,8 @@ def add_structure(subparsers):
             "with the force of Eq. 4 (Table 2's people), passive people stand (5.0 Hz, 0.40). Solve the coupled "
             "model and the force-only one (the active people's rigid-floor GRFs on the empty structure) and write "
             "DIR/summary.json (empty and occupied modes; per response point peak, maximum 1 s running RMS and VDV "
-            "of the unweighted acceleration, both models), DIR/response.csv, DIR/people.csv and figures; with "
+            "of the acceleration, the last two also W_b-weighted (BS 6841), both models), DIR/response.csv, "
+            "DIR/people.csv and figures; with "
             "--draws K > 1 also K random crowds (DIR/draws.csv, their 95th percentiles and a histogram)."
         ),
     )

@@ -13,6 +13,7 @@ module              what it holds
 :mod:`.response`    peak, maximum 1 s running RMS, VDV; accelerance
 :mod:`.analysis`    :func:`analyse_structure` -> :class:`StructureResult`
 :mod:`.montecarlo`  many random crowds on any executor
+:mod:`.weighting`   ``W_b`` (BS 6841) and ``W_k`` (ISO 2631-1) frequency weightings
 =================== ==============================================================
 """
 
@@ -22,7 +23,9 @@ from .modes import EXAMPLES, ModalModel, beam, plate, read_modal_model, sdof
 from .montecarlo import CrowdDraws, monte_carlo, percentiles
 from .people import PASSIVE, Occupants, draw_occupants, read_occupants
 from .response import measures, running_rms
+from .weighting import WEIGHTINGS, weighted, weighting_gain
 
 __all__ = ["StructureResult", "analyse_structure", "Coupling", "coupled_eigenvalues", "occupied_eigenvalues",
            "EXAMPLES", "ModalModel", "beam", "plate", "read_modal_model", "sdof", "CrowdDraws", "monte_carlo",
-           "percentiles", "PASSIVE", "Occupants", "draw_occupants", "read_occupants", "measures", "running_rms"]
+           "percentiles", "PASSIVE", "Occupants", "draw_occupants", "read_occupants", "measures", "running_rms",
+           "WEIGHTINGS", "weighted", "weighting_gain"]

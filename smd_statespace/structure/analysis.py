@@ -107,7 +107,8 @@ class StructureResult:
                        "mass_kg": float(people["mass"].sum()), "contact_lost": self.occupants.contact_lost()},
             "settings": {key: (value if isinstance(value, (str, float, int)) or value is None else str(value))
                          for key, value in settings.items()},
-            "frequency_weighting": "none (unweighted vertical acceleration)",
+            "frequency_weighting": "peak, rms_1s_max, vdv: none (the vertical acceleration as computed); "
+                                   "rms_1s_max_wb, vdv_wb: W_b of BS 6841:1987 (structure.weighting)",
             "limits": "none built in (see docs/tutorial-structure.md)",
             "worst_point": rows[self.worst()]["point"] if rows else None,
             "points": rows,

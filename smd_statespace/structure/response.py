@@ -1,19 +1,18 @@
 """What engineers check: peak acceleration, maximum 1 s running RMS, VDV, and the frequency response.
 
-All three measures are of the *unweighted* vertical acceleration: no frequency
-weighting (``W_b`` of BS 6841:1987 or ``W_k`` of ISO 2631-1:1997) is applied,
-so they are upper bounds of the weighted values for the 1-10 Hz content of a
-bouncing crowd only where the weighting is below 1 (check against the guidance
-you design to). No acceptance limits are built in: this library has not
-checked the numerical thresholds of the IStructE/DCLG/DCMS (2008) grandstand
-guide against its text, so none are quoted.
+Of the vertical acceleration as computed (unweighted) and weighted by ``W_b`` (BS 6841:1987,
+:mod:`~smd_statespace.structure.weighting`), the weighting BS 6472-1:2008 applies to vertical vibration in
+buildings. No acceptance limits are built in: this library has not checked the numerical thresholds of the
+IStructE/DCLG/DCMS (2008) grandstand guide against its text, so none are quoted.
 
 - ``peak``: ``max |a(t)|`` (m/s^2);
 - ``rms_1s_max``: the largest RMS over a 1 s window sliding one sample at a
   time (m/s^2; windows lie wholly inside the record);
 - ``vdv``: the vibration dose value of BS 6841 / ISO 2631-1,
   ``(integral a^4 dt)^(1/4)`` (m/s^1.75), by the rectangle rule (exact for a
-  sampled sinusoid over whole cycles: ``(3 T / 8)^(1/4) A``).
+  sampled sinusoid over whole cycles: ``(3 T / 8)^(1/4) A``);
+- ``rms_1s_max_wb``, ``vdv_wb``: the same of the ``W_b``-weighted acceleration (for a bouncing crowd's
+  1.5-3.5 Hz, ``W_b`` is 0.4-0.85; 1.02 at 5-8 Hz).
 """
 
 from __future__ import annotations
@@ -21,10 +20,11 @@ from __future__ import annotations
 import numpy as np
 
 from .coupled import Coupling
+from .weighting import weighted
 
 __all__ = ["running_rms", "measures", "accelerance"]
 
-MEASURES = ("peak", "rms_1s_max", "vdv")
+MEASURES = ("peak", "rms_1s_max", "vdv", "rms_1s_max_wb", "vdv_wb")
 """The names :func:`measures` returns."""
 
 
@@ -54,7 +54,7 @@ def running_rms(acceleration, fs, window=1.0):
 
 
 def measures(acceleration, fs) -> dict:
-    """``{"peak", "rms_1s_max", "vdv"}`` of accelerations (m/s^2) at ``fs`` Hz, each of shape ``(...)``.
+    """:data:`MEASURES` of accelerations (m/s^2) at ``fs`` Hz, each of shape ``(...)``.
 
     Parameters
     ----------
@@ -63,10 +63,12 @@ def measures(acceleration, fs) -> dict:
         Sampling frequency (Hz).
     """
     a = np.asarray(acceleration, dtype=float)
-    rms = running_rms(a, fs)
-    return {"peak": np.max(np.abs(a), axis=-1),
-            "rms_1s_max": rms.max(axis=-1) if rms.shape[-1] else np.sqrt(np.mean(a * a, axis=-1)),
-            "vdv": (np.sum(a**4, axis=-1) / float(fs)) ** 0.25}
+    out = {"peak": np.max(np.abs(a), axis=-1)}
+    for suffix, values in (("", a), ("_wb", weighted(a, fs, "Wb"))):
+        rms = running_rms(values, fs)
+        out[f"rms_1s_max{suffix}"] = rms.max(axis=-1) if rms.shape[-1] else np.sqrt(np.mean(values**2, axis=-1))
+        out[f"vdv{suffix}"] = (np.sum(values**4, axis=-1) / float(fs)) ** 0.25
+    return out
 
 
 def accelerance(coupling: Coupling, point, frequency, occupied=True):
