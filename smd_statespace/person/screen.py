@@ -15,7 +15,8 @@ search bound) with the template, the initial state and the noise scale profiled 
 with ``g`` the gradient at ``c = 0`` and ``I`` the profile information (:func:`score`'s
 ``profile_information``); asymptotically chi-square(1) under "no such effect". The *robust* version replaces
 the denominator by the cycle-clustered sum of squares of the efficient scores ``s_j - I_jt I_tt^-1 s_t``
-summed per bouncing cycle (White 1982; Wooldridge 1990), which stays calibrated when the innovations are
+summed per bouncing cycle (White 1982; Wooldridge 1990), centred on their mean (a t-test across cycles), which
+stays calibrated when the innovations are
 correlated within a cycle or heavy-tailed; it is the one :func:`screen` ranks by. Over a library the p-values
 are adjusted by Holm's step-down method, so the chance of any false alarm on a record without a missing effect
 stays at ``alpha`` however long the library.
@@ -107,7 +108,8 @@ def score_test(result, effect) -> dict:
     dict
         ``gradient`` (d loglike / d c at 0), ``lm`` and ``p`` (chi-square(1), from the profile information),
         ``lm_robust`` and ``p_robust`` (cycle-clustered), ``loglike`` (the model with ``c = 0``: the fitted
-        person's, a check), ``parameter`` (the coefficient's name).
+        person's, a check), ``parameter`` (the coefficient's name), ``cycle_scores`` (the efficient score summed
+        per bouncing cycle, shape (J,): ``lm_robust`` is the squared one-sample t statistic of their mean).
     """
     model, params, j = _at_null(result, effect)
     out = score(model, params)
@@ -117,10 +119,16 @@ def score_test(result, effect) -> dict:
     gradient = float(out["gradient"][j])
     per_cycle = cycle_sums(model, scores)
     lm = gradient**2 / efficient_info if efficient_info > 0 else float("nan")
-    spread = float(per_cycle @ per_cycle)
+    # centred: under "no such effect" the cycles' scores have mean 0 and this is the usual clustered variance; where
+    # the effect is there their mean is not 0, and the uncentred sum of squares would count it as noise (the
+    # statistic is then at most the number of cycles: a true step of f_h 1 cycle from a tested one scored 13,
+    # the tested steps 1.5 s either side 38)
+    cycles = per_cycle.size
+    spread = float(np.sum((per_cycle - per_cycle.mean()) ** 2)) * cycles / max(cycles - 1, 1)
     lm_robust = float(scores.sum()) ** 2 / spread if spread > 0 else float("nan")
     return {"parameter": model.param_names[j], "gradient": gradient, "lm": float(lm), "p": float(stats.chi2.sf(lm, 1)),
-            "lm_robust": lm_robust, "p_robust": float(stats.chi2.sf(lm_robust, 1)), "loglike": float(out["loglike"])}
+            "lm_robust": lm_robust, "p_robust": float(stats.chi2.sf(lm_robust, 1)), "loglike": float(out["loglike"]),
+            "cycle_scores": per_cycle}
 
 
 def _at_null(result, effect) -> tuple:
@@ -204,8 +212,9 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
         (:mod:`~smd_statespace.person.threads`), with the same table.
     """
     effects = generic_library(result) if effects is None else list(effects)
-    rows = [{"effect": effect.spec, "label": label(effect), "physics": getattr(effect, "physics", effect.name), **row}
-            for effect, row in zip(effects, thread_map(lambda effect: score_test(result, effect), effects, threads))]
+    tests = thread_map(lambda effect: score_test(result, effect), effects, threads)
+    rows = [{"effect": effect.spec, "label": label(effect), "physics": getattr(effect, "physics", effect.name),
+             **{key: value for key, value in row.items() if key != "cycle_scores"}} for effect, row in zip(effects, tests)]
     table = pd.DataFrame(rows).set_index("effect")
     table["p_holm"] = holm(table["p_robust"].to_numpy())
     table = table.sort_values("p_robust")
