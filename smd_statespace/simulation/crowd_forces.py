@@ -83,8 +83,9 @@ def _simulate_forces(indices, parameters, cycles, time, out, effects=()):
         systems = [system_matrices(parameters["mass"][i], parameters["f_h"][i], parameters["xi_h"][i]) for i in chunk]
         a_matrices = np.stack([a for a, _ in systems])
         b_vectors = np.stack([b for _, b in systems])
-        _, rates, _ = batch_response(a_matrices, b_vectors, [cycles[i] for i in chunk], time)
-        out[chunk] = mass[:, None] * (G + rates[:, :, 1])  # Eq. 3
+        u_ddot = batch_response(a_matrices, b_vectors, [cycles[i] for i in chunk], time,
+                                output=(a_matrices[:, 1], b_vectors[:, 1]))  # Eq. 2's row: u''
+        out[chunk] = mass[:, None] * (G + u_ddot)  # Eq. 3
 
 
 def _with_extra_harmonics(cycles, extra, parameters, i):

