@@ -105,10 +105,6 @@ def _simulation_effects(effects, mass, where="simulate_bouncing"):
 # the dynamical system
 
 
-def _slot_width(where: slice) -> int:
-    return where.stop - where.start
-
-
 class _System:
     """Right-hand side of Eq. 2 plus the effects' own terms, for forward simulation.
 
@@ -137,7 +133,6 @@ class _System:
             self.template[self.model.index("f_h")] = f_h
             self.template[self.model.index("xi_h")] = xi_h
             self.inputs = CycleInputs(f_b=1.0)
-            self._widths = [(effect, _slot_width(self.model.effect_slice(effect))) for effect in self.effects]
         self.n_state = len(self.names)
         self.a_matrix, self.b_vector = self._linear_matrices()
         self.linear = self._is_linear()
@@ -152,7 +147,6 @@ class _System:
         twin = copy.copy(self)
         twin.effects = tuple(effects)
         twin.model = SMDModel(n_harmonics=1, effects=twin.effects)
-        twin._widths = [(effect, _slot_width(twin.model.effect_slice(effect))) for effect in twin.effects]
         return twin
 
     def rates(self, x, force_g, t):
@@ -161,34 +155,22 @@ class _System:
         if self.model is None:
             return np.stack(np.broadcast_arrays(x[1], acc)), acc
         x = np.asarray(x, dtype=float)
-        full = np.broadcast_to(self.template, x.shape[1:] + self.template.shape).copy()
-        full[..., self.dynamic] = np.moveaxis(x, 0, -1)
+        full = np.empty(x.shape[1:] + self.template.shape)
+        full[...] = self.template
+        full[..., self.dynamic] = x.T if x.ndim <= 2 else np.moveaxis(x, 0, -1)  # (the ODE solver: one state)
         for effect in self.effects:
             acc = acc + effect.acceleration(self.model, full, t, self.inputs)
-        parts = [np.broadcast_to(x[1], np.shape(acc)), acc]
+        parts = [x[1] if np.shape(x[1]) == np.shape(acc) else np.broadcast_to(x[1], np.shape(acc)), acc]
         for effect in self.effects:
-            own = effect.slot_rates(self.model, full, t, self.inputs, acc)
-            parts.extend(np.moveaxis(own, -1, 0))
+            own = np.asarray(effect.slot_rates(self.model, full, t, self.inputs, acc))
+            parts.extend(own.T if own.ndim <= 2 else np.moveaxis(own, -1, 0))
         return np.stack(parts), acc
 
     def rhs(self, t, x, force):
-        """Time derivative of the state ``x`` (shape (n_state,)) at time ``t`` (s)."""
-        u, v = x[0], x[1]
-        acc = equations.smd_acceleration(u, v, self.f_h, self.xi_h, G * force.scalar(t))  # Eq. 2
-        if self.model is None:  # the fast path of the base model
-            return np.array([v, acc])
-        full = self.template.copy()
-        full[self.dynamic] = x
-        for effect in self.effects:
-            acc = acc + effect.acceleration(self.model, full, t, self.inputs)
-        out = np.empty(self.n_state)
-        out[0], out[1] = v, acc
-        start = 2
-        for effect, width in self._widths:
-            if width:
-                out[start:start + width] = effect.slot_rates(self.model, full, t, self.inputs, acc)
-                start += width
-        return out
+        """Time derivative of the state ``x`` (shape (n_state,)) at time ``t`` (s): :meth:`rates` at one state."""
+        if self.model is None:  # the fast path of the base model: Eq. 2 on plain floats
+            return np.array([x[1], equations.smd_acceleration(x[0], x[1], self.f_h, self.xi_h, G * force.scalar(t))])
+        return self.rates(np.asarray(x, dtype=float), G * force.scalar(t), t)[0]
 
     def _linear_matrices(self):
         """``(A, B)`` of the linearisation at rest: ``x' = A x + B g F`` (central differences, step 1e-4)."""
