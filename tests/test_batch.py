@@ -129,7 +129,8 @@ def test_resume_keeps_finished_records_and_refuses_other_settings(records, tmp_p
 def test_sigkill_mid_run_then_resume_gives_the_clean_results(tmp_path):
     """A real process killed with SIGKILL after its first record; --resume completes it, nothing lost or doubled."""
     folder = write_records(tmp_path / "records", 6, duration=10.0)
-    argv = ["identify", str(folder), "--mass", "65", "--estimator", "ekf", "--max-passes", "2", "--seed", "5", "--quiet"]
+    argv = ["identify", str(folder), "--mass", "65", "--estimator", "ekf", "--max-passes", "2", "--seed", "5",
+            "--quiet"]
     killed = tmp_path / "killed"
     process = subprocess.Popen([sys.executable, "-m", "smd_statespace", *argv, "--out", str(killed)],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -179,8 +180,9 @@ def test_a_new_run_rewrites_settings_left_in_its_folder(records, tmp_path):
 @pytest.mark.slow
 def test_record_estimator_batch_command_gives_one_person_per_record_that_stats_reads(records, tmp_path, capsys):
     """The documented study path through the command line (docs/batch.md): ``identify FOLDER --manifest M
-    --jobs 2`` (the record-level person, by default as for one record) writes one person per record and the people's figure, fails the flat record
-    in one line (exit 1, no traceback), resumes without refitting; ``stats`` reads the table as people."""
+    --jobs 2`` (the record-level person, by default as for one record) writes one person per record and the
+    people's figure, fails the flat record in one line (exit 1, no traceback), resumes without refitting; ``stats``
+    reads the table as people."""
     out = tmp_path / "people"
     argv = ["identify", str(records), "--manifest", str(records / "manifest.csv"), "--out", str(out), "--jobs", "2",
             "--quiet"]

@@ -46,7 +46,8 @@ def _paths(f_h):
         "record-level, a nonlinear effect along a path": cubic.linearise(f_h, XI_H, {"beta_3": 800.0}, nominal).A,
         "frequency response": equations.acceleration_frf(np.linspace(0.5, 8, 40), f_h, XI_H),
         "person on a floor: matrices": np.concatenate([m.ravel() for m in system_matrices(70, f_h, XI_H, floor)]),
-        "a crowd on a structure's modes": state_matrix(Coupling(sdof(), [0, 0], [70.0, 80.0], [f_h, 2 * f_h], [XI_H, 0.4])),
+        "a crowd on a structure's modes": state_matrix(Coupling(sdof(), [0, 0], [70.0, 80.0], [f_h, 2 * f_h],
+                                                                [XI_H, 0.4])),
         "simulator": plain.record.force,
         "lab export simulator": lab.record.force,
     }
