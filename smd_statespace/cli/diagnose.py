@@ -95,6 +95,19 @@ def _effects_and_candidates(args) -> tuple:
     return added, candidates
 
 
+def _extra_effects(args) -> str:
+    """``--effects FILE`` options to repeat in the printed next command (a user's effects file)."""
+    return "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
+
+
+def _write_json(args, result, written: list) -> None:
+    """``--json FILE``: the diagnosis's report (either path's ``report()``), added to ``written``."""
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as handle:
+            json.dump(result.report(), handle, indent=2, default=float)
+        written.append(args.json)
+
+
 def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..person import identify_person
@@ -144,8 +157,7 @@ def run_person_diagnose(args) -> int:
         print(f"\nverdict: missing effect '{result.missing[0]}'{physics} (LR {best['lr']:.1f}{scaled} on "
               f"{int(best['df'])} parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> "
               f"{best['f_h']:.3f} Hz, xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
-        extra = "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
-        print("next: " + result.command(args.record, args.mass, extra))
+        print("next: " + result.command(args.record, args.mass, _extra_effects(args)))
     for note in result.notes():
         print(f"note: {note}")
     written = [directory / "person_diagnostics.png", directory / "person_candidates.png"]
@@ -160,10 +172,7 @@ def run_person_diagnose(args) -> int:
     if validated:  # the proposed one, else the best that was judged on held-out data
         written.append(directory / "person_held_out.png")
         plot_held_out(result, (result.missing or validated)[0], written[-1])
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as handle:
-            json.dump(result.report(), handle, indent=2, default=float)
-        written.append(args.json)
+    _write_json(args, result, written)
     print("wrote " + ", ".join(str(path) for path in written))
     return 0
 
@@ -209,8 +218,7 @@ def run_diagnose(args) -> int:
     else:
         best = result.best
         print(f"\nverdict: missing effect '{best.name}': {best.evidence}")
-        extra = "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
-        print("next: " + result.command(args.record, args.mass, args.estimator, extra))
+        print("next: " + result.command(args.record, args.mass, args.estimator, _extra_effects(args)))
     for note in result.notes():
         print(f"note: {note}")
     base.plot_diagnostics(directory / "diagnostics.png")
@@ -218,9 +226,6 @@ def run_diagnose(args) -> int:
     written = [directory / "diagnostics.png", directory / "fit.png"]
     if model.effects:
         written.append(directory / "before_after.png")
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as handle:
-            json.dump(result.report(), handle, indent=2, default=float)
-        written.append(args.json)
+    _write_json(args, result, written)
     print("wrote " + ", ".join(str(path) for path in written))
     return 0
