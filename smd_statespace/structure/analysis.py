@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import time as _time
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -73,6 +74,11 @@ class StructureResult:
 
     def table(self) -> pd.DataFrame:
         """One row per response point: ``point`` and ``coupled_*``, ``force_only_*``, ``ratio_*`` of each measure."""
+        return self._measured.copy()
+
+    @cached_property
+    def _measured(self) -> pd.DataFrame:
+        """:meth:`table`, computed once (the summary, the printout, the worst point and the figures all read it)."""
         coupled, force_only = (measures(a, self.fs) for a in self.accelerations())
         frame = pd.DataFrame({"point": [self.model.points[k] for k in self.points]})
         for name in MEASURES:
@@ -83,14 +89,14 @@ class StructureResult:
 
     def worst(self) -> int:
         """Position (in :attr:`points`) of the point with the largest coupled ``rms_1s_max``, force-only if larger."""
-        table = self.table()
+        table = self._measured
         return int(np.argmax(np.maximum(table["coupled_rms_1s_max"], table["force_only_rms_1s_max"])))
 
     def summary(self) -> dict:
         """JSON-able summary: modes empty and occupied, people, and per point both models' measures."""
         people = self.occupants.table
         rows = []
-        for row in self.table().itertuples(index=False):
+        for row in self._measured.itertuples(index=False):
             item = {"point": row.point}
             for model in ("force_only", "coupled"):
                 item[model] = {name: float(getattr(row, f"{model}_{name}")) for name in MEASURES}

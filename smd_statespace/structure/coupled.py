@@ -164,10 +164,9 @@ class Coupling:
         stiffness, damping = np.zeros((size, size)), np.zeros((size, size))
         stiffness[:m, :m] = np.diag(model.modal_mass * model.omega**2)
         damping[:m, :m] = np.diag(2.0 * model.damping * model.omega * model.modal_mass)
+        link = np.hstack([-self.phi, np.eye(n)])  # u_i - phi_i . q
         for matrix, per_mass in ((stiffness, self.k), (damping, self.c)):
-            spring = self.mass * per_mass
-            link = np.hstack([-self.phi, np.eye(n)])  # u_i - phi_i . q
-            matrix += link.T @ (spring[:, None] * link)
+            matrix += link.T @ ((self.mass * per_mass)[:, None] * link)
         return masses, damping, stiffness
 
 

@@ -128,17 +128,24 @@ def _read_csv(path, label, **options):
         raise RecordError(f"{label} {path}: not a readable CSV ({' '.join(str(exc).split())})") from None
 
 
-def _column(frame, name, path, positive=True):
-    """Column ``name`` of ``frame`` as finite floats (``positive``: > 0), or a one-line error naming its row."""
+def _column(frame, name, path, low=0.0, strict=True, optional=False):
+    """Column ``name`` of ``frame`` as finite floats, or a one-line error naming its row and what is valid.
+
+    ``low``: the values must be above it (``strict``) or at least it; None for any finite number. ``optional``
+    (a people table's cells, drawn where empty): a missing column or an empty cell is NaN.
+    """
     if name not in frame.columns:
+        if optional:
+            return np.full(len(frame), np.nan)
         raise RecordError(f"{path}: missing column {name!r} (columns: {', '.join(map(str, frame.columns))})")
     values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
-    bad = ~np.isfinite(values) | ((values <= 0) if positive else False)
+    valid = np.isfinite(values) & (True if low is None else (values > low) if strict else (values >= low))
+    bad = ~valid & (frame[name].notna().to_numpy() if optional else True)
     if np.any(bad):
         row = int(np.flatnonzero(bad)[0])
-        need = "a number > 0" if positive else "a finite number"
+        need = "a finite number" if low is None else f"a number {'>' if strict else '>='} {low:g}"
         raise RecordError(f"{path} row {row + 1}, column {name}: {frame[name].iloc[row]!r} is not valid; "
-                          f"it must be {need}")
+                          f"it must be {need}" + (" (or empty, to draw it)" if optional else ""))
     return values
 
 
@@ -174,8 +181,8 @@ def read_modal_model(modes_path, shapes_path, name=None) -> ModalModel:
     if seen.has_duplicates:
         row = int(np.flatnonzero(seen.duplicated())[0])
         raise RecordError(f"{shapes_path} row {row + 1}, column point: {points[row]!r} appears twice")
-    coordinates = np.column_stack([_column(shapes, c, shapes_path, positive=False) for c in ("x_m", "y_m")])
-    phi = np.column_stack([_column(shapes, f"phi_{j}", shapes_path, positive=False) for j in range(1, m + 1)])
+    coordinates = np.column_stack([_column(shapes, c, shapes_path, low=None) for c in ("x_m", "y_m")])
+    phi = np.column_stack([_column(shapes, f"phi_{j}", shapes_path, low=None) for j in range(1, m + 1)])
     return ModalModel(values["f_hz"], values["zeta"], values["mass_kg"], points, coordinates, phi,
                       name=Path(modes_path).stem if name is None else str(name))
 

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from .analysis import analyse_structure
+from .coupled import modes_of
 from .modes import ModalModel
 from .people import draw_occupants
 from .response import MEASURES
@@ -67,8 +68,8 @@ def one_draw(spec: CrowdDraws, seed) -> list:
                                phase_spread=spec.phase_spread, points=None)
     result = analyse_structure(spec.model, occupants, points=spec.points)
     modes = {}
-    for j, root in enumerate(result.occupied, start=1):
-        modes[f"f{j}_hz"], modes[f"zeta{j}"] = abs(root) / (2 * np.pi), -root.real / abs(root)
+    for j, mode in enumerate(modes_of(result.occupied), start=1):
+        modes[f"f{j}_hz"], modes[f"zeta{j}"] = mode["f_hz"], mode["zeta"]
     rows = []
     for row in result.table().to_dict("records"):
         rows.append({**row, **modes})

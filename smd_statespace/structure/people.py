@@ -44,7 +44,7 @@ from ..io import G
 from ..model import k_h
 from ..simulation.crowd import CROWD_SETTINGS, draw_people, simulate_crowd
 from ..simulation.person_forces import person_cycles, rigid_floor_grf
-from .modes import ModalModel, _read_csv
+from .modes import ModalModel, _column, _read_csv
 
 __all__ = ["PASSIVE", "Occupants", "draw_occupants", "read_occupants", "PEOPLE_COLUMNS"]
 
@@ -190,19 +190,10 @@ def draw_occupants(model: ModalModel, n, active_share=1.0, f_b=2.0, duration=30.
     return Occupants(table, time, grf, cycles, _settings(f_b, phase_spread, root.entropy, fs, duration))
 
 
-def _people_column(frame, name, path, low=0.0, strict=True):
-    """Column ``name`` of a people table as floats (NaN where empty); a one-line error for a bad value."""
-    if name not in frame.columns:
-        return np.full(len(frame), np.nan)
-    values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
-    given = frame[name].notna().to_numpy()
-    bad = given & ~(np.isfinite(values) & ((values > low) if strict else (values >= low)))
-    if np.any(bad):
-        row = int(np.flatnonzero(bad)[0])
-        need = f"> {low:g}" if strict else f">= {low:g}"
-        raise RecordError(f"{path} row {row + 1}, column {name}: {frame[name].iloc[row]!r} is not valid; "
-                          f"it must be a number {need} (or empty, to draw it)")
-    return values
+def _people_column(frame, name, path, strict=True):
+    """Column ``name`` of a people table as floats, NaN where empty (:func:`~.modes._column`: > 0, or >= 0 when not
+    ``strict``); a one-line error for a bad value."""
+    return _column(frame, name, path, low=0.0, strict=strict, optional=True)
 
 
 def read_occupants(path, model: ModalModel, f_b=2.0, duration=30.0, fs=200.0, seed=None,
