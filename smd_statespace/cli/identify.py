@@ -12,7 +12,6 @@ import pandas as pd
 from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError
-from ..identify.runner import DEFAULT_ESTIMATOR
 from .common import (PROG, _count, add_accelerometer_arguments, add_model_arguments, add_noise_floor_argument,
                      add_rate_argument,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,

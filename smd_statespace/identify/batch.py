@@ -52,6 +52,7 @@ from ..errors import OptionError, RecordError, SMDInputError
 from ..io import check_mass
 from ..progress import tqdm
 from .plausibility import implausible_ok
+
 RECORD_ESTIMATOR = "record"
 """The estimator name of the record-level model (:func:`~smd_statespace.person.identify_person`):
 one row per record (the person) instead of one per cycle."""
