@@ -144,7 +144,7 @@ def _column(frame, name, path, low=0.0, strict=True, optional=False):
     if np.any(bad):
         row = int(np.flatnonzero(bad)[0])
         need = "a finite number" if low is None else f"a number {'>' if strict else '>='} {low:g}"
-        raise RecordError(f"{path} row {row + 1}, column {name}: {frame[name].iloc[row]!r} is not valid; "
+        raise RecordError(f"{path} row {row + 1}, column {name}: {frame[name].tolist()[row]!r} is not valid; "
                           f"it must be {need}" + (" (or empty, to draw it)" if optional else ""))
     return values
 

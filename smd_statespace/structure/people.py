@@ -226,7 +226,7 @@ def read_occupants(path, model: ModalModel, f_b=2.0, duration=30.0, fs=200.0, se
     active = _people_column(frame, "active", path, strict=False)
     if np.any(~np.isnan(active) & ~np.isin(active, (0.0, 1.0))):
         row = int(np.flatnonzero(~np.isnan(active) & ~np.isin(active, (0.0, 1.0)))[0])
-        raise RecordError(f"{path} row {row + 1}, column active: {frame['active'].iloc[row]!r}; it must be 0 or 1")
+        raise RecordError(f"{path} row {row + 1}, column active: {frame['active'].tolist()[row]!r}; it must be 0 or 1")
     table = pd.DataFrame({"person": np.arange(len(frame)), "point": [model.points[k] for k in where],
                           "point_index": where, "mass": _people_column(frame, "mass_kg", path),
                           "f_h": _people_column(frame, "f_h", path), "xi_h": _people_column(frame, "xi_h", path),
