@@ -87,8 +87,8 @@ def _effects_and_candidates(args) -> tuple:
 
     added = list(build_model(args).effects)
     candidates = [make_effect(spec) for spec in args.candidate] or None
-    present = {effect.name for effect in added}
-    both = [effect.name for effect in candidates or [] if effect.name in present]
+    present = {effect.key for effect in added}
+    both = [effect.key for effect in candidates or [] if effect.key in present]
     if both:
         raise OptionError(f"--candidate {both[0]!r} is also given as --effect: an effect is either in the model "
                           "(--effect) or a candidate to try on top of it (--candidate)")

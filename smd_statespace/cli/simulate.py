@@ -143,7 +143,7 @@ def run_simulate(args) -> int:
         setattr(args, name, default if getattr(args, name) is None else getattr(args, name))
     mass = check_mass(args.mass, source="--mass")
     effects = [make_effect(spec, "--effect") for spec in args.effect]
-    names = [effect.name for effect in effects]
+    names = [effect.key for effect in effects]
     if len(set(names)) < len(names):
         raise OptionError(f"--effect {max(names, key=names.count)!r} is given twice; give each effect once")
     given = [(flag, key) for flag, key, _, _ in PHONE_OPTIONS if getattr(args, flag.replace("-", "_")) is not None]

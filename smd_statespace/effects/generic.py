@@ -96,6 +96,11 @@ class GenericTerm(Effect):
 
     name = "term"
 
+    scan = None
+    """For a step whose time a scan found (:func:`~smd_statespace.person.breaks.located_step`): ``{"trim",
+    "lm_robust", "p", "time_s"}``, the scan's largest robust score statistic and its p-value as the largest of
+    many; the step's tests then refer to that distribution. None for a step placed by hand (its time is known)."""
+
     def __init__(self, kind: str, scale: float, start: float = 0.0, at: float = 0.5):
         if kind not in TERMS:
             raise OptionError(f"term: kind={kind!r}; give one of {', '.join(TERMS)}")
@@ -112,6 +117,11 @@ class GenericTerm(Effect):
     def coefficient(self) -> str:
         """The name of the term's parameter slot, ``c_<kind>``."""
         return f"c_{self.kind}"
+
+    @property
+    def key(self) -> str:
+        """``term:<kind>``: terms of different kinds go in one model together (each its own ``c_<kind>``)."""
+        return f"{self.name}:{self.kind}"
 
     @property
     def changes(self) -> str | None:

@@ -194,7 +194,7 @@ class SMDModel:
         for effect in effects:
             if not isinstance(effect, Effect):
                 raise OptionError(f"effects must be Effect objects, got {effect!r}")
-        names = [effect.name for effect in effects]
+        names = [effect.key for effect in effects]
         for name in names:
             if names.count(name) > 1:
                 raise OptionError(f"effect {name!r} is given twice; give each effect once")

@@ -160,6 +160,12 @@ class Effect:
         return f"{self.name}:" + ",".join(f"{key}={spec_value(value, self.name, key)}" for key, value in given.items())
 
     @property
+    def key(self) -> str:
+        """What two effects of one model must not share (their parameter slots would): the effect's
+        :attr:`name`, or a kind of it where one name makes several (``term:f_drift`` and ``term:f_step``)."""
+        return self.name
+
+    @property
     def breaks(self) -> tuple[float, ...]:
         """Times (s, on the record's time axis) where the effect's term changes abruptly, such as a step; default none.
 

@@ -55,13 +55,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
+from .breaks import log_p_value
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .threads import search_threads, thread_map
@@ -97,7 +97,7 @@ def candidate_row(base, fitted, level: float) -> dict:
     # a candidate with nothing to estimate (a measured floor) is not nested: it must beat chi-square(1);
     # one found as the best of many trials (a floor mode's frequency grid) is tested as that many (Bonferroni)
     trials = int(np.prod([record_search_size(effect, base) for effect in added]))
-    log_p = min(float(stats.chi2.logsf(max(lr / scale, 0.0), max(df, 1))) + math.log(trials), 0.0)
+    log_p = min(log_p_value(lr / scale, df, added) + math.log(trials), 0.0)
     estimates = fitted.effect_estimates()
     before_tests, after_tests = base.test_pvalues(), fitted.test_pvalues()
     person_on_bound = fitted.model.person_at_bound(fitted.params)
@@ -372,7 +372,8 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
         trials = int(np.prod([record_search_size(e, base) for e in fits[name].effects[present:]]))
         scale = robust_scale(both.model, both.params, added_unknowns(fits[name], base))
         out[name] = {"lr": float(lr), "lr_scale": scale,
-                     "p_value": min(float(stats.chi2.sf(max(lr / scale, 0.0), df)) * trials, 1.0)}
+                     "p_value": min(math.exp(log_p_value(lr / scale, df, fits[name].effects[present:])) * trials,
+                                    1.0)}
     keeps = [name for name in (first, second) if out[name]["p_value"] < level]
     if len(keeps) == 1:
         out["first"] = keeps[0]
@@ -435,7 +436,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     tests = len(effects)
     if candidates is None if library is None else library:
         taken = present | {label(effect) for effect in effects}
-        terms = [term for term in generic_library(result)  # a term that is a candidate in another unit: once
+        terms = [term for term in generic_library(result, scan=True)  # a candidate in another unit: once
                  if label(term) not in taken and SAME_AS.get(term.kind) not in taken]
         tests += len(terms)  # Bonferroni counts every term screened, fitted or not
         try:

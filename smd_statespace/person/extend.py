@@ -51,7 +51,7 @@ from .model import RecordModel
 from .search import WIDER_SANDWICH
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects",
-           "configured_for_record", "split_effects", "record_signals", "effect_model", "fit_effects"]
+           "configured_for_record", "split_effects", "record_signals", "effect_model", "at_zero", "fit_effects"]
 
 NOMINAL_ITERATIONS = 6
 """Most re-linearisations of a nonlinear effect about the new predicted path."""
@@ -199,6 +199,21 @@ def effect_model(result, effects, path=None) -> RecordModel:
                        nominal=nominal, observed=base.observed)
 
 
+def at_zero(result, effect) -> tuple:
+    """``(model, params, j)``: ``result``'s model with the one-parameter ``effect``, at the fit with its
+    coefficient (index ``j``) at 0: the model a score test of the effect works in (it is ``result``'s there)."""
+    model = effect_model(result, [effect])
+    added = [name for name in model.param_names if name not in result.model.param_names]
+    if len(added) != 1:
+        raise ValueError(f"{effect.spec}: a score test takes an effect of one parameter, this adds {added}")
+    named = result.model.unpack(result.params)
+    default = model.start_params(result.f_h, result.xi_h)
+    params = np.array([named.get(name, value) for name, value in zip(model.param_names, default)], dtype=float)
+    j = model.position(added[0])
+    params[j] = 0.0
+    return model, params, j
+
+
 def _starts(model: RecordModel, result, root, effects) -> list:
     """Starts of the search, one per fit the model could grow from.
 
@@ -274,7 +289,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
 
     present = tuple(result.effects)
     added = check_effects([configured_for_record(effect, result) for effect in effects], result.record)
-    already = sorted({e.name for e in present} & {e.name for e in added})
+    already = sorted({e.key for e in present} & {e.key for e in added})
     if already:
         raise OptionError(f"{result.record.source}: the effect {already[0]!r} is in the model already "
                           f"(it has {', '.join(e.spec for e in present)})")

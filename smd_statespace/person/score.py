@@ -329,7 +329,7 @@ def system_derivatives(model: RecordModel, params, system=None, step=DYNAMICS_ST
 
 
 # ------------------------------------------------------------------------------------------------ score
-def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
+def score(model: RecordModel, params, fitted=None, method="auto", derivatives=None) -> dict:
     """Exact gradient of the profile log-likelihood, per-sample scores and the expected information.
 
     One compiled pass of the Kalman filter at the estimated ``delta`` and
@@ -348,6 +348,10 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
         ``innovation_regression``, ``delta_cov_unscaled``).
     method : {"auto", "analytic", "difference"}
         How the dynamics' arrays are differentiated (:func:`system_derivatives`).
+    derivatives : dict, optional
+        The arrays' derivatives, as :func:`system_derivatives` returns them, when made otherwise: their
+        parameters, ``k`` of them, need not be ``model``'s (the directions of
+        :func:`~smd_statespace.person.breaks.step_scan`, a step at every sample); every output's ``k`` is theirs.
 
     Returns
     -------
@@ -388,7 +392,7 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
     params = np.asarray(params, dtype=float)
     fitted = model.filter(params) if fitted is None else fitted
     sys = model.system(params)
-    k = params.size
+    k = params.size if derivatives is None else derivatives["dyn"].size
     N = model.time.size
     if not np.isfinite(fitted["loglike"]):
         nan = np.full(k, np.nan)
@@ -399,7 +403,7 @@ def score(model: RecordModel, params, fitted=None, method="auto") -> dict:
                 "innovations": np.full(N, np.nan), "variances": np.full(N, np.nan),
                 "d_innovations": np.full((N, k), np.nan), "d_log_variances": np.full((N, k), np.nan),
                 "delta": fitted["delta"], "sigma2": fitted["sigma2"]}
-    der = system_derivatives(model, params, sys, method=method)
+    der = system_derivatives(model, params, sys, method=method) if derivatives is None else derivatives
     delta, sigma2 = np.asarray(fitted["delta"], dtype=float), float(fitted["sigma2"])
     v, f, dv, df = sensitivity_pass(
         *sys.pass_arguments(model.y, model.n_coefficients), delta,

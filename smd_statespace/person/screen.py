@@ -41,7 +41,9 @@ import pandas as pd
 from scipy import stats
 
 from ..effects.generic import TERMS, GenericTerm, label
-from .extend import effect_model
+from ..errors import SMDInputError
+from .breaks import located_step, log_p_value
+from .extend import at_zero
 from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
 from .search import fit_model
@@ -77,10 +79,12 @@ stationary people said to change; 4 of the 16 lab exports, whose forces fade by 
 had an ``f_h`` term found, all with ``f_h`` not determined (``benchmarks/results/lab_records_time_change.md``)."""
 
 
-def generic_library(result, kinds=None) -> list:
+def generic_library(result, kinds=None, scan: bool = False) -> list:
     """Every generic term (:data:`~smd_statespace.effects.generic.TERMS`, or those in ``kinds``) scaled to the
     record of the fitted ``result``: the RMS compression and rate its person predicts, and its fitted span's
-    start and length; a step at each of :data:`STEPS`."""
+    start and length; a step at each of :data:`STEPS`, or with ``scan`` one step of each kind at the time a
+    scan of every sample finds (:func:`~smd_statespace.person.breaks.located_step`: a step placed a fraction of
+    a cycle from the truth is found only in part)."""
     kinds = list(TERMS if kinds is None else kinds)
     scales = {}
     if any(TERMS[kind][0] != "time" for kind in kinds):  # the path scales the terms in u and u'
@@ -91,6 +95,12 @@ def generic_library(result, kinds=None) -> list:
     out = []
     for kind in kinds:
         family = TERMS[kind][0]
+        if family == "time" and scan and kind.endswith("step"):
+            try:
+                out.append(located_step(result, kind))
+                continue
+            except (SMDInputError, ArithmeticError, np.linalg.LinAlgError, ValueError):
+                pass  # a record the scan cannot take: the steps at fixed times
         if family == "time":
             out += [GenericTerm(kind, scale=length, start=start, at=at)
                     for at in (STEPS if kind.endswith("step") else (0.5,))]
@@ -110,7 +120,7 @@ def score_test(result, effect) -> dict:
         person's, a check), ``parameter`` (the coefficient's name), ``cycle_scores`` (the efficient score summed
         per bouncing cycle, shape (J,): ``lm_robust`` is the squared one-sample t statistic of their mean).
     """
-    model, params, j = _at_null(result, effect)
+    model, params, j = at_zero(result, effect)
     out = score(model, params)
     free = [i for i in range(params.size) if i != j and not model.at_bound(params, i)]
     info, scores = profile_out(out["profile_information"], out["efficient_per_sample"], [j], free, 1e-10)
@@ -128,21 +138,6 @@ def score_test(result, effect) -> dict:
     return {"parameter": model.param_names[j], "gradient": gradient, "lm": float(lm), "p": float(stats.chi2.sf(lm, 1)),
             "lm_robust": lm_robust, "p_robust": float(stats.chi2.sf(lm_robust, 1)), "loglike": float(out["loglike"]),
             "cycle_scores": per_cycle}
-
-
-def _at_null(result, effect) -> tuple:
-    """``(model, params, j)``: ``result``'s model with the one-parameter ``effect``, at the fit with its
-    coefficient (index ``j``) at 0."""
-    model = effect_model(result, [effect])
-    added = [name for name in model.param_names if name not in result.model.param_names]
-    if len(added) != 1:
-        raise ValueError(f"{effect.spec}: a score test takes an effect of one parameter, this adds {added}")
-    named = result.model.unpack(result.params)
-    default = model.start_params(result.f_h, result.xi_h)
-    params = np.array([named.get(name, value) for name, value in zip(model.param_names, default)], dtype=float)
-    j = model.position(added[0])
-    params[j] = 0.0
-    return model, params, j
 
 
 def quick_ratio(result, effect) -> dict:
@@ -163,7 +158,7 @@ def quick_ratio(result, effect) -> dict:
     """
     from .statespace import nominal_path  # statsmodels: imported when an effect is linearised
 
-    model, params, j = _at_null(result, effect)
+    model, params, j = at_zero(result, effect)
     fitted = fit_model(model, params, quick=True)
     for _ in range(RELINEARISED if model.approximate else 0):
         model = replace(model, nominal=nominal_path(model, fitted["params"]))
@@ -194,7 +189,8 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
 
     With ``alpha``, two stages: every term whose robust score p-value is below :data:`PREFILTER` (unadjusted:
     a term that shows only away from ``c = 0`` has a small score) gets a quick fit (:func:`quick_ratio`); the
-    p-value of its likelihood ratio over its misspecification scale (chi-square(1)) is adjusted by Holm over the
+    p-value of its likelihood ratio over its misspecification scale (chi-square(1); for a step whose time a scan
+    found, the largest of the scan's: :func:`~smd_statespace.person.breaks.log_p_value`) is adjusted by Holm over the
     *whole* library (a term not fitted counts as p = 1, so the pre-filter can lose power, never add false
     alarms). Those below ``alpha`` come first, the largest scaled quick likelihood ratio first: they are what
     ``diagnose`` fits.
@@ -204,8 +200,9 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
     pandas.DataFrame
         Indexed by the effect's spec: ``label`` (``term:abs_u``), ``physics`` (its physical name, where it has
         one), ``parameter``,
-        ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` and ``p_holm`` (the robust p-values adjusted
-        over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
+        ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` (for a step whose time a scan found, the scan's
+        largest robust statistic and its p-value as the largest of many) and ``p_holm`` (the robust p-values
+        adjusted over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
         ``lr_scale`` (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm`` (of ``lr_quick /
         lr_scale``), ordered as above. The tests, and the quick fits, run in up to ``threads`` threads
         (:mod:`~smd_statespace.person.threads`), with the same table.
@@ -216,6 +213,9 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
              **{key: value for key, value in row.items() if key != "cycle_scores"}}
             for effect, row in zip(effects, tests)]
     table = pd.DataFrame(rows).set_index("effect")
+    for effect in effects:  # a step placed by a scan is tested as the largest of the scan's statistics
+        if getattr(effect, "scan", None):
+            table.loc[effect.spec, ["lm_robust", "p_robust"]] = [effect.scan["lm_robust"], effect.scan["p"]]
     table["p_holm"] = holm(table["p_robust"].to_numpy())
     table = table.sort_values("p_robust")
     if alpha is None:
@@ -227,7 +227,7 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
         table.loc[spec, ["lr_quick", "estimate", "lr_scale"]] = [quick[key] for key in ("lr_quick", "estimate",
                                                                                          "lr_scale")]
     scaled = (table["lr_quick"] / table["lr_scale"]).fillna(0.0).to_numpy()
-    p_quick = stats.chi2.sf(np.maximum(scaled, 0.0), 1)
+    p_quick = np.exp([log_p_value(value, 1, [by_spec[spec]]) for spec, value in zip(table.index, scaled)])
     table["p_quick_holm"] = holm(np.where(table["lr_quick"].notna(), p_quick, 1.0))
     passed = table["p_quick_holm"] < alpha
     return pd.concat([table[passed].assign(_scaled=scaled[passed.to_numpy()]).sort_values("_scaled", ascending=False)

@@ -90,7 +90,7 @@ def _simulation_effects(effects, mass, where="simulate_bouncing"):
             f"{where}: effects must be a list of effects or specs (e.g. ['floor_mode', 'cubic_stiffness:beta_3=400']) "
             f"or a dict {{name: {{option: value}}}}, got {effects!r}"
         ) from None
-    names = [effect.name for effect in built]
+    names = [effect.key for effect in built]
     twice = sorted({name for name in names if names.count(name) > 1})
     if twice:
         raise OptionError(f"{where}: effect {twice[0]!r} is given twice; give each effect once")
