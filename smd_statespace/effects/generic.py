@@ -112,6 +112,8 @@ class GenericTerm(Effect):
             raise OptionError(f"term: at={at!r}; give where a step is as a fraction of the record, between 0 and 1")
         self.kind, self.scale, self.start, self.at = kind, float(scale), float(start), float(at)
         self.family, self.physics = TERMS[kind]
+        if kind.endswith("step"):  # where it is, in the record's time
+            self.physics += f" (at {self.start + self.at * self.scale:.2f} s)"
 
     @property
     def coefficient(self) -> str:
