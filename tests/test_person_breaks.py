@@ -6,7 +6,8 @@ import pytest
 
 from smd_statespace.effects import GenericTerm
 from smd_statespace.person import identify_person
-from smd_statespace.person.breaks import log_p_value, located_step, step_scan, sup_p_value
+from smd_statespace.person.breaks import located_step, step_scan
+from smd_statespace.person.supremum import critical_value, log_p_value, sup_p_value
 from smd_statespace.person.screen import score_test
 from smd_statespace.simulation import simulate_bouncing
 
@@ -42,12 +43,15 @@ def test_the_supremum_p_value_is_that_of_a_squared_standardised_brownian_bridge(
     inside = (t >= 0.15) & (t <= 0.85)
     sup = np.max(bridge[:, inside] ** 2 / (t[inside] * (1 - t[inside])), axis=1)
     for level in (8.85, 12.0):
-        assert np.mean(sup > level) == pytest.approx(sup_p_value(level), abs=0.012)
-    assert sup_p_value(3.84) > 0.3  # chi-square(1)'s 5 % point is no evidence as the largest of many
+        assert np.mean(sup > level) == pytest.approx(sup_p_value(level, 0.15), abs=0.012)
+    assert sup_p_value(3.84, 0.15) > 0.3  # chi-square(1)'s 5 % point is no evidence as the largest of many
+    for p in (0.05, 1e-3, 1e-8):  # the level lines of the figures invert the p-value
+        assert sup_p_value(critical_value(p, 1, 0.15), 0.15) == pytest.approx(p, rel=1e-6)
+    assert critical_value(0.05, 1) == pytest.approx(3.8415, abs=1e-4)
     effect = GenericTerm("f_step", scale=20.0)
     assert log_p_value(10.0, 1, [effect]) == pytest.approx(np.log(0.0016), rel=0.01)  # chi-square(1): no scan
     effect.scan = {"trim": 0.15}
-    assert log_p_value(10.0, 1, [effect]) == pytest.approx(np.log(sup_p_value(10.0)))
+    assert log_p_value(10.0, 1, [effect]) == pytest.approx(np.log(sup_p_value(10.0, 0.15)))
 
 
 def test_a_step_of_f_h_is_placed_where_it_is_and_a_clean_record_has_none(clean):

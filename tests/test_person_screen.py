@@ -98,7 +98,8 @@ def test_diagnose_fits_the_screened_term_and_names_its_physics(clean, tmp_path, 
     assert "verdict: missing effect 'term:f_drift' = a leg stiffness (f_h) that drifts over the record" in out
     assert "--effect term:kind=f_drift,scale=20" in out and "score-tested at the fitted person" in out
     assert "term:u3 " not in out  # cubic_stiffness is a candidate: its twin is not screened again (SAME_AS)
-    for figure in ("person_candidates.png", "person_spectrum.png", "person_compare.png", "person_held_out.png"):
+    for figure in ("person_candidates.png", "person_spectrum.png", "person_compare.png", "person_held_out.png",
+                   "person_step_scan.png"):
         assert (tmp_path / "d" / figure).stat().st_size > 10_000
 
 

@@ -112,7 +112,7 @@ def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..person import identify_person
     from ..person.diagnose import SCREENED, diagnose_person
-    from ..plotting.person import plot_candidates, plot_compare, plot_held_out, plot_spectrum
+    from ..plotting.person import plot_candidates, plot_compare, plot_held_out, plot_spectrum, plot_step_scan
     from ..person.extend import check_effects
 
     added, candidates = _effects_and_candidates(args)  # a bad --effect or --candidate: one line, nothing read
@@ -163,6 +163,9 @@ def run_person_diagnose(args) -> int:
     written = [directory / "person_diagnostics.png", directory / "person_candidates.png"]
     base.plot_diagnostics(written[0])
     plot_candidates(result, written[1])
+    if result.scans:  # when does the person change: the steps' scans
+        written.append(directory / "person_step_scan.png")
+        plot_step_scan(result, written[-1])
     if not result.adequate:  # the proposed effect: the innovations' spectrum and the free run, without and with it
         proposed = result.fits[result.missing[0]]
         written += [directory / "person_spectrum.png", directory / "person_compare.png"]

@@ -23,23 +23,20 @@ exactly, every sample covered by one of them, and the pass carries a column per 
 The largest statistic is not chi-square(1): it is the largest of many. Its p-value is that of the supremum of a
 squared standardised Brownian bridge over the trimmed fractions ``[trim, 1 - trim]`` (Andrews 1993), in the
 closed form of Estrella (2003, *Econometric Theory* 19, 1128-1143, after DeLong 1981):
-:func:`sup_p_value`.
+:func:`~smd_statespace.person.supremum.sup_p_value`.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..effects.generic import GenericTerm
 from .extend import at_zero
 from .score import cycle_sums, profile_out, score, system_derivatives
+from .supremum import sup_p_value
 
-__all__ = ["TRIM", "CHUNK", "STRIDE", "PEAKS", "step_scan", "log_sup_p_value", "sup_p_value", "log_p_value",
-           "located_step"]
+__all__ = ["TRIM", "CHUNK", "STRIDE", "PEAKS", "step_scan", "located_step"]
 
 TRIM = 0.15
 """A step is looked for from this fraction of the fitted record to one minus it (Andrews' trimming, ``pi_0``):
@@ -63,38 +60,6 @@ _TRANSITIONS = ("d_Phi", "d_Gam", "d_offset", "d_X_tr")
 """Those of them that take sample ``i`` to ``i + 1``: the path-linearised dynamics use the rates' Jacobians at both
 ends (:mod:`~smd_statespace.person.dynamics`), so a step at a sample gives the interval before it half of each
 side's derivative (0); the others are at the sample."""
-
-
-def log_sup_p_value(statistic, trim: float = TRIM) -> float:
-    """Log of the asymptotic p-value of the largest of the LM (or likelihood-ratio) statistics of one
-    coefficient's step over the times between ``trim`` and ``1 - trim`` of the record (Andrews 1993, one
-    restriction): ``P(sup > c^2) ~ c phi(c) [(1 - 1/c^2) log(lambda) + 4/c^2]`` with
-    ``lambda = ((1 - trim) / trim)^2`` (Estrella 2003); at most 0."""
-    statistic = float(statistic)
-    if not statistic > 1.0:  # below 1 the expansion is no longer a probability; such a maximum is no evidence
-        return 0.0
-    c = math.sqrt(statistic)
-    bracket = (1.0 - 1.0 / statistic) * math.log(((1.0 - trim) / trim) ** 2) + 4.0 / statistic
-    return min(math.log(c) + float(stats.norm.logpdf(c)) + math.log(bracket), 0.0)
-
-
-def sup_p_value(statistic, trim: float = TRIM) -> float:
-    """:func:`log_sup_p_value` as a p-value.
-
-    >>> round(sup_p_value(8.85), 3)  # Andrews' (1993) 5 % critical value at trim 0.15
-    0.05
-    """
-    return math.exp(log_sup_p_value(statistic, trim))
-
-
-def log_p_value(statistic, df: int, effects) -> float:
-    """Log p-value of a (scaled) likelihood-ratio or score ``statistic`` on ``df`` for adding ``effects``:
-    chi-square(``df``), or for one step whose time a scan found (``effect.scan``) the largest of the scan's
-    (:func:`log_sup_p_value`)."""
-    scanned = [effect.scan for effect in effects if getattr(effect, "scan", None)]
-    if scanned and df == 1:
-        return log_sup_p_value(statistic, scanned[0]["trim"])
-    return float(stats.chi2.logsf(max(float(statistic), 0.0), max(int(df), 1)))
 
 
 def _reference(result, kind, at_sample) -> tuple:
@@ -196,8 +161,9 @@ def step_scan(result, kind: str = "f_step", trim: float = TRIM, stride: int = ST
 def located_step(result, kind: str = "f_step", trim: float = TRIM) -> GenericTerm:
     """The ``kind`` step at the time :func:`step_scan`'s LM statistic is largest (the step's least-squares time;
     the sample it names is the first after it), with the scan on it: ``scan`` = ``{"trim": trim, "lm_robust":``
-    the largest robust statistic of the scan, ``"p": ``its :func:`sup_p_value```, "time_s": ``the step's time``}``,
-    which :func:`~smd_statespace.person.screen.screen` and ``diagnose`` test it by."""
+    the largest robust statistic of the scan, ``"p": ``its :func:`sup_p_value```, "time_s": ``the step's time``,
+    "table": ``the scan's table``}``, which :func:`~smd_statespace.person.screen.screen` and ``diagnose`` test it by
+    and ``diagnose``'s figure of the scan draws."""
     scan = step_scan(result, kind, trim)
     best = scan.loc[scan["lm"].idxmax()]
     time = result.model.time
@@ -205,5 +171,6 @@ def located_step(result, kind: str = "f_step", trim: float = TRIM) -> GenericTer
     at = (float(best["time_s"]) - start) / length - 1e-9  # just before the sample: it is on the side after
     term = GenericTerm(kind, scale=length, start=start, at=at)
     sup = float(scan["lm_robust"].max())
-    term.scan = {"trim": trim, "lm_robust": sup, "p": sup_p_value(sup, trim), "time_s": float(best["time_s"])}
+    term.scan = {"trim": trim, "lm_robust": sup, "p": sup_p_value(sup, trim), "time_s": float(best["time_s"]),
+                 "table": scan}
     return term

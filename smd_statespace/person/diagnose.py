@@ -61,7 +61,7 @@ from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
-from .breaks import log_p_value
+from .supremum import log_p_value, scan_trim
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .threads import search_threads, thread_map
@@ -106,8 +106,8 @@ def candidate_row(base, fitted, level: float) -> dict:
            "physics": "; ".join(getattr(e, "physics", "") for e in added),
            "spec": " ".join(e.spec for e in fitted.effects), "df": df, "lr": lr, "lr_scale": scale,
            "lr_robust": lr / scale, "p_value": math.exp(log_p),
-           "log_p": log_p, "trials": trials, "f_h_before": base.f_h, "f_h": fitted.f_h, "xi_h_before": base.xi_h,
-           "xi_h": fitted.xi_h, "noise_change_%": 100.0 * (fitted.sigma / base.sigma - 1.0),
+           "log_p": log_p, "trials": trials, "scan_trim": scan_trim(added), "f_h_before": base.f_h, "f_h": fitted.f_h,
+           "xi_h_before": base.xi_h, "xi_h": fitted.xi_h, "noise_change_%": 100.0 * (fitted.sigma / base.sigma - 1.0),
            "ljung_box_p_before": before_tests["ljung_box_p"], "ljung_box_p": after_tests["ljung_box_p"],
            "ljung_box_q_before": before_tests["ljung_box_q"], "ljung_box_q": after_tests["ljung_box_q"],
            "parameters": _parameters_text(base, fitted, estimates),
@@ -170,6 +170,11 @@ class PersonDiagnosis:
         were given.
     tests : int
         How many tests the Bonferroni level counts: the candidates fitted and every generic term screened.
+    scans : dict
+        Per kind of step (``"f_step"``, ``"xi_step"``) whose time a scan found
+        (:func:`~smd_statespace.person.breaks.located_step`): the scan's ``table`` (score statistics at every
+        time tested), ``time_s`` (where the step was placed), ``lm_robust`` and ``p`` (the largest robust
+        statistic, as the largest of many), ``trim``. Empty when the library was not screened.
     validation : dict
         Held-out validation (:func:`~smd_statespace.person.validation.cross_validated_loglike`) of the person
         without any candidate (``"without"``) and with each candidate that passed its test (by name); for a
@@ -186,6 +191,7 @@ class PersonDiagnosis:
     screened: pd.DataFrame = field(default_factory=pd.DataFrame)
     tests: int = 0
     validation: dict = field(default_factory=dict)
+    scans: dict = field(default_factory=dict)
 
     def table(self) -> pd.DataFrame:
         """The candidates: those that pass first, by their held-out log-likelihood gain per held-out sample (the
@@ -349,7 +355,9 @@ class PersonDiagnosis:
         screened = self.screened.reset_index().to_dict(orient="records") if len(self.screened) else []
         return {"base": self.base.to_dict(), "candidates": table.reset_index().to_dict(orient="records"),
                 "missing": self.missing, "adequate": self.adequate, "alpha": self.alpha, "notes": self.notes(),
-                "joint": self.joint, "screened": screened, "tests": self.tests}
+                "joint": self.joint, "screened": screened, "tests": self.tests,
+                "step_scans": {kind: {key: value for key, value in scan.items() if key != "table"}
+                               for kind, scan in self.scans.items()}}
 
 
 def _ratio_text(test: dict) -> str:
@@ -434,7 +442,8 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
             raise OptionError(f"candidate {already[0]!r} is in the model already; candidates are effects to try on "
                               f"top of it ({', '.join(sorted(present))})")
     tests = len(effects)
-    if candidates is None if library is None else library:
+    library_screened = candidates is None if library is None else library
+    if library_screened:
         taken = present | {label(effect) for effect in effects}
         terms = [term for term in generic_library(result, scan=True)  # a candidate in another unit: once
                  if label(term) not in taken and SAME_AS.get(term.kind) not in taken]
@@ -449,8 +458,9 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     level = alpha / max(tests, 1)
     fits, rows = _fit_candidates(result, effects, level, failed, threads, progress)
     validation = held_out_checks(result, fits, rows, level, threads)
+    scans = {term.kind: term.scan for term in terms if term.scan} if library_screened else {}
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha, screened=screened,
-                                tests=tests, validation=validation)
+                                tests=tests, validation=validation, scans=scans)
     significant = diagnosis.missing
     if len(significant) >= 2:
         try:

@@ -42,7 +42,8 @@ from scipy import stats
 
 from ..effects.generic import TERMS, GenericTerm, label
 from ..errors import SMDInputError
-from .breaks import located_step, log_p_value
+from .breaks import located_step
+from .supremum import log_p_value, scan_trim
 from .extend import at_zero
 from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
@@ -201,8 +202,9 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
         Indexed by the effect's spec: ``label`` (``term:abs_u``), ``physics`` (its physical name, where it has
         one), ``parameter``,
         ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` (for a step whose time a scan found, the scan's
-        largest robust statistic and its p-value as the largest of many) and ``p_holm`` (the robust p-values
-        adjusted over the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
+        largest robust statistic and its p-value as the largest of many; ``scan_trim`` its scan's trimming, NaN
+        for the others) and ``p_holm`` (the robust p-values adjusted over the library by :func:`holm`), sorted by
+        ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
         ``lr_scale`` (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm`` (of ``lr_quick /
         lr_scale``), ordered as above. The tests, and the quick fits, run in up to ``threads`` threads
         (:mod:`~smd_statespace.person.threads`), with the same table.
@@ -213,6 +215,7 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
              **{key: value for key, value in row.items() if key != "cycle_scores"}}
             for effect, row in zip(effects, tests)]
     table = pd.DataFrame(rows).set_index("effect")
+    table["scan_trim"] = [scan_trim([effect]) for effect in effects]
     for effect in effects:  # a step placed by a scan is tested as the largest of the scan's statistics
         if getattr(effect, "scan", None):
             table.loc[effect.spec, ["lm_robust", "p_robust"]] = [effect.scan["lm_robust"], effect.scan["p"]]

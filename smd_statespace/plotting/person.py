@@ -26,11 +26,12 @@ from matplotlib.figure import Figure
 from scipy import signal
 
 from ..measures import fit_percent
+from ..person.supremum import critical_value
 from ..person.noise_floor import measured_label
 from .save import save
 
 __all__ = ["free_run", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
-           "plot_held_out", "plot_floor_correlation", "plot_candidates"]
+           "plot_held_out", "plot_floor_correlation", "plot_candidates", "plot_step_scan"]
 
 COLORS = {"without": "tab:red", "with": "tab:blue"}
 
@@ -275,14 +276,12 @@ def plot_person_diagnostics(result, path=None, lags=None) -> Figure:
 def plot_candidates(diagnosis, path=None) -> Figure:
     """What ``diagnose`` found: the generic terms' score tests and the fitted candidates' likelihood ratios.
 
-    Left: every generic term's robust score statistic (chi-square(1) under "absent"), with Holm's first level
-    over the library (``alpha / terms``), in blue the terms whose quick fit passed over the library (the
+    Left: every generic term's robust score statistic (chi-square(1) under "absent"; a step a scan placed, the
+    largest of the scan's: its own level as a tick), with Holm's first level over the library (``alpha / terms``), in blue the terms whose quick fit passed over the library (the
     largest of them are fitted: :func:`~smd_statespace.person.screen.screen`); right: each fitted candidate's likelihood
     ratio over its misspecification scale (:func:`~smd_statespace.person.robust.robust_scale`) against the level
     of its own test (Bonferroni over every test, and over a floor mode's frequency grid), proposed ones in blue.
     """
-    from scipy import stats
-
     fig = Figure(figsize=(11, 4.4), layout="constrained")
     left, right = fig.subplots(1, 2, width_ratios=(1.15, 1))
     screened = diagnosis.screened
@@ -292,8 +291,13 @@ def plot_candidates(diagnosis, path=None) -> Figure:
         gate = "p_quick_holm" if "p_quick_holm" in screened else "p_holm"  # what decided the fit (screen's stages)
         flagged = (screened[gate] < diagnosis.alpha).to_numpy()[::-1]
         left.barh(names, values, color=np.where(flagged, "tab:blue", "0.6"))
-        left.axvline(stats.chi2.isf(diagnosis.alpha / len(screened), 1), color="k", ls="--", lw=0.8,
+        first_level = diagnosis.alpha / len(screened)
+        left.axvline(critical_value(first_level), color="k", ls="--", lw=0.8,
                      label=f"Holm's first level (alpha {diagnosis.alpha:g} over {len(screened)})")
+        trims = screened["scan_trim"].to_numpy(dtype=float)[::-1] if "scan_trim" in screened else []
+        for y, trim in enumerate(trims):  # a step a scan placed: its level as the largest of the scan's
+            if np.isfinite(trim):
+                left.plot([critical_value(first_level, 1, trim)] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
         left.set_xscale("symlog", linthresh=10.0)
         left.legend(fontsize=8, loc="lower right")
     left.set(xlabel="robust score statistic (no fit)",
@@ -307,10 +311,43 @@ def plot_candidates(diagnosis, path=None) -> Figure:
         right.barh(names, ratios, color=np.where(proposed, "tab:blue", "0.6"))
         degrees = table["df"].to_numpy(dtype=int)[::-1]
         trials = table["trials"].to_numpy(dtype=float)[::-1]  # a floor mode's frequency grid: tested as that many
-        for y, (df, tried) in enumerate(zip(degrees, trials)):
-            right.plot([stats.chi2.isf(level / tried, max(df, 1))] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
+        trims = table["scan_trim"].to_numpy(dtype=float)[::-1]  # a step a scan placed: the largest of the scan's
+        for y, (df, tried, trim) in enumerate(zip(degrees, trials, trims)):
+            right.plot([critical_value(level / tried, df, trim)] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
         right.set_xscale("symlog", linthresh=10.0)
     right.set(xlabel="likelihood ratio / its scale (black: its test's level)",
               title="candidates fitted with the person")
     fig.suptitle(f"{_name(diagnosis.base)}: is an effect missing? blue: proposed", fontsize=10)
+    return save(fig, path, DPI)
+
+
+def plot_step_scan(diagnosis, path=None) -> Figure:
+    """When does the person change? The score statistics of a step of ``f_h`` and of ``xi_h`` at every time
+    ``diagnose``'s scan tested (:func:`~smd_statespace.person.breaks.step_scan`), against the record's time.
+
+    Per kind of step a panel: the robust (cycle-clustered) statistic in blue and the plain one in grey, the
+    level of the largest of them at ``diagnose``'s level (Andrews' distribution,
+    :func:`~smd_statespace.person.breaks.critical_value`) dashed, and where the step was placed (the plain
+    statistic's largest) as a vertical line. A person who changes once shows one peak above the line; a drift,
+    a broad hump; a person who does not change, nothing above it.
+    """
+    scans = diagnosis.scans
+    fig = Figure(figsize=(10, 2.6 * max(len(scans), 1)), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(max(len(scans), 1), 1, sharex=True, squeeze=False)[:, 0])
+    parameter = {"f_step": "f_h (stiffness)", "xi_step": "xi_h (damping)"}
+    for ax, (kind, scan) in zip(axes, scans.items()):
+        table = scan["table"]
+        ax.plot(table["time_s"], table["lm"], color="0.6", lw=0.7, label="score statistic")
+        ax.plot(table["time_s"], table["lm_robust"], color="tab:blue", lw=0.9, label="robust (cycles as clusters)")
+        ax.axhline(critical_value(diagnosis.level, 1, scan["trim"]), color="k", ls="--", lw=0.8,
+                   label=f"level of the largest (p {diagnosis.level:.2g})")
+        ax.axvline(scan["time_s"], color="tab:red", lw=0.8, label=f"placed at {scan['time_s']:.2f} s")
+        ax.set_yscale("symlog", linthresh=10.0)
+        ax.set_ylim(bottom=0.0)
+        ax.set(ylabel="statistic", title=f"a step of {parameter.get(kind, kind)}: largest robust "
+                                          f"{scan['lm_robust']:.1f}, p {scan['p']:.2g} as the largest of the scan")
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1].set_xlabel("time (s, the record's)")
+    fig.suptitle(f"{_name(diagnosis.base)}: when does the person change? a step tested at every sample",
+                 fontsize=10)
     return save(fig, path, DPI)
