@@ -33,7 +33,9 @@ screens by score tests (``term_abs_u``: a spring stiffer in compression, ``term_
 speed, ``term_f_drift``: ``f_h`` drifting over the record; simulated with fixed scales, 1 cm, 0.15 m/s and the
 record's length, which the library rescales to each record's motion). The effect's size is
 measured on every record as the RMS of the GRF difference it makes (same
-seed, noise-free, with and without the effect) over the noise sd.
+seed, noise-free, with and without the effect) over the noise sd, and over the person's innovations' sd (in
+brackets: the noise the model sees, which on a quiet plate is the misfit of the force's variation, not the
+plate's noise).
 
 Everything random comes from ``numpy.random.SeedSequence(--seed)``, one
 child per record keyed by its place (generator, kind, size, index): fresh
@@ -233,6 +235,10 @@ def one(task) -> dict:
         # default (measured_floor), is left out so that diagnose can be asked to find it
         base = identify_person(record, measured_floor=False)
         base_seconds = time.perf_counter() - moment
+        if effects:  # the effect against the noise the model sees: its innovations' sd (N), not the plate's
+            newton = row["effect_size"] * (sim.truth["noise_n"] if generator.startswith("lab")
+                                           else NOISE * person["mass"] * G)
+            row["effect_vs_innovations"] = newton / (base.sigma * person["mass"])
         candidates = [record_default(cls, base) for cls in EFFECTS.values()]
         candidates = [c for c in candidates if c is not None]  # without floor_acc the floor is the estimated mode
         diagnosis = diagnose_person(base, candidates=candidates, library=True)
@@ -277,7 +283,7 @@ def one(task) -> dict:
 
 def summary(frame: pd.DataFrame) -> list:
     """Markdown table: one row per kind, size and generator."""
-    lines = ["| hidden effect | size | generator | records (failed) | effect / noise | ranked first | "
+    lines = ["| hidden effect | size | generator | records (failed) | effect / noise (/ innovations' sd) | ranked first | "
              "what came first | \\|f_h error\\| without -> with the true effect | f_h worse with it (by > 1 sd) | "
              "\\|xi_h error\\| without -> with | effect parameter error, covered | Ljung-Box passes before -> after | "
              "f_h determined before -> after; covered | s per record (diagnose, identify --effect) | "
@@ -292,6 +298,8 @@ def summary(frame: pd.DataFrame) -> list:
         proposed = ok["proposed"].replace("", "nothing").str.replace(r"f_step@[0-9.]+", "f_step@t", regex=True)
         firsts = ", ".join(f"{k} {v}" for k, v in proposed.value_counts().items())
         effect = f"{ok['effect_size'].median():.1f}" if "effect_size" in ok and ok["effect_size"].notna().any() else "-"
+        if "effect_vs_innovations" in ok and ok["effect_vs_innovations"].notna().any():
+            effect += f" ({ok['effect_vs_innovations'].median():.1f})"
         passes_before = int((ok["ljung_box_before"] >= 0.01).sum())
         if kind in FITTED:
             before = (100 * (ok["f_h_before"] / ok["f_h"] - 1)).abs()
