@@ -123,7 +123,7 @@ def test_the_measured_floor_brings_the_person_nearer_the_truth_not_further(on_fl
     with_floor, without = abs(result.f_h / truth - 1.0), abs(result.before.f_h / truth - 1.0)
     assert [effect.spec for effect in result.effects] == ["floor_mode"]
     assert with_floor < 0.05 and with_floor <= without + 0.01
-    assert not any(row["on_bound"] for row in result.before.comparison if row["variation"] == result.model.variation)
+    assert not any(row.on_bound for row in result.before.comparison if row.variation == result.model.variation)
 
 
 def test_the_printed_likelihood_ratio_is_twice_the_difference_of_the_printed_log_likelihoods(on_floor):

@@ -582,12 +582,12 @@ def test_auto_chooses_among_the_variation_models_at_their_own_cycle_starts():
     sim = simulate_bouncing(mass=61.11, f_b=3.3464272409903266, f_h=2.5314826062611298, xi_h=0.39824060175194365,
                             duration=30.0, fs=100.0, blf=blf, noise=0.01, seed=322228685, variation="tempo")
     auto = identify_person(sim.record)
-    replaced = {row["variation"]: row for row in auto.comparison if row["timing"] == "re-placed"}
+    replaced = {row.variation: row for row in auto.comparison if row.timing == "re-placed"}
     for variation in ("independent", "smooth"):
         alone = identify_person(sim.record, variation=variation)
-        assert replaced[variation]["loglike"] == pytest.approx(alone.loglike, abs=0.05), variation
-    chosen = min(replaced.values(), key=lambda row: row["aic"])
-    assert auto.model.variation == chosen["variation"] == "independent"
+        assert replaced[variation].loglike == pytest.approx(alone.loglike, abs=0.05), variation
+    chosen = min(replaced.values(), key=lambda row: row.aic)
+    assert auto.model.variation == chosen.variation == "independent"
     low, high = auto.intervals["f_h"]
     assert low < 2.5314826062611298 < high
 

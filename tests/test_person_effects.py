@@ -482,10 +482,10 @@ def test_identify_effect_re_places_the_cycle_starts_with_the_effect_and_tests_it
     moved = np.abs(fitted.model.timing.boundaries - base.model.timing.boundaries)
     assert moved.max() > 0.002 and fitted.loglike > screened.loglike + 1.0
     assert fitted.effect_test() == pytest.approx(screened.effect_test())
-    assert {row["variation"] for row in fitted.comparison} == {row["variation"] for row in base.comparison}
-    assert all(row["effects"] == ["harmonics:count=2"] for row in fitted.comparison)
-    assert fitted.model.variation == min((row for row in fitted.comparison if not row["on_bound"]),
-                                         key=lambda row: row["aic"])["variation"]
+    assert {row.variation for row in fitted.comparison} == {row.variation for row in base.comparison}
+    assert all(row.effects == ("harmonics:count=2",) for row in fitted.comparison)
+    assert fitted.model.variation == min((row for row in fitted.comparison if not row.on_bound),
+                                         key=lambda row: row.aic).variation
 
 
 def test_a_candidate_whose_terms_are_all_near_zero_is_not_evidence():

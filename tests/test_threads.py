@@ -64,7 +64,7 @@ def test_identify_in_two_threads_equals_one(record):
     np.testing.assert_array_equal(one.params, two.params)
     np.testing.assert_array_equal(one.cov, two.cov)  # the information's passes in threads too
     assert one.model.variation == two.model.variation
-    assert [row["loglike"] for row in one.comparison] == [row["loglike"] for row in two.comparison]
+    assert [row.loglike for row in one.comparison] == [row.loglike for row in two.comparison]
     assert one.change is not None and one.change["z"] == two.change["z"]
     # and the answer is the person's, not merely the same twice
     assert abs(one.f_h - 2.9) < 3 * one.sd("f_h")

@@ -82,7 +82,7 @@ def honest_intervals(result) -> dict:
         halves = result.change["halves"]
         out[name] = (float(min(out[name][0], *(h[f"{name}_low"] for h in halves))),
                      float(max(out[name][1], *(h[f"{name}_high"] for h in halves))))
-    values = [row["f_h"] for row in result.plausible_variations()]
+    values = [row.f_h for row in result.plausible_variations()]
     if values and max(values) > (1.0 + VARIATION_DISAGREEMENT) * min(values):
         low, high = out["f_h"]
         out["f_h"] = (float(min(low, *values)), float(max(high, *values)))

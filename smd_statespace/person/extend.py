@@ -304,7 +304,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
     # the test is made here, at result's starts and variation model: its statistic and its count of added unknowns
     comparison, tested = result.comparison, fitted["loglike"]
     tested_df = model.unknowns(fitted["params"]) - result.model.unknowns(result.params)
-    if timing and any(row.get("timing") == "re-placed" for row in result.comparison):
+    if timing and any(row.timing == "re-placed" for row in result.comparison):
         model, fitted, comparison = _with_own_timing(model, fitted, result, effects, progress, threads)
         if model.approximate:  # the starts moved: the path is predicted again about them
             model, fitted, more, settled = _settle_path(model, fitted, result.loglike, progress)
@@ -413,10 +413,10 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
 
     # called only when result re-placed its starts: its comparison lists every variation model it fitted,
     # the one it kept among them
-    variations = list(dict.fromkeys(row["variation"] for row in result.comparison))
+    variations = list(dict.fromkeys(row.variation for row in result.comparison))
     suspect, earlier = set(), result
     while earlier is not None and any(isinstance(effect, FloorMotion) for effect in effects):
-        suspect |= {row["variation"] for row in earlier.comparison if row["on_bound"]}
+        suspect |= {row.variation for row in earlier.comparison if row.on_bound}
         earlier = earlier.before
     fits = []
     with tqdm(total=len(variations) * (TIMING_ITERATIONS + 2) + 1, desc="effects: cycle starts", unit="fit",
@@ -432,5 +432,5 @@ def _with_own_timing(model: RecordModel, fitted, result, effects, progress=False
         chosen, chosen_fit, rows = choose_with_own_timing(model_for, model.timing, fits, first, bar.update,
                                                           suspect=suspect, threads=threads)
     specs = [effect.spec for effect in effects]
-    rows = [{**row, "effects": specs} for row in rows]
+    rows = [replace(row, effects=tuple(specs)) for row in rows]
     return chosen, chosen_fit, rows

@@ -260,11 +260,11 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         comparison = [comparison_row(m, f, "first") for m, f in fits]
         # a fit with f_h or xi_h on its search bound has not estimated them (a variation model that is
         # too flexible lets the person's resonance imitate a missing effect): it wins only if all do
-        eligible = [i for i, row in enumerate(comparison) if not row["on_bound"]] or list(range(len(fits)))
-        best = min(eligible, key=lambda i: comparison[i]["aic"])
+        eligible = [i for i, row in enumerate(comparison) if not row.on_bound] or list(range(len(fits)))
+        best = min(eligible, key=lambda i: comparison[i].aic)
         model, fitted = fits[best]
         if timing == "model":
-            suspect = {row["variation"] for row in comparison if row["on_bound"]}  # at the first timing
+            suspect = {row.variation for row in comparison if row.on_bound}  # at the first timing
             model, fitted, refined = choose_with_own_timing(model_for, cycle_timing, fits, best, step, suspect,
                                                             threads)
             comparison += refined

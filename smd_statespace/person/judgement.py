@@ -105,11 +105,11 @@ def variation_disagreement(result) -> str:
     rows = result.plausible_variations()
     if len(rows) < 2:
         return ""
-    values = [row["f_h"] for row in rows]
+    values = [row.f_h for row in rows]
     if max(values) <= (1.0 + VARIATION_DISAGREEMENT) * min(values):
         return ""
-    best = min(row["aic"] for row in rows)
-    parts = ", ".join(f"{row['variation']} {row['f_h']:.3g} Hz (AIC {row['aic'] - best:+.1f})" for row in rows)
+    best = min(row.aic for row in rows)
+    parts = ", ".join(f"{row.variation} {row.f_h:.3g} Hz (AIC {row.aic - best:+.1f})" for row in rows)
     spans = " (the interval spans them)" if result.interval_method.startswith("calibrated") else ""
     return (f"the variation models disagree on f_h: {parts}; f_h depends on how the force is assumed to vary "
             f"between cycles, which the record does not settle{spans}: read the interval, not the value, or "
@@ -122,11 +122,10 @@ def plausible_variations(result) -> list:
     the force (as the result's ``at_bouncing_frequency``), AIC within :data:`VARIATION_AIC_CLOSE` of the best of them.
     For a fit with effects, the fits with the same effects only (none when its cycle starts were kept from
     the person without them: :func:`~smd_statespace.person.extend.fit_effects` with ``timing=False``)."""
-    specs = [effect.spec for effect in result.effects]
+    specs = tuple(effect.spec for effect in result.effects)
     f_b = float(np.median(result.model.timing.f_b))
-    rows = [row for row in result.comparison if row.get("timing") == "re-placed" and row["converged"]
-            and row.get("effects", []) == specs
-            and not row["on_bound"] and row["xi_h"] <= 1.0
-            and not stands_in_for_force(row["f_h"], row["xi_h"], f_b, result.model.n_harmonics, row["variation"])]
-    best = min((row["aic"] for row in rows), default=0.0)
-    return [row for row in rows if row["aic"] - best < VARIATION_AIC_CLOSE]
+    rows = [row for row in result.comparison if row.timing == "re-placed" and row.converged and row.effects == specs
+            and not row.on_bound and row.xi_h <= 1.0
+            and not stands_in_for_force(row.f_h, row.xi_h, f_b, result.model.n_harmonics, row.variation)]
+    best = min((row.aic for row in rows), default=0.0)
+    return [row for row in rows if row.aic - best < VARIATION_AIC_CLOSE]

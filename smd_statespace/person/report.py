@@ -169,7 +169,7 @@ def result_dict(result) -> dict:
                                                       "ljung_box_p")}
     out["warnings"] = result.warnings
     out["notes"] = list(result.notes)
-    out["variation_models"] = result.comparison
+    out["variation_models"] = [row.to_dict() for row in result.comparison]
     return out
 
 

@@ -56,8 +56,9 @@ class PersonResult:
     interval_method : str
         ``"profile"`` or ``"wald"``.
     level : float
-    comparison : list of dict
-        The variation models tried: log-likelihood, parameters, AIC.
+    comparison : list of VariationFit
+        The variation models tried (:class:`~smd_statespace.person.search.VariationFit`: log-likelihood, AIC,
+        the person, at which cycle starts).
     n_evaluations : int
         Likelihood evaluations of the search.
     record_warnings : list of str

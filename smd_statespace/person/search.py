@@ -16,6 +16,7 @@ effects or results.
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy import optimize, stats
@@ -26,7 +27,7 @@ from .threads import thread_map
 from .timing import CycleTiming
 
 __all__ = ["COV_TYPES", "WIDER_SANDWICH", "FitError", "fit_model", "information", "profile_interval",
-           "corrected_timing", "fit_timing", "choose_with_own_timing", "comparison_row"]
+           "corrected_timing", "fit_timing", "choose_with_own_timing", "comparison_row", "VariationFit"]
 
 
 START_F_H = (1.2, 1.7, 2.3, 3.0, 3.9, 5.0)
@@ -445,17 +446,57 @@ that the bound rule below catches when it runs onto 6 Hz.
 """
 
 
-def comparison_row(model, fitted, timing) -> dict:
-    """One variation model's fit in ``result.comparison``: its likelihood, AIC, person, and at which timing.
+@dataclass(frozen=True)
+class VariationFit:
+    """One variation model's fit, a row of ``result.comparison`` (``person.json``'s ``variation_models``).
 
-    ``on_bound``: ``f_h`` or ``xi_h`` sits on a search bound, or ``f_h``'s Wald interval reaches one
-    (:func:`reaches_bound`).
+    Attributes
+    ----------
+    variation : str
+        The variation model (:data:`~smd_statespace.person.variation.VARIATIONS`).
+    timing : {"first", "re-placed"}
+        At which cycle starts: the first timing, or those the model re-placed with its own fit.
+    loglike : float
+        Its log-likelihood.
+    n_params : int
+        Its searched parameters.
+    aic : float
+        ``2 n_params - 2 loglike``.
+    converged : bool
+        Whether its search converged.
+    on_bound : bool
+        ``f_h`` or ``xi_h`` on a search bound, or ``f_h``'s Wald interval reaching one (:func:`reaches_bound`).
+    f_h, xi_h : float
+        Its person (Hz, -).
+    effects : tuple of str
+        The effects in the model (their specs): a fit with effects compares the fits with the same effects only.
     """
+
+    variation: str
+    timing: str
+    loglike: float
+    n_params: int
+    aic: float
+    converged: bool
+    on_bound: bool
+    f_h: float
+    xi_h: float
+    effects: tuple = ()
+
+    def to_dict(self) -> dict:
+        """The row as JSON takes it (``effects`` a list)."""
+        return {**asdict(self), "effects": list(self.effects)}
+
+
+def comparison_row(model, fitted, timing, effects=()) -> VariationFit:
+    """One variation model's fit in ``result.comparison``: its likelihood, AIC, person, and at which timing
+    (:class:`VariationFit`)."""
     named = model.unpack(fitted["params"])
     on_bound = model.person_at_bound(fitted["params"]) or reaches_bound(model, fitted["params"])
-    return {"variation": model.variation, "timing": timing, "loglike": fitted["loglike"],
-            "n_params": len(fitted["params"]), "aic": 2 * len(fitted["params"]) - 2 * fitted["loglike"],
-            "converged": fitted["converged"], "on_bound": on_bound, "f_h": named["f_h"], "xi_h": named["xi_h"]}
+    return VariationFit(variation=model.variation, timing=timing, loglike=float(fitted["loglike"]),
+                        n_params=len(fitted["params"]), aic=2 * len(fitted["params"]) - 2 * float(fitted["loglike"]),
+                        converged=bool(fitted["converged"]), on_bound=bool(on_bound), f_h=float(named["f_h"]),
+                        xi_h=float(named["xi_h"]), effects=tuple(effects))
 
 
 def reaches_bound(model, params, z=BOUND_REACH) -> bool:
@@ -513,12 +554,12 @@ def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()
     finished = [(m, f) for m, f, _ in chains]
     suspect = set(suspect) | {m.variation for m, _, ran_onto_bound in chains if ran_onto_bound}
     rows = [comparison_row(m, f, "re-placed") for m, f in finished]
-    inside = [i for i, row in enumerate(rows) if not row["on_bound"] and row["converged"]]
+    inside = [i for i, row in enumerate(rows) if not row.on_bound and row.converged]
     # a model that ran onto a bound at the first timing is suspect even when the re-placed starts bring it in
     never_on_bound = [i for i in inside if not fits[i][0].person_at_bound(fits[i][1]["params"])
                       and fits[i][0].variation not in suspect]
     eligible = never_on_bound or inside or [first_best]
-    best = min(eligible, key=lambda i: rows[i]["aic"])
+    best = min(eligible, key=lambda i: rows[i].aic)
     model, quick = finished[best]
     fitted = fit_model(model, quick["params"])
     step()
