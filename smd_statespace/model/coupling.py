@@ -126,6 +126,14 @@ def modal_coupling(mass, f_h, xi_h, shape) -> dict:
     dict
         ``u`` (``a``, 1/s^2), ``u_dot`` (``b``, 1/s) and ``force_g`` (``e``, -), shape (N,); ``q`` (``A``,
         1/s^2), ``q_dot`` (``B``, 1/s) and ``drive`` (``D``, N per m/s^2: kg), shape (N, m).
+
+    Examples
+    --------
+    A 70 kg person at 2 Hz where mode 1 has the ordinate 0.5: ``A = w_h^2 phi``, ``D = -M_h phi``.
+
+    >>> links = modal_coupling([70.0], [2.0], [0.3], [[0.5]])
+    >>> round(float(links["q"][0, 0] / links["u"][0]), 12), float(links["drive"][0, 0])
+    (-0.5, -35.0)
     """
     shape = np.asarray(shape, dtype=float)
     leg = leg_derivatives(0.0, 0.0, 0.0, 0.0, f_h, xi_h)  # at rest: the coefficients are all that is used

@@ -12,11 +12,12 @@ spring and damper of Eq. 2 act on the motion relative to the floor::
 
     u_i'' = -k_i (u_i - z_i) - c_i (u_i' - z_i') + g F_i(t)                   (Eq. 2)
 
-with ``k_i = w_h^2`` and ``c_i = 2 xi_h w_h`` per unit mass. Neither they nor the
-coupling are written again here: :func:`smd_statespace.model.coupling.modal_coupling`
-gives both equations' coefficients (from Eq. 2's function every estimator uses, on
-unit inputs, which is exact because Eq. 2 is linear), the ``floor_mode`` effect's
-and :func:`smd_statespace.simulation.floor.system_matrices`' coupling too.
+with ``k_i = w_h^2`` and ``c_i = 2 xi_h w_h`` per unit mass. Neither equation is
+written again here: both are :mod:`smd_statespace.model.coupling` (Eq. 2 on ``u - z``
+through the Eq. 2 every estimator uses, and the reaction on the modes), read as
+linear maps on unit inputs by :func:`~smd_statespace.model.coupling.modal_coupling`
+(exact: both are linear). The ``floor_mode`` effect and
+:func:`smd_statespace.simulation.floor.system_matrices` use the same coupling.
 ``g F_i`` is the biomechanical force of Eq. 4 per unit mass (0 for a passive
 person). The plate under a person measures their GRF ``M_i (g + u_i'')``
 (Eq. 3); by Newton's third law the person pushes the floor down with it, so
