@@ -1,23 +1,28 @@
-"""Eq. 2 is written once: changed in ``model/equations.py``, every path that uses it follows.
+"""Eq. 2 and the person-floor coupling are written once: changed in ``model/``, every path that uses them follows.
 
 The change is a leg 1.1 times as fast (``f_h`` -> 1.1 ``f_h`` inside Eq. 2 only). Every path, run with the change
 at ``f_h``, must then give what it gives without the change at 1.1 ``f_h``: a path that wrote Eq. 2 (or its
 derivative, its frequency response, the floor's spring and damper on ``u - z``) again would not follow.
 ``simulation.floor.coupled_frf`` is left out on purpose: it is the independent route (the second-order matrices
 from ``K_h``, ``C_h`` of Eq. 17, 18) that the tests check the state-space route against.
+
+The coupling of ``model/coupling.py`` (Section 6) is changed the same way, once in each of its two parts: the leg
+on ``u - z`` 1.1 times as fast (``leg_acceleration``; the same as 1.1 ``f_h`` for every coupled path) and the
+reaction on the modes 1.1 times as strong (``modal_force``; the same as modal masses 1.1 times lighter). The
+``floor_mode`` effect, ``simulation.floor.system_matrices`` and ``structure.coupled`` must follow both.
 """
 
 import numpy as np
 import pytest
 
-from smd_statespace.effects import make_effect
-from smd_statespace.model import SMDModel, equations
+from smd_statespace.effects import FloorMode, make_effect
+from smd_statespace.model import SMDModel, coupling, equations
 from smd_statespace.model.inputs import CycleInputs
 from smd_statespace.person.dynamics import PersonDynamics
 from smd_statespace.simulation import simulate_bouncing, simulate_lab_record
 from smd_statespace.simulation.floor import FloorModel, coupled_frf, system_matrices
-from smd_statespace.structure.coupled import Coupling, state_matrix
-from smd_statespace.structure.modes import sdof
+from smd_statespace.structure.coupled import Coupling, occupied_eigenvalues, person_coefficients, state_matrix
+from smd_statespace.structure.modes import ModalModel, sdof
 
 F_H, XI_H, FASTER = 2.5, 0.3, 1.1
 
@@ -96,3 +101,80 @@ def test_the_change_is_seen_where_a_path_keeps_its_own_copy(monkeypatch):
                                                                       force_g))
     with pytest.raises(AssertionError):
         np.testing.assert_allclose(coupled_frf(frequency, 70, F_H, XI_H, floor)["u_ddot"], unchanged, rtol=1e-7)
+
+
+def _coupled_paths(f_h, lighter):
+    """What each user of ``model.coupling`` gives at ``f_h`` on floor modes ``lighter`` times lighter, by name."""
+    rng = np.random.default_rng(np.random.SeedSequence(4))
+    time = np.linspace(0.0, 2.0, 101)
+    inputs = CycleInputs(f_b=2.0, time=time)
+    floor = FloorMode("modal", frequency=3.48, damping=0.004, mass_ratio=0.01 * lighter)
+    model = SMDModel(effects=[floor])
+    x = rng.normal(0.0, [0.02, 0.2] + [0.0] * (model.n_state - 4) + [1e-3, 1e-2], (time.size, model.n_state))
+    x[:, model.index("f_h")], x[:, model.index("xi_h")], x[:, model.index("a0")] = f_h, XI_H, 0.1
+    acc, acc_jacobian = rng.normal(0.0, 3.0, time.size), rng.normal(0.0, 3.0, (time.size, model.n_state))
+    modes = FloorModel(frequency=(5.0, 7.5), damping=(0.02, 0.01), modal_mass=(1000.0 / lighter, 3000.0 / lighter),
+                       shape=(0.9, -0.5))
+    structure = ModalModel(np.array(modes.frequency), np.array(modes.damping), np.array(modes.modal_mass), ("a", "b"),
+                           np.zeros((2, 2)), np.array([[0.9, -0.5], [0.4, 0.8]]))
+    crowd = Coupling(structure, [0, 1, 1], [70.0, 80.0, 60.0], [f_h, 1.3 * f_h, 0.8 * f_h], [XI_H, 0.4, 0.2])
+    return {
+        "floor_mode effect: the floor's pull on the COM": floor.acceleration(model, x, time, inputs),
+        "floor_mode effect: its Jacobian (EKF)": floor.acceleration_jacobian(model, x, time, inputs),
+        "floor_mode effect: the floor's rates": floor.slot_rates(model, x, time, inputs, acc),
+        "floor_mode effect: their Jacobian": floor.slot_rates_jacobian(model, x, time, inputs, acc, acc_jacobian),
+        "person on floor modes: system_matrices": np.concatenate([m.ravel() for m in system_matrices(
+            70.0, f_h, XI_H, modes)]),
+        "crowd on modes: state_matrix": state_matrix(crowd),
+        "crowd on modes: person_coefficients": np.concatenate(person_coefficients(crowd.f_h, crowd.xi_h)),
+        "crowd on modes: occupied eigenvalues (Newton on det D)": occupied_eigenvalues(crowd),
+    }
+
+
+def _change_the_coupling(monkeypatch, part):
+    """Change ``part`` of ``model.coupling``: the leg 1.1 times as fast or the reaction 1.1 times as strong."""
+    if part == "leg":
+        leg = coupling.leg_acceleration
+        monkeypatch.setattr(coupling, "leg_acceleration", lambda u, u_dot, z, z_dot, f_h, xi_h, force_g=0.0: leg(
+            u, u_dot, z, z_dot, FASTER * np.asarray(f_h), xi_h, force_g))
+    else:
+        reaction = coupling.modal_force
+        monkeypatch.setattr(coupling, "modal_force", lambda shape, mass, u_ddot: FASTER * reaction(shape, mass, u_ddot))
+
+
+@pytest.mark.parametrize("part", ["leg", "reaction"])
+def test_changing_the_coupling_in_one_place_changes_its_three_users(monkeypatch, part):
+    """The floor effect, the person on floor modes and the crowd on a structure all follow a change of either part of
+    the one coupling: the leg's change is 1.1 ``f_h`` for them (not for the model's own Eq. 2), the reaction's change
+    modal masses 1.1 times lighter (a mass ratio 1.1 times larger)."""
+    unchanged = _coupled_paths(FASTER * F_H, 1.0) if part == "leg" else _coupled_paths(F_H, FASTER)
+    original = _coupled_paths(F_H, 1.0)
+    _change_the_coupling(monkeypatch, part)
+    changed = _coupled_paths(F_H, 1.0)
+    model = SMDModel(effects=[FloorMode("modal", frequency=3.48, damping=0.004)])
+    chain = np.ones(model.n_state)
+    chain[model.index("f_h")] = FASTER if part == "leg" else 1.0  # d/df_h: the chain rule's factor of the faster leg
+    moved = 0
+    for name, value in changed.items():
+        expected = unchanged[name] * (chain if name == "floor_mode effect: its Jacobian (EKF)" else 1.0)
+        np.testing.assert_allclose(value, expected, rtol=1e-7, atol=1e-9 * np.max(np.abs(expected)), err_msg=name)
+        moved += not np.allclose(value, original[name], rtol=1e-7, atol=0.0)
+    # the leg moves everything but the floor's own rates; the reaction moves those and the matrices, not the leg
+    assert moved == (6 if part == "leg" else 5)
+
+
+@pytest.mark.parametrize("part", ["leg", "reaction"])
+def test_a_path_that_writes_the_coupling_itself_does_not_follow(monkeypatch, part):
+    """The negative case: ``coupled_frf`` writes the person on floor modes out from ``K_h``, ``C_h`` (Eq. 17, 18) and
+    its own ``u - z``; it does not follow the change of the coupling (``system_matrices``, on the same floor, does),
+    and the comparison above says so."""
+    modes = FloorModel(frequency=(5.0,), damping=(0.02,), modal_mass=(1000.0,), shape=(0.9,))
+    lighter = FloorModel(frequency=(5.0,), damping=(0.02,), modal_mass=(1000.0 / FASTER,), shape=(0.9,))
+    frequency = np.linspace(0.5, 8, 40)
+    f_h, floor = (FASTER * F_H, modes) if part == "leg" else (F_H, lighter)
+    frf, matrix = coupled_frf(frequency, 70, f_h, XI_H, floor)["u_ddot"], system_matrices(70, f_h, XI_H, floor)[0]
+    _change_the_coupling(monkeypatch, part)
+    np.testing.assert_allclose(system_matrices(70, F_H, XI_H, modes)[0], matrix, rtol=1e-12,
+                               atol=1e-12 * np.max(np.abs(matrix)))
+    with pytest.raises(AssertionError):
+        np.testing.assert_allclose(coupled_frf(frequency, 70, F_H, XI_H, modes)["u_ddot"], frf, rtol=1e-7)

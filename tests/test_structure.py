@@ -176,3 +176,13 @@ def test_measures_of_a_sine_are_the_closed_forms():
     assert values["vdv"] == pytest.approx((3 * duration / 8) ** 0.25 * amplitude, rel=1e-12)
     np.testing.assert_allclose(running_rms(sine, fs), amplitude / np.sqrt(2), rtol=1e-9)
     assert running_rms(sine[:100], fs).size == 0
+
+
+@pytest.mark.parametrize("modes", [None, [1], [2, 5]])
+def test_the_plate_example_is_the_floor_modules_table3(modes):
+    """``structure.plate`` takes its modes from ``FloorModel.table3`` (one selection of Table 3, not two)."""
+    ours, theirs = plate(modes), FloorModel.table3(modes)
+    for name in ("frequency", "damping", "modal_mass"):
+        np.testing.assert_array_equal(getattr(ours, name), getattr(theirs, name))
+    np.testing.assert_array_equal(ours.shapes, [theirs.shape])
+    assert ours.points == ("mid-span",) and ours.name == "plate of Table 3, mid-span"

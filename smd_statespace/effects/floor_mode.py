@@ -8,7 +8,7 @@ import numpy as np
 
 from .. import article
 from ..errors import OptionError, check_range
-from ..model import equations
+from ..model import coupling
 from ..model.core import F_H, TWO_PI, XI_H, Slot
 from ..model.effect import Effect, slot_count, spec_value
 from .excitation import ambient_floor_excitation, ambient_line_count
@@ -26,8 +26,10 @@ class FloorMode(Effect):
         u'' = -omega_h^2 (u - z) - 2 xi_h omega_h (u' - z') + F_bio / M_h
 
     so the effect adds ``omega_h^2 z + 2 xi_h omega_h z'`` to the acceleration
-    of Eq. 10. ``u''`` stays the absolute COM acceleration, which the GRF
-    measures through Eq. 3. Where ``z`` comes from depends on ``source``:
+    of Eq. 10 (:func:`smd_statespace.model.coupling.leg_acceleration`, the
+    coupling every floor model uses). ``u''`` stays the absolute COM
+    acceleration, which the GRF measures through Eq. 3. Where ``z`` comes
+    from depends on ``source``:
 
     ``"measured"``
         The record has a ``floor_acc`` column; its high-passed, integrated
@@ -41,7 +43,8 @@ class FloorMode(Effect):
             z'' = -omega_f^2 z - 2 xi_f omega_f z' - mass_ratio u''
 
         i.e. ``m_f z'' + c_f z' + k_f z = -M_h u''`` divided by the modal mass
-        ``m_f = M_h / mass_ratio``: the floor is driven by the dynamic GRF.
+        ``m_f = M_h / mass_ratio``: the floor is driven by the dynamic GRF
+        (:func:`~smd_statespace.model.coupling.modal_force` with ``phi = 1``).
         Slots ``z`` (m), ``z_dot`` (m/s), then the parameters ``f_f`` (Hz),
         ``xi_f`` (-) and ``mass_ratio`` (-), all three non-linear.
 
@@ -470,16 +473,16 @@ class FloorMode(Effect):
 
     def acceleration(self, model, x, t, inputs):
         z, z_dot = self.floor_motion(model, x, t, inputs)
-        # Section 6: the spring and damper of Eq. 2 act on u - z; Eq. 2 gave their u, u' terms, these are the rest
-        return equations.smd_acceleration(-z, -z_dot, x[..., F_H], x[..., XI_H], 0.0)
+        # Section 6: the leg acts on u - z; the model's Eq. 2 gave the u, u' terms, these are the floor's
+        return coupling.leg_acceleration(0.0, 0.0, z, z_dot, x[..., F_H], x[..., XI_H])
 
     def acceleration_jacobian(self, model, x, t, inputs):
         z, z_dot = self.floor_motion(model, x, t, inputs)
-        eq2 = equations.acceleration_derivatives(-z, -z_dot, x[..., F_H], x[..., XI_H])
+        leg = coupling.leg_derivatives(0.0, 0.0, z, z_dot, x[..., F_H], x[..., XI_H])
         jac = np.zeros(x.shape)
-        jac[..., F_H], jac[..., XI_H] = eq2["f_h"], eq2["xi_h"]
+        jac[..., F_H], jac[..., XI_H] = leg["f_h"], leg["xi_h"]
         if self.modal:
-            jac[..., model.index("z")], jac[..., model.index("z_dot")] = -eq2["u"], -eq2["u_dot"]
+            jac[..., model.index("z")], jac[..., model.index("z_dot")] = leg["z"], leg["z_dot"]
         return jac
 
     def slot_rates(self, model, x, t, inputs, acc):
@@ -491,7 +494,8 @@ class FloorMode(Effect):
         f_f, xi_f, mu = (model.value(x, name) for name in ("f_f", "xi_f", "mass_ratio"))
         omega_f = TWO_PI * f_f
         rates[..., 0] = z_dot
-        rates[..., 1] = -(omega_f**2) * z - 2.0 * xi_f * omega_f * z_dot - mu * acc
+        # the floor's own mode, driven by the reaction -M_h u'' over its modal mass M_h / mu (phi = 1: z is q)
+        rates[..., 1] = -(omega_f**2) * z - 2.0 * xi_f * omega_f * z_dot + coupling.modal_force(1.0, mu, acc)
         if self._excitation is not None:  # a simulation's ambient floor vibration
             rates[..., 1] += self._excitation.scalar(t) if np.ndim(t) == 0 else self._excitation(t)
         return rates
@@ -506,11 +510,11 @@ class FloorMode(Effect):
         f_f, xi_f, mu = (model.value(x, name) for name in ("f_f", "xi_f", "mass_ratio"))
         omega_f = TWO_PI * f_f
         jac[..., 0, i_v] = 1.0
-        row = -np.asarray(mu)[..., None] * acc_jacobian
+        row = coupling.modal_force(1.0, np.asarray(mu)[..., None], acc_jacobian)  # it is linear in u'' and M_h
         row[..., i_z] += -(omega_f**2)
         row[..., i_v] += -2.0 * xi_f * omega_f
         derivatives = {"f_f": -TWO_PI * (2.0 * omega_f * z + 2.0 * xi_f * z_dot), "xi_f": -2.0 * omega_f * z_dot,
-                       "mass_ratio": -acc}
+                       "mass_ratio": coupling.modal_force(1.0, 1.0, acc)}
         for name, derivative in derivatives.items():
             if name in model.state_names:
                 row[..., model.index(name)] += derivative

@@ -10,6 +10,8 @@ module                  what it holds
                         ``U, U_DOT, F_H, XI_H`` (Eq. 7)
 :mod:`.equations`       Eq. 2 (:func:`smd_acceleration`, :func:`acceleration_frf`),
                         ``K_h``, ``C_h``, ``BLF`` (Eq. 5, 17, 18)
+:mod:`.coupling`        a person on a moving floor (Section 6): Eq. 2 on
+                        ``u - z`` and the reaction on each floor mode
 :mod:`.discretisation`  one Euler or Runge-Kutta step and its exact
                         Jacobian (Eq. 11-12)
 :mod:`.prior`           :class:`Prior`, the independent prior of the slots

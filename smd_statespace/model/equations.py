@@ -5,19 +5,22 @@ function                         what it computes
 ================================ ==================================================
 :func:`smd_acceleration`         the COM acceleration of Eq. 2, the one place it is written
 :func:`acceleration_derivatives` its derivatives, taken from it (unit inputs, a complex step)
+:func:`linear_derivatives`       those two rules for any function linear in its inputs
 :func:`acceleration_frf`         Eq. 2's frequency response from force to acceleration, taken from it
 :func:`k_h`, :func:`c_h`         leg stiffness and damping (Eq. 17, 18)
 :func:`blf`                      biomechanical load factor (Eq. 5)
 ================================ ==================================================
 
-They are re-exported by :mod:`smd_statespace.model.core` and :mod:`smd_statespace.model`.
+All but :func:`linear_derivatives` are re-exported by :mod:`smd_statespace.model.core` and
+:mod:`smd_statespace.model`.
 
 Every other place that needs Eq. 2 calls :func:`smd_acceleration` through this module
 (``equations.smd_acceleration``), its derivatives and frequency response included, so that a change
 made here reaches every path: the per-cycle estimators' model and Jacobian, the record-level model,
-the simulators (on a rigid floor, on a floor, a lab's export), the floor effect and the plausibility
-rules (``tests/test_equation_once.py`` changes it here and checks each of them). Only the particle
-filter's compiled kernel keeps a twin, tested against it.
+the simulators (on a rigid floor, a lab's export), the person-floor coupling of
+:mod:`~smd_statespace.model.coupling` (and through it the floor effect, a person on floor modes and a
+crowd on a structure) and the plausibility rules (``tests/test_equation_once.py`` changes it here and
+checks each of them). Only the particle filter's compiled kernel keeps a twin, tested against it.
 """
 
 from __future__ import annotations
@@ -62,8 +65,8 @@ def smd_acceleration(u, u_dot, f_h, xi_h, force_g):
     :meth:`SMDModel.acceleration` (every estimator), the record-level model
     (through the model's rates) and the simulator
     (:mod:`smd_statespace.simulation.dynamics`; relative to the floor in
-    :mod:`smd_statespace.simulation.floor`) all call it; only the compiled
-    particle-filter kernel keeps a tested twin.
+    :func:`smd_statespace.model.coupling.leg_acceleration`) all call it; only
+    the compiled particle-filter kernel keeps a tested twin.
 
     Parameters
     ----------
@@ -94,7 +97,7 @@ def acceleration_derivatives(u, u_dot, f_h, xi_h) -> dict:
 
     Eq. 2 is linear in ``u``, ``u'`` and ``g F``: their coefficients are its values at unit inputs. Its
     derivatives in ``f_h`` and ``xi_h`` are complex steps (``Im f(p + i h) / h``, Squire & Trapp 1998),
-    exact to rounding.
+    exact to rounding. Both by :func:`linear_derivatives`.
 
     Parameters
     ----------
@@ -109,14 +112,38 @@ def acceleration_derivatives(u, u_dot, f_h, xi_h) -> dict:
         ``u`` (1/s^2), ``u_dot`` (1/s), ``force_g`` (-), ``f_h`` (m/s^2 per Hz) and ``xi_h`` (m/s^2): the
         partial derivatives of ``u''``.
     """
-    f_h, xi_h = np.asarray(f_h, dtype=float), np.asarray(xi_h, dtype=float)
-    return {
-        "u": smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0),
-        "u_dot": smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0),
-        "force_g": smd_acceleration(0.0, 0.0, f_h, xi_h, 1.0),
-        "f_h": np.imag(smd_acceleration(u, u_dot, f_h + 1j * COMPLEX_STEP, xi_h, 0.0)) / COMPLEX_STEP,
-        "xi_h": np.imag(smd_acceleration(u, u_dot, f_h, xi_h + 1j * COMPLEX_STEP, 0.0)) / COMPLEX_STEP,
-    }
+    return linear_derivatives(smd_acceleration, {"u": u, "u_dot": u_dot, "force_g": 0.0}, f_h=f_h, xi_h=xi_h)
+
+
+def linear_derivatives(function, inputs: dict, **parameters) -> dict:
+    """Partial derivatives of ``function(**inputs, **parameters)``, a function linear in ``inputs``.
+
+    Its coefficients on the inputs are its values at unit inputs (exact: it is linear in them); its derivatives in
+    the parameters are complex steps (``Im f(p + i h) / h``, Squire & Trapp 1998), exact to rounding. Eq. 2
+    (:func:`acceleration_derivatives`) and the leg on a moving floor
+    (:func:`smd_statespace.model.coupling.leg_derivatives`) take theirs from here.
+
+    Parameters
+    ----------
+    function : callable
+        Called with keywords: the names of ``inputs`` and of ``parameters``; linear in the inputs.
+    inputs : dict
+        The point: each input's value (float or ndarray).
+    **parameters : float or ndarray
+        The parameters (arrays broadcast), converted to float arrays.
+
+    Returns
+    -------
+    dict
+        The derivative in each input, then in each parameter, by name.
+    """
+    parameters = {name: np.asarray(value, dtype=float) for name, value in parameters.items()}
+    zeros = dict.fromkeys(inputs, 0.0)
+    out = {name: function(**{**zeros, name: 1.0}, **parameters) for name in inputs}
+    for name, value in parameters.items():
+        stepped = {**parameters, name: value + 1j * COMPLEX_STEP}
+        out[name] = np.imag(function(**inputs, **stepped)) / COMPLEX_STEP
+    return out
 
 
 def acceleration_frf(frequency, f_h, xi_h):

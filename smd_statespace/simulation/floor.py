@@ -17,7 +17,11 @@ driven by the dynamic GRF ``-M_h u''`` (the static weight only sets the
 static deflection). The state is ``x = [u, u', q_1, q_1', ..., q_r, q_r']``;
 with one mode and ``phi = 1`` it is exactly the ``floor_mode`` system of
 :func:`smd_statespace.simulation.integrate_response` (tested), and with no mode
-it is the rigid floor.
+it is the rigid floor. :func:`system_matrices` takes the person's row and each
+mode's drive from :func:`smd_statespace.model.coupling.modal_coupling`, the
+coupling the ``floor_mode`` effect and :mod:`smd_statespace.structure` use too;
+:func:`coupled_frf` writes it out again from ``K_h``, ``C_h`` (Eq. 17, 18) as
+the independent check.
 
 Mode-shape assumption at mid-span
 ---------------------------------
@@ -59,7 +63,7 @@ import pandas as pd
 from .. import article
 from ..errors import OptionError
 from ..io import G, check_mass, make_record
-from ..model import c_h, equations, k_h
+from ..model import c_h, coupling, k_h
 
 __all__ = ["FloorModel", "system_matrices", "coupled_frf", "batch_response", "coupled_response", "simulate_on_floor"]
 
@@ -221,26 +225,23 @@ def system_matrices(mass, f_h, xi_h, floor: FloorModel | None = None):
     floor = FloorModel() if floor is None else floor
     n = floor.n_state
     a_matrix, b_vector = np.zeros((n, n)), np.zeros(n)
-    phi = np.asarray(floor.shape)
-    # person row: Eq. 2 on the motion relative to the floor, u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + g F,
-    # z = sum phi_k q_k; its coefficients are Eq. 2's derivatives
-    stiffness_row = equations.smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0)
-    damping_row = equations.smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0)
+    # the person row: Eq. 2 on the motion relative to the floor z = sum phi_k q_k, from model.coupling
+    links = coupling.modal_coupling([float(mass)], [f_h], [xi_h], [floor.shape])
     person = np.zeros(n)
-    person[0], person[1] = stiffness_row, damping_row
-    person[2::2], person[3::2] = -stiffness_row * phi, -damping_row * phi
+    person[0], person[1] = links["u"][0], links["u_dot"][0]
+    person[2::2], person[3::2] = links["q"][0], links["q_dot"][0]
     a_matrix[0, 1] = 1.0
     a_matrix[1] = person
-    b_vector[1] = 1.0
+    b_vector[1] = links["force_g"][0]
     for k in range(floor.n_modes):
         w_k = 2.0 * np.pi * floor.frequency[k]
-        mu = float(mass) * phi[k] / floor.modal_mass[k]
+        drive = links["drive"][0, k] / floor.modal_mass[k]  # the reaction -phi_k M_h u'' per unit modal mass
         row = 2 + 2 * k
         a_matrix[row, row + 1] = 1.0
-        a_matrix[row + 1] = -mu * person  # driven by the dynamic GRF -M_h u''
+        a_matrix[row + 1] = drive * person
         a_matrix[row + 1, row] += -(w_k**2)
         a_matrix[row + 1, row + 1] += -2.0 * floor.damping[k] * w_k
-        b_vector[row + 1] = -mu
+        b_vector[row + 1] = drive * b_vector[1]
     return a_matrix, b_vector
 
 
@@ -269,15 +270,15 @@ def coupled_frf(frequency, mass, f_h, xi_h, floor: FloorModel | None = None):
     omega = 2.0 * np.pi * np.atleast_1d(np.asarray(frequency, dtype=float))
     r = floor.n_modes
     phi = np.asarray(floor.shape)
-    coupling = np.concatenate([[1.0], -phi])  # u - z = coupling . (u, q)
-    stiffness = k_h(f_h, mass) * np.outer(coupling, coupling)  # Eq. 17
-    damping = c_h(xi_h, f_h, mass) * np.outer(coupling, coupling)  # Eq. 18
+    relative = np.concatenate([[1.0], -phi])  # u - z = relative . (u, q)
+    stiffness = k_h(f_h, mass) * np.outer(relative, relative)  # Eq. 17
+    damping = c_h(xi_h, f_h, mass) * np.outer(relative, relative)  # Eq. 18
     masses = np.diag(np.concatenate([[mass], floor.modal_mass]))
     for k in range(r):
         w_k = 2.0 * np.pi * floor.frequency[k]
         stiffness[1 + k, 1 + k] += floor.modal_mass[k] * w_k**2
         damping[1 + k, 1 + k] += 2.0 * floor.damping[k] * floor.modal_mass[k] * w_k
-    load = mass * coupling  # the internal pair M_h g F: up on the COM, down on the floor
+    load = mass * relative  # the internal pair M_h g F: up on the COM, down on the floor
     dynamic = stiffness[None] + 1j * omega[:, None, None] * damping[None] - omega[:, None, None] ** 2 * masses[None]
     displacement = np.linalg.solve(dynamic, np.broadcast_to(load, (omega.size, r + 1))[..., None])[..., 0]
     u_ddot = -(omega**2) * displacement[:, 0]

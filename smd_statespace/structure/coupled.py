@@ -12,10 +12,12 @@ spring and damper of Eq. 2 act on the motion relative to the floor::
 
     u_i'' = -k_i (u_i - z_i) - c_i (u_i' - z_i') + g F_i(t)                   (Eq. 2)
 
-with ``k_i = w_h^2`` and ``c_i = 2 xi_h w_h`` per unit mass. They are not
-written again here: :func:`person_coefficients` takes them from
-:func:`smd_statespace.model.smd_acceleration` (Eq. 2, the function every
-estimator uses) on unit inputs, which is exact because Eq. 2 is linear.
+with ``k_i = w_h^2`` and ``c_i = 2 xi_h w_h`` per unit mass. Neither equation is
+written again here: both are :mod:`smd_statespace.model.coupling` (Eq. 2 on ``u - z``
+through the Eq. 2 every estimator uses, and the reaction on the modes), read as
+linear maps on unit inputs by :func:`~smd_statespace.model.coupling.modal_coupling`
+(exact: both are linear). The ``floor_mode`` effect and
+:func:`smd_statespace.simulation.floor.system_matrices` use the same coupling.
 ``g F_i`` is the biomechanical force of Eq. 4 per unit mass (0 for a passive
 person). The plate under a person measures their GRF ``M_i (g + u_i'')``
 (Eq. 3); by Newton's third law the person pushes the floor down with it, so
@@ -53,7 +55,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import OptionError
-from ..model import equations
+from ..model.coupling import leg_derivatives, modal_coupling
 from .modes import ModalModel
 
 __all__ = ["person_coefficients", "transmissibility", "Coupling", "state_matrix", "coupled_eigenvalues",
@@ -61,18 +63,18 @@ __all__ = ["person_coefficients", "transmissibility", "Coupling", "state_matrix"
 
 
 def person_coefficients(f_h, xi_h):
-    """Stiffness and damping per unit mass of Eq. 2, ``(k, c)`` with ``u'' = -k u - c u' + g F``.
+    """Stiffness and damping per unit mass of Eq. 2, ``(k, c)`` with ``u'' = -k (u - z) - c (u' - z') + g F``.
 
-    Evaluated from :func:`~smd_statespace.model.smd_acceleration` on unit
-    inputs (Eq. 2 is linear): ``k = w_h^2`` (1/s^2), ``c = 2 xi_h w_h`` (1/s).
+    Read off :func:`~smd_statespace.model.coupling.leg_derivatives` (Eq. 2 on ``u - z``, linear):
+    ``k = w_h^2`` (1/s^2), ``c = 2 xi_h w_h`` (1/s).
 
     Parameters
     ----------
     f_h, xi_h : float or ndarray
         SMD natural frequency (Hz) and damping ratio (-).
     """
-    return (-equations.smd_acceleration(1.0, 0.0, f_h, xi_h, 0.0),  # Eq. 2 on a unit displacement
-            -equations.smd_acceleration(0.0, 1.0, f_h, xi_h, 0.0))  # Eq. 2 on a unit velocity
+    leg = leg_derivatives(0.0, 0.0, 0.0, 0.0, f_h, xi_h)
+    return -leg["u"], -leg["u_dot"]
 
 
 def transmissibility(s, k, c):
@@ -114,7 +116,9 @@ class Coupling:
         self.k, self.c = person_coefficients(self.f_h, self.xi_h)
         self.phi = model.shapes[self.point_index] if n else np.zeros((0, model.n_modes))  # (N, m)
         m = model.n_modes
-        self._outer = (self.mass[:, None] * np.einsum("ij,ik->ijk", self.phi, self.phi).reshape(n, m * m))
+        self._links = modal_coupling(self.mass, self.f_h, self.xi_h, self.phi)
+        # M_i phi_i phi_i^T: the reaction on the modes per unit u_i'' (-M_i phi_i) times the floor under i, phi_i . q
+        self._outer = -np.einsum("ij,ik->ijk", self._links["drive"], self.phi).reshape(n, m * m)
 
     @property
     def n_people(self) -> int:
@@ -155,8 +159,9 @@ class Coupling:
     def second_order(self):
         """Mass, damping and stiffness matrices ``(M, C, K)`` in the coordinates ``(q_1..q_m, u_1..u_N)``.
 
-        Built from :func:`person_coefficients` (Eq. 2): person ``i`` adds
-        ``M_i k_i`` and ``M_i c_i`` between ``u_i`` and the floor ``phi_i . q``.
+        Built from :func:`~smd_statespace.model.coupling.modal_coupling`: person ``i``'s row is ``M_i`` times
+        Eq. 2 on ``u_i - phi_i . q``, each mode's row takes the reaction ``-phi_i M_i u_i''`` of every person with
+        that ``u_i''`` put in; together ``M_i k_i`` and ``M_i c_i`` between ``u_i`` and the floor ``phi_i . q``.
         """
         model, n, m = self.model, self.n_people, self.model.n_modes
         size = m + n
@@ -164,9 +169,10 @@ class Coupling:
         stiffness, damping = np.zeros((size, size)), np.zeros((size, size))
         stiffness[:m, :m] = np.diag(model.modal_mass * model.omega**2)
         damping[:m, :m] = np.diag(2.0 * model.damping * model.omega * model.modal_mass)
-        link = np.hstack([-self.phi, np.eye(n)])  # u_i - phi_i . q
-        for matrix, per_mass in ((stiffness, self.k), (damping, self.c)):
-            matrix += link.T @ ((self.mass * per_mass)[:, None] * link)
+        links = self._links
+        load = np.vstack([links["drive"].T, np.diag(self.mass)])  # on (q, u) per unit u_i'': the reaction, M_i u_i''
+        for matrix, on_q, on_u in ((stiffness, "q", "u"), (damping, "q_dot", "u_dot")):
+            matrix -= load @ np.hstack([links[on_q], np.diag(links[on_u])])  # u_i'' on (q, u), without g F_i
         return masses, damping, stiffness
 
 

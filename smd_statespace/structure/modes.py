@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import article
 from ..errors import OptionError, RecordError
+from ..simulation.floor import FloorModel
 
 __all__ = ["ModalModel", "read_modal_model", "sdof", "beam", "plate", "EXAMPLES"]
 
@@ -242,23 +242,19 @@ def beam(length=15.0, mass_per_m=2000.0, f1_hz=4.0, zeta=0.01, n_modes=3, n_poin
 def plate(modes=None) -> ModalModel:
     """The article's laboratory plate (Table 3) at one point, ``"mid-span"``, with ``phi = 1``.
 
-    The modal masses read as driving-point masses at mid-span, as
-    :meth:`~smd_statespace.simulation.floor.FloorModel.table3` does (its
-    module docstring says why that is exact for mode 1 and an upper bound for
-    the others).
+    The modes :meth:`~smd_statespace.simulation.floor.FloorModel.table3` keeps,
+    with its reading of the modal masses as driving-point masses at mid-span
+    (its module docstring says why that is exact for mode 1 and an upper bound
+    for the others).
 
     Parameters
     ----------
     modes : sequence of int, optional
         Mode numbers 1-6 to keep (default all six).
     """
-    numbers = tuple(range(1, len(article.TABLE3) + 1)) if modes is None else tuple(int(k) for k in modes)
-    if not numbers or any(not 1 <= k <= len(article.TABLE3) for k in numbers):
-        raise OptionError(f"plate: modes must be among 1-{len(article.TABLE3)}, got {modes!r}")
-    rows = [article.TABLE3[k - 1] for k in numbers]
-    return ModalModel(np.array([r.frequency for r in rows]), np.array([r.damping for r in rows]),
-                      np.array([r.modal_mass for r in rows]), ("mid-span",), np.array([[5.0, 3.0]]),
-                      np.ones((1, len(rows))), name="plate of Table 3, mid-span")
+    floor = FloorModel.table3(modes)
+    return ModalModel(np.array(floor.frequency), np.array(floor.damping), np.array(floor.modal_mass), ("mid-span",),
+                      np.array([[5.0, 3.0]]), np.array([floor.shape]), name="plate of Table 3, mid-span")
 
 
 EXAMPLES = {"sdof": sdof, "beam": beam, "plate": plate}
