@@ -2,8 +2,6 @@
 by default and then without any effect on the record; each on doing what it says.
 """
 
-import hashlib
-
 import numpy as np
 import pytest
 
@@ -18,18 +16,30 @@ STILL = dict(tilt=0.0, sway=0.0, bias=0.0, noise=0.0, jitter=0.0, drop=0.0, hori
 """A level phone without the older phenomena: what a new one does is all there is."""
 
 BEFORE = (
-    (dict(duration=6.0, seed=5), "6a4d4e9f979de72d", 1190),
-    (dict(duration=6.0, seed=7, fs=400.0, tilt=35.0, f_b=2.7, f_h=3.3), "2a43cb5bb931823e", 2382),
-    (dict(duration=6.0, seed=9, fs=100.0, variation="smooth"), "de46a5675ef486b4", 595),
+    (dict(duration=6.0, seed=5), 1190,
+     [3573.34213824, 14323.3652213, 2.00535994132, 4.00547188931, 13593.9409455, 122381.560433, 7.5772956596,
+      -0.734336196091, 22.9834993757, 6522.83434175, -1.65900945044, -2.58630280435]),
+    (dict(duration=6.0, seed=7, fs=400.0, tilt=35.0, f_b=2.7, f_h=3.3), 2382,
+     [7149.7288546, 28611.9814825, 2.00034598546, 4.00769231561, 38443.9990984, 250494.826176, 3.39506365691,
+      2.89115173492, 111.374456572, 15905.925305, 0.185764467246, -1.97609410455]),
+    (dict(duration=6.0, seed=9, fs=100.0, variation="smooth"), 595,
+     [1785.53514866, 7161.50398727, 2.00038606099, 4.01029330692, 7784.41853896, 60761.005991, 0.618149740167,
+      8.3426423549, -6.75196282843, 3879.83376825, -2.61966109034, -0.898409582726]),
 )
-"""Records made before the phenomena existed (commit 2089321): options, digest of time, acc and vertical, samples."""
+"""Records made before the phenomena existed (commit 2089321): options, samples, and per array (time, acc,
+vertical) its sum, its sum of squares and its values a third and two thirds of the way through. Pinned by these
+to 1e-9 rather than by a digest of their bits: the bits differ between builds of numpy and scipy (the digests
+taken on 2026-11-28 failed on 2026-11-29's machine, where commit 2089321 itself makes today's records bit for
+bit)."""
 
 
-def digest(phone) -> str:
-    h = hashlib.sha256()
+def fingerprint(phone) -> list:
+    """:data:`BEFORE`'s statistics of a phone's record."""
+    out = []
     for values in (phone.time, phone.acc, phone.vertical):
-        h.update(np.ascontiguousarray(values, dtype=float).tobytes())
-    return h.hexdigest()[:16]
+        values = np.asarray(values, dtype=float).ravel()
+        out += [values.sum(), (values**2).sum(), values[values.size // 3], values[2 * values.size // 3]]
+    return out
 
 
 def line(t, values, frequency) -> np.ndarray:
@@ -39,11 +49,13 @@ def line(t, values, frequency) -> np.ndarray:
     return np.hypot(coef[0], coef[1])
 
 
-@pytest.mark.parametrize("options, expected, samples", BEFORE)
-def test_with_every_phenomenon_off_the_record_is_the_one_made_before(options, expected, samples):
+@pytest.mark.parametrize("options, samples, expected", BEFORE)
+def test_with_every_phenomenon_off_the_record_is_the_one_made_before(options, samples, expected):
     default = simulate_phone(**options)
     off = simulate_phone(**options, **OFF)
-    assert digest(default) == digest(off) == expected
+    assert all(np.array_equal(a, b) for a, b in zip((default.time, default.acc, default.vertical),
+                                                    (off.time, off.acc, off.vertical)))
+    assert fingerprint(default) == pytest.approx(expected, rel=1e-9, abs=1e-9)
     assert default.time.size == samples and default.truth == off.truth
     assert np.array_equal(default.instants, default.time)
     assert "rocking_deg" not in default.truth["phone"]
