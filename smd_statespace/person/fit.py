@@ -33,10 +33,11 @@ from ..signals import RECORD_RATE, prepare_record
 # the steps below identify_person (the names of __all__ were defined here up to 2026-11-27, and stay importable)
 from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
+from .comparison import comparison_row
 from .model import VARIATIONS, Regressor, RecordModel
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .screen import time_change
-from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, comparison_row,
+from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing,
                      fit_model, profile_interval)
 from .threads import search_threads, thread_map
 from .timing import TIMING_METHODS, estimate_timing

@@ -57,8 +57,7 @@ class PersonResult:
         ``"profile"`` or ``"wald"``.
     level : float
     comparison : list of VariationFit
-        The variation models tried (:class:`~smd_statespace.person.search.VariationFit`: log-likelihood, AIC,
-        the person, at which cycle starts).
+        The variation models tried (:class:`~smd_statespace.person.comparison.VariationFit`).
     n_evaluations : int
         Likelihood evaluations of the search.
     record_warnings : list of str
