@@ -1,7 +1,7 @@
 """Acceptance limits from published guidance, with where each number was read, and a response classified against them.
 
 Only numbers read in a named source are here. What was found (searched for in the stored public corpora,
-2026-11-30):
+2026-11-29):
 
 - :data:`ROUTE2` -- the IStructE/DCLG/DCMS (2008) grandstand guide's Route 2 criteria, one per event scenario, on
   the maximum 1 s RMS vertical acceleration: 3, 7.5 and 20 %g for scenarios 2, 3 and 4. Read in an open-source
@@ -114,19 +114,36 @@ class Limits:
         return f"exceeds the {self._phrase(exceeded)}; within the {self._phrase(within)}"
 
     def bands(self) -> list:
-        """Every band: ``lower`` (exclusive) and ``upper`` (inclusive; None for the last) in m/s^2, and its words."""
+        """Every band: ``lower`` (exclusive, except 0 in the first band) and ``upper`` (inclusive; None for the last)
+        in m/s^2, and its words."""
         edges = [0.0, *self.edges.tolist(), None]
         return [{"lower": edges[k], "upper": edges[k + 1], "words": self.words(k)} for k in range(len(edges) - 1)]
 
     def band(self, value) -> int:
-        """Band of ``value`` (m/s^2): the number of criteria it exceeds (a value equal to a limit is within it)."""
+        """Band of ``value``: the number of criteria it exceeds (a value equal to a limit is within it).
+
+        Parameters
+        ----------
+        value : float
+            Of :attr:`measure` (m/s^2), finite and >= 0 (a ValueError otherwise).
+
+        Returns
+        -------
+        int
+            0 to ``len(criteria)``.
+        """
         value = float(value)
         if not np.isfinite(value) or value < 0:
             raise ValueError(f"limits {self.name}: {self.measure} must be a finite value >= 0, got {value!r}")
         return int(np.searchsorted(self.edges, value, side="left"))
 
     def classify(self, value) -> dict:
-        """``value`` (m/s^2, of :attr:`measure`) against the criteria, JSON-able.
+        """``value`` against the criteria, JSON-able.
+
+        Parameters
+        ----------
+        value : float
+            Of :attr:`measure` (m/s^2), finite and >= 0.
 
         Returns
         -------
@@ -148,7 +165,8 @@ class Limits:
                 "bands": self.bands()}
 
     def sentence(self, value) -> str:
-        """One line: ``rms_1s_max 0.412 m/s^2 (4.2 %g): exceeds the criterion of scenario 2; within ...``."""
+        """One line for ``value`` (m/s^2): ``rms_1s_max 0.412 m/s^2 (4.2 %g): exceeds the criterion of scenario 2;
+        within the criteria of scenarios 3 and 4``."""
         item = self.classify(value)
         return f"{self.measure} {item['value']:.3f} m/s^2 ({item['percent_g']:.1f} %g): {item['words']}"
 

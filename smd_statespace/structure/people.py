@@ -54,9 +54,9 @@ PASSIVE = {"f_h": 5.0, "xi_h": 0.40}
 The passive-crowd values an open-source implementation of the IStructE/DCLG/DCMS (2008) grandstand guide's Route 2
 uses: ``sgettler/grandstand-dynamics``, ``grandstand-dynamics/src-old/getCrowdStructureResponse.m`` (commit
 a09e62f), which gives 5.0 Hz, 0.40 for passive and 2.3 Hz, 0.25 for active people and cites for its crowd model
-Dougill, Wright, Parkhouse & Harrison (2006), "Human structure interaction during rhythmic bobbing", The
-Structural Engineer 84(22), 32-39, as implemented by Pavic & Reynolds (2008), "Experimental verification of novel
-3DOF model for grandstand crowd-structure dynamic interaction", IMAC XXVI. Neither the guide's text nor those papers
+Dougill et al. (2006), "Human structure interaction during rhythmic bobbing", The Structural Engineer 84(22),
+32-39, as implemented by Pavic and Reynolds (2008), "Experimental verification of novel 3DOF model of grandstand
+crowd-structure dynamic interaction", 26th International Modal Analysis Conference, Orlando. Neither the guide's text nor those papers
 were read here (the stored copies of the guide give its front matter only), so that the guide itself states these
 values is not confirmed. Here active people are the article's own (Table 2), not 2.3 Hz, 0.25."""
 
