@@ -38,7 +38,14 @@ def test_the_command_writes_the_summary_the_response_and_the_figures(files, tmp_
     assert list(response.columns[:3]) == ["time", "x15_coupled", "x15_force_only"] and len(response) == 1201
     for name in ("structure_frf.png", "structure_rms.png"):
         assert (out / name).stat().st_size > 10_000
-    assert "mode 1: empty 4.000 Hz" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "mode 1: empty 4.000 Hz" in printed
+    assert summary["limits"]["name"] == "istructe2008-route2" and summary["limits"]["measure"] == "rms_1s_max"
+    assert point["limits"]["coupled"]["value"] == point["coupled"]["rms_1s_max"]
+    assert point["limits"]["coupled"]["band"] in (0, 1, 2, 3) and point["limits"]["force_only"]["words"]
+    assert f"limits at {summary['worst_point']} (IStructE/DCLG/DCMS (2008) Route 2 criteria" in printed
+    worst = next(item for item in summary["points"] if item["point"] == summary["worst_point"])
+    assert f"coupled: rms_1s_max {worst['coupled']['rms_1s_max']:.3f} m/s^2" in printed
 
 
 def test_draws_write_their_table_percentiles_and_histogram(tmp_path):
@@ -49,6 +56,8 @@ def test_draws_write_their_table_percentiles_and_histogram(tmp_path):
     assert sorted(draws["draw"].unique()) == [0, 1, 2]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["draws"]["count"] == 3 and "P1" in summary["draws"]["points"]
+    p95 = summary["draws"]["points"]["P1"]["coupled_rms_1s_max"]
+    assert summary["draws"]["limits"]["P1"]["coupled"]["value"] == pytest.approx(p95)
     assert (out / "structure_draws.png").stat().st_size > 10_000
 
 

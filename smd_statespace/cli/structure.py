@@ -25,8 +25,9 @@ def add_structure(subparsers):
             "with the force of Eq. 4 (Table 2's people), passive people stand (5.0 Hz, 0.40). Solve the coupled "
             "model and the force-only one (the active people's rigid-floor GRFs on the empty structure) and write "
             "DIR/summary.json (empty and occupied modes; per response point peak, maximum 1 s running RMS and VDV "
-            "of the acceleration, the last two also W_b-weighted (BS 6841), both models), DIR/response.csv, "
-            "DIR/people.csv and figures; with "
+            "of the acceleration, the last two also W_b-weighted (BS 6841), both models, and the maximum 1 s RMS "
+            "against the IStructE/DCLG/DCMS (2008) Route 2 criteria by scenario, 3 / 7.5 / 20 %g, as an "
+            "open-source implementation of Route 2 codes them), DIR/response.csv, DIR/people.csv and figures; with "
             "--draws K > 1 also K random crowds (DIR/draws.csv, their 95th percentiles and a histogram)."
         ),
     )
@@ -112,6 +113,7 @@ def _draws(args, model, points, options, result, directory, plot_draws):
 
     import numpy as np
 
+    from ..structure.limits import ROUTE2
     from ..structure.montecarlo import CrowdDraws, monte_carlo, percentiles
 
     spec = CrowdDraws(model, args.people, args.active, points=None if points is None else tuple(points), **options)
@@ -128,10 +130,16 @@ def _draws(args, model, points, options, result, directory, plot_draws):
     table = percentiles(frame)
     summary_path = directory / "summary.json"
     summary = json.loads(summary_path.read_text(encoding="utf-8"))
+    limits = ROUTE2
     summary["draws"] = {"count": args.draws, "percentile": 95,
-                        "points": {point: {k: float(v) for k, v in row.items()} for point, row in table.iterrows()}}
+                        "points": {point: {k: float(v) for k, v in row.items()} for point, row in table.iterrows()},
+                        "limits": {point: {model: limits.classify(row[f"{model}_{limits.measure}"])
+                                           for model in ("coupled", "force_only")}
+                                   for point, row in table.iterrows()}}
     summary_path.write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
     print(f"{args.draws} random crowds, 95th percentile at {worst}: rms_1s_max coupled "
           f"{table.loc[worst, 'coupled_rms_1s_max']:.3f} vs force-only {table.loc[worst, 'force_only_rms_1s_max']:.3f} "
           "m/s^2")
+    for model, label in (("coupled", "coupled"), ("force_only", "force-only")):
+        print(f"  {label} 95th percentile: {limits.sentence(table.loc[worst, f'{model}_{limits.measure}'])}")
     return [Path(p) for p in paths]

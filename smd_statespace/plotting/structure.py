@@ -7,6 +7,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..structure.analysis import StructureResult
+from ..structure.limits import ROUTE2, Limits
 from ..structure.response import accelerance, running_rms
 from .save import save
 
@@ -49,14 +50,18 @@ def plot_frequency_response(result: StructureResult, path=None) -> Figure:
     return save(fig, path)
 
 
-def plot_running_rms(result: StructureResult, path=None) -> Figure:
-    """1 s running RMS acceleration over time at the worst response point, coupled and force-only.
+def plot_running_rms(result: StructureResult, path=None, limits: Limits = ROUTE2) -> Figure:
+    """1 s running RMS acceleration over time at the worst response point, coupled and force-only, with the
+    criteria of ``limits`` (each drawn when below the plotted maximum, and the first above it).
 
     Parameters
     ----------
     result : StructureResult
     path : str or path-like, optional
         PNG to write.
+    limits : Limits
+        Criteria on the unweighted ``rms_1s_max`` (default :data:`~smd_statespace.structure.limits.ROUTE2`);
+        None for none.
 
     Returns
     -------
@@ -77,15 +82,40 @@ def plot_running_rms(result: StructureResult, path=None) -> Figure:
         rms = running_rms(values, fs)
         ax_rms.plot(time[time.size - rms.size:], rms, lw=1.2, color=color,
                     label=f"{label}: max {rms.max() if rms.size else np.nan:.3f} m/s$^2$")
+    if limits is not None and limits.measure == "rms_1s_max":
+        ax_rms.set_title(_criteria(ax_rms, limits), fontsize=8, loc="right")
     ax_rms.set_xlabel("time (s)")
     ax_rms.set_ylabel("1 s running RMS (m/s$^2$)")
-    ax_rms.legend(fontsize=8, loc="upper right")
+    ax_rms.legend(fontsize=8, loc="upper left", framealpha=0.9)
     fig.tight_layout()
     return save(fig, path)
 
 
-def plot_draws(frame, point, path=None, q=95.0) -> Figure:
-    """Histograms over Monte Carlo draws of the maximum 1 s running RMS at ``point``, coupled and force-only.
+def _criteria(ax, limits: Limits, vertical=False):
+    """Lines at the criteria of ``limits`` up to the first above the plotted data, each labelled: horizontal on the
+    y axis (a running RMS), vertical on the x axis (a histogram of maxima). Returns a caption naming the source."""
+    top = (ax.get_xlim() if vertical else ax.get_ylim())[1]
+    shown = [c for c in limits.criteria if c.limit <= top]
+    shown += [c for c in limits.criteria if c.limit > top][:1]
+    box = {"facecolor": "white", "alpha": 0.75, "edgecolor": "none", "pad": 0.5}
+    for criterion in shown:
+        label = f"{limits.kind} {criterion.name}: {criterion.stated} "
+        if vertical:
+            ax.axvline(criterion.limit, color="0.35", lw=0.9, ls="--")
+            ax.text(criterion.limit, 0.6, label, fontsize=7, color="0.25", rotation=90, ha="right", va="center",
+                    bbox=box, transform=ax.get_xaxis_transform())
+        else:
+            ax.axhline(criterion.limit, color="0.35", lw=0.9, ls="--")
+            ax.text(ax.get_xlim()[1], criterion.limit, label, fontsize=7, color="0.25", ha="right", va="bottom",
+                    bbox=box)
+    bound = max(top, 1.12 * shown[-1].limit) if shown else top
+    (ax.set_xlim if vertical else ax.set_ylim)(0.0, bound)
+    return f"dashed: {limits.label}"
+
+
+def plot_draws(frame, point, path=None, q=95.0, limits: Limits = ROUTE2) -> Figure:
+    """Histograms over Monte Carlo draws of the maximum 1 s running RMS at ``point``, coupled and force-only, with
+    the criteria of ``limits``.
 
     Parameters
     ----------
@@ -97,6 +127,9 @@ def plot_draws(frame, point, path=None, q=95.0) -> Figure:
         PNG to write.
     q : float
         Percentile marked (default the 95th).
+    limits : Limits
+        Criteria on the unweighted ``rms_1s_max`` (default :data:`~smd_statespace.structure.limits.ROUTE2`);
+        None for none.
 
     Returns
     -------
@@ -115,7 +148,10 @@ def plot_draws(frame, point, path=None, q=95.0) -> Figure:
         ax.axvline(np.percentile(values, q), color=color, lw=1.2, ls="--")
     ax.set_xlabel("maximum 1 s running RMS acceleration (m/s$^2$, unweighted)")
     ax.set_ylabel("draws")
-    ax.set_title(f"{len(rows)} random crowds: response at {point}", fontsize=10)
-    ax.legend(fontsize=8)
+    title = f"{len(rows)} random crowds: response at {point}"
+    if limits is not None and limits.measure == "rms_1s_max":
+        title += "\n" + _criteria(ax, limits, vertical=True)
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8, loc="upper right", framealpha=0.9)
     fig.tight_layout()
     return save(fig, path)

@@ -14,11 +14,14 @@ module              what it holds
 :mod:`.analysis`    :func:`analyse_structure` -> :class:`StructureResult`
 :mod:`.montecarlo`  many random crowds on any executor
 :mod:`.weighting`   ``W_b`` (BS 6841) and ``W_k`` (ISO 2631-1) frequency weightings
+:mod:`.limits`      published acceptance limits with their sources (:data:`ROUTE2`);
+                    a value or a result's worst point classified against them
 =================== ==============================================================
 """
 
 from .analysis import StructureResult, analyse_structure
 from .coupled import Coupling, coupled_eigenvalues, occupied_eigenvalues
+from .limits import LIMITS, ROUTE2, Criterion, Limits
 from .modes import EXAMPLES, ModalModel, beam, plate, read_modal_model, sdof
 from .montecarlo import CrowdDraws, monte_carlo, percentiles
 from .people import PASSIVE, Occupants, draw_occupants, read_occupants
@@ -28,4 +31,4 @@ from .weighting import WEIGHTINGS, weighted, weighting_gain
 __all__ = ["StructureResult", "analyse_structure", "Coupling", "coupled_eigenvalues", "occupied_eigenvalues",
            "EXAMPLES", "ModalModel", "beam", "plate", "read_modal_model", "sdof", "CrowdDraws", "monte_carlo",
            "percentiles", "PASSIVE", "Occupants", "draw_occupants", "read_occupants", "measures", "running_rms",
-           "WEIGHTINGS", "weighted", "weighting_gain"]
+           "WEIGHTINGS", "weighted", "weighting_gain", "LIMITS", "ROUTE2", "Criterion", "Limits"]

@@ -3,7 +3,8 @@
 :func:`analyse_structure` takes a :class:`~.modes.ModalModel` and the people on
 it (:class:`~.people.Occupants`), solves the coupled and the force-only models
 (:mod:`.solve`) and gathers what an engineer checks (:mod:`.response`) into a
-:class:`StructureResult`, which writes ``summary.json`` and ``response.csv``.
+:class:`StructureResult`, which classifies it against published limits (:mod:`.limits`) and writes
+``summary.json`` and ``response.csv``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from .coupled import Coupling, coupled_eigenvalues, modes_of, occupied_eigenvalues
+from .limits import ROUTE2, Limits
 from .modes import ModalModel
 from .people import Occupants
 from .response import MEASURES, measures
@@ -92,16 +94,40 @@ class StructureResult:
         table = self._measured
         return int(np.argmax(np.maximum(table["coupled_rms_1s_max"], table["force_only_rms_1s_max"])))
 
-    def summary(self) -> dict:
-        """JSON-able summary: modes empty and occupied, people, and per point both models' measures."""
+    def classify(self, limits: Limits = ROUTE2, point=None) -> dict:
+        """Both models' values at a response point against ``limits`` (:meth:`.limits.Limits.classify`).
+
+        Parameters
+        ----------
+        limits : Limits
+            Default :data:`~.limits.ROUTE2`.
+        point : int, optional
+            Position in :attr:`points`; default the worst point (:meth:`worst`).
+
+        Returns
+        -------
+        dict
+            ``point`` (its name), ``coupled`` and ``force_only``: each the classification of that model's value of
+            ``limits.measure`` there.
+        """
+        k = self.worst() if point is None else int(point)
+        row = self._measured.iloc[k]
+        return {"point": row["point"], **{model: limits.classify(row[f"{model}_{limits.measure}"])
+                                          for model in ("coupled", "force_only")}}
+
+    def summary(self, limits: Limits = ROUTE2) -> dict:
+        """JSON-able summary: modes empty and occupied, people, per point both models' measures and their
+        classification against ``limits`` (default :data:`~.limits.ROUTE2`)."""
         people = self.occupants.table
         rows = []
-        for row in self._measured.itertuples(index=False):
+        for k, row in enumerate(self._measured.itertuples(index=False)):
             item = {"point": row.point}
             for model in ("force_only", "coupled"):
                 item[model] = {name: float(getattr(row, f"{model}_{name}")) for name in MEASURES}
             ratios = {name: float(getattr(row, f"ratio_{name}")) for name in MEASURES}
             item["coupled_over_force_only"] = {name: (v if np.isfinite(v) else None) for name, v in ratios.items()}
+            classified = self.classify(limits, k)
+            item["limits"] = {model: classified[model] for model in ("coupled", "force_only")}
             rows.append(item)
         settings = self.occupants.settings
         return {
@@ -115,11 +141,18 @@ class StructureResult:
                          for key, value in settings.items()},
             "frequency_weighting": "peak, rms_1s_max, vdv: none (the vertical acceleration as computed); "
                                    "rms_1s_max_wb, vdv_wb: W_b of BS 6841:1987 (structure.weighting)",
-            "limits": "none built in (see docs/tutorial-structure.md)",
+            "limits": limits.describe(),
             "worst_point": rows[self.worst()]["point"] if rows else None,
             "points": rows,
             "seconds": self.seconds,
         }
+
+    def _limits_lines(self, limits: Limits) -> list:
+        """The worst point against ``limits``, both models, in words, and the limits' source (for :meth:`text`)."""
+        item = self.classify(limits)
+        return [f"limits at {item['point']} ({limits.label}):",
+                *(f"  {label}: {limits.sentence(item[model]['value'])}"
+                  for model, label in (("coupled", "coupled"), ("force_only", "force-only")))]
 
     def response_frame(self) -> pd.DataFrame:
         """``time`` and, per response point, ``<point>_coupled`` and ``<point>_force_only`` accelerations (m/s^2)."""
@@ -151,6 +184,8 @@ class StructureResult:
         for item in s["points"]:
             parts = [f"{name} {item['coupled'][name]:.3f} vs {item['force_only'][name]:.3f}" for name in MEASURES]
             lines.append(f"point {item['point']}: coupled vs force-only " + ", ".join(parts))
+        if s["points"]:
+            lines += self._limits_lines(ROUTE2)
         if s["people"]["contact_lost"]:
             lines.append(f"warning: {s['people']['contact_lost']} active people's rigid-floor GRF goes below zero "
                          "(the SMD model has no flight phase)")

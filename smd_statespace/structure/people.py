@@ -51,14 +51,14 @@ __all__ = ["PASSIVE", "Occupants", "draw_occupants", "read_occupants", "PEOPLE_C
 PASSIVE = {"f_h": 5.0, "xi_h": 0.40}
 """SMD of a passive (standing or seated, not bouncing) person: 5.0 Hz, damping ratio 0.40.
 
-The passive-crowd values of Dougill, Wright, Parkhouse & Harrison (2006), "Human
-structure interaction during rhythmic bobbing", The Structural Engineer 84(22),
-32-39, which the IStructE/DCLG/DCMS (2008) guide "Dynamic performance
-requirements for permanent grandstands subject to crowd action" adopts for its
-Route 2 (the same source gives 2.3 Hz, 0.25 for an active crowd; here active
-people are the article's own, Table 2). The values are as an open-source
-implementation of Route 2 uses them (``getCrowdStructureResponse.m``), not
-checked here against the guide's text."""
+The passive-crowd values an open-source implementation of the IStructE/DCLG/DCMS (2008) grandstand guide's Route 2
+uses: ``sgettler/grandstand-dynamics``, ``grandstand-dynamics/src-old/getCrowdStructureResponse.m`` (commit
+a09e62f), which gives 5.0 Hz, 0.40 for passive and 2.3 Hz, 0.25 for active people and cites for its crowd model
+Dougill et al. (2006), "Human structure interaction during rhythmic bobbing", The Structural Engineer 84(22),
+32-39, as implemented by Pavic and Reynolds (2008), "Experimental verification of novel 3DOF model of grandstand
+crowd-structure dynamic interaction", 26th International Modal Analysis Conference, Orlando. Neither the guide's
+text nor those papers were read here (the stored copies of the guide give its front matter only), so that the guide
+itself states these values is not confirmed. Here active people are the article's own (Table 2), not 2.3 Hz, 0.25."""
 
 PEOPLE_COLUMNS = ("point", "mass_kg", "f_h", "xi_h", "active", "f_b", "blf_1", "blf_2", "blf_3", "person_json")
 """Columns of ``people.csv``: ``point`` is required, the others may be missing or empty (taken from the row's

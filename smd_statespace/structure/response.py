@@ -2,8 +2,7 @@
 
 Of the vertical acceleration as computed (unweighted) and weighted by ``W_b`` (BS 6841:1987,
 :mod:`~smd_statespace.structure.weighting`), the weighting BS 6472-1:2008 applies to vertical vibration in
-buildings. No acceptance limits are built in: this library has not checked the numerical thresholds of the
-IStructE/DCLG/DCMS (2008) grandstand guide against its text, so none are quoted.
+buildings. Published limits on them, with where each number was read, are :mod:`~smd_statespace.structure.limits`.
 
 - ``peak``: ``max |a(t)|`` (m/s^2);
 - ``rms_1s_max``: the largest RMS over a 1 s window sliding one sample at a
