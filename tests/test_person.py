@@ -219,14 +219,14 @@ def test_the_f_h_interval_spans_the_variation_models_the_record_cannot_rule_out(
     the interval as it was (the unseen-generator record of shared/findings: 2.10-2.26 and 2.84-3.69 Hz, truth
     2.45)."""
     from smd_statespace.person.answer import honest_intervals
+    from smd_statespace.person.comparison import VariationFit
 
     sim = long_sim
     model = RecordModel(sim.record.time, acceleration(sim), true_timing(sim), variation="independent")
     params = model.start_params(2.4, 0.3)
-    rows = [{"variation": "independent", "timing": "re-placed", "converged": True, "on_bound": False, "aic": 0.0,
-             "f_h": 2.4, "xi_h": 0.3},
-            {"variation": "smooth", "timing": "re-placed", "converged": True, "on_bound": False, "aic": other_aic,
-             "f_h": other_f_h, "xi_h": 0.25}]
+    common = dict(timing="re-placed", converged=True, on_bound=False, loglike=0.0, n_params=params.size)
+    rows = [VariationFit(variation="independent", aic=0.0, f_h=2.4, xi_h=0.3, **common),
+            VariationFit(variation="smooth", aic=other_aic, f_h=other_f_h, xi_h=0.25, **common)]
     result = PersonResult(sim.record, model, params, np.eye(params.size) * 1e-6, np.ones(params.size, bool), 0.0,
                           {"f_h": (2.3, 2.5), "xi_h": (0.25, 0.35)}, "calibrated wald", 0.9, rows)
     result.misfit_share = 0.0
