@@ -174,3 +174,15 @@ def test_an_empty_plate_reading_zero_is_no_contact_not_clipping(bouncing):
     assert kinds[0] == "contact_lost" and "saturated" not in kinds
     clipped = make_record(bouncing.record.time, np.minimum(force, 1.3 * WEIGHT), MASS)  # clipping still seen
     assert [f.kind for f in check_clipping(clipped).findings] == ["saturated"]
+
+
+def test_a_record_whose_kept_part_is_refused_is_refused_for_what_the_whole_record_shows():
+    """A resonant simulated person (f_h 2.50 Hz at f_b 2.40 Hz, xi_h 0.105) whose force goes below zero 61 times:
+    the front end kept 2.1 s of it, which is "not rhythmic"; the record as read says why, the person leaves the plate
+    (benchmarks/person_effects.py, jumps, clean, seed 92, record 10)."""
+    sim = simulate_bouncing(mass=80.59665626136908, f_b=2.4000799312859615, f_h=2.495282843724893,
+                            xi_h=0.10511389833761733, duration=30.0, fs=100.0, noise=0.01, seed=921140584,
+                            blf=(0.28584035791093215, 0.17992150874221827, 0.04451014128210892, 0.014777461149032672))
+    assert check_bouncing(sim.record).refusals[0].kind == "contact_lost"
+    with pytest.raises(NotBouncingError, match=r"\(contact_lost\): the force falls below 5% of body weight"):
+        identify_person(sim.record)

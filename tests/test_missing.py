@@ -120,9 +120,10 @@ def test_diagnose_cli_json_and_before_after(tmp_path, capsys):
                  "--json", str(report_path)]) == 0
     report = json.loads(report_path.read_text())
     # the record-level report's keys (one vocabulary), then this path's own
-    assert set(report) == {"missing", "adequate", "alpha", "candidates", "notes", "fit_percent", "residual_rms",
-                           "whiteness_pvalue", "effects_in_model", "missing_effects"}
+    assert set(report) == {"missing", "adequate", "verdict", "alpha", "candidates", "notes", "fit_percent",
+                           "residual_rms", "whiteness_pvalue", "effects_in_model", "missing_effects"}
     assert report["adequate"] is False and report["missing"][0] == "harmonics"
+    assert report["verdict"].startswith("missing effect 'harmonics'") and report["verdict"] in capsys.readouterr().out
     assert report["missing_effects"][0]["effect"] == "harmonics"
     assert {"significant", "df", "lr", "p_value", "f_h_before", "f_h", "ljung_box_p"} <= set(report["candidates"][0])
     assert (tmp_path / "d" / "diagnostics.png").exists() and (tmp_path / "d" / "fit.png").exists()

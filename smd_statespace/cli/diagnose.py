@@ -100,6 +100,16 @@ def _extra_effects(args) -> str:
     return "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
 
 
+def _print_verdict(result, command: str) -> None:
+    """Either diagnosis's verdict, the command that adds what is missing (``command``, empty when adequate) and
+    its notes, one line each."""
+    print(f"\nverdict: {result.verdict()}")
+    if command:
+        print("next: " + command)
+    for note in result.notes():
+        print(f"note: {note}")
+
+
 def _write_json(args, result, written: list) -> None:
     """``--json FILE``: the diagnosis's report (either path's ``report()``), added to ``written``."""
     if args.json:
@@ -145,21 +155,7 @@ def run_person_diagnose(args) -> int:
             quick = (f"quick LR {row['lr_quick']:7.1f} / {row['lr_scale']:<4.2g} (Holm p {row['p_quick_holm']:<7.2g})"
                      if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 28)
             print(f"  {row['label']:<17} robust LM {row['lm_robust']:7.1f}  {quick}  {row['physics']}")
-    tests = result.tests or len(result.rows) + len(result.failed)
-    level = result.level
-    if result.adequate:
-        print(f"\nverdict: no candidate effect is a significant improvement at alpha {args.alpha:g} "
-              f"(Bonferroni over {tests}: each at {level:.2g})")
-    else:
-        best = table.loc[result.missing[0]]
-        physics = f" = {best['physics']}" if best.get("physics") else ""
-        scaled = f" / {best['lr_scale']:.2g}" if best["lr_scale"] > 1 else ""
-        print(f"\nverdict: missing effect '{result.missing[0]}'{physics} (LR {best['lr']:.1f}{scaled} on "
-              f"{int(best['df'])} parameter(s), p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> "
-              f"{best['f_h']:.3f} Hz, xi_h {best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
-        print("next: " + result.command(args.record, args.mass, _extra_effects(args)))
-    for note in result.notes():
-        print(f"note: {note}")
+    _print_verdict(result, result.command(args.record, args.mass, _extra_effects(args)))
     written = [directory / "person_diagnostics.png", directory / "person_candidates.png"]
     base.plot_diagnostics(written[0])
     plot_candidates(result, written[1])
@@ -216,14 +212,7 @@ def run_diagnose(args) -> int:
         with pd.option_context("display.float_format", "{:.3g}".format, "display.width", 200,
                                "display.max_colwidth", 60):
             print(table[list(SHARED_COLUMNS[:-1]) + ["score", "rms_fall_%", "parameters"]].to_string())
-    if result.adequate:
-        print("\nverdict: the model is adequate for this record (no candidate effect is a significant improvement)")
-    else:
-        best = result.best
-        print(f"\nverdict: missing effect '{best.name}': {best.evidence}")
-        print("next: " + result.command(args.record, args.mass, args.estimator, _extra_effects(args)))
-    for note in result.notes():
-        print(f"note: {note}")
+    _print_verdict(result, result.command(args.record, args.mass, args.estimator, _extra_effects(args)))
     base.plot_diagnostics(directory / "diagnostics.png")
     base.plot_fit(directory / "fit.png")
     written = [directory / "diagnostics.png", directory / "fit.png"]

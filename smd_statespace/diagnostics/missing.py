@@ -156,6 +156,13 @@ class Diagnosis:
             })
         return pd.DataFrame(rows).set_index("effect") if rows else pd.DataFrame()
 
+    def verdict(self) -> str:
+        """The verdict in one line, as ``diagnose`` prints it after ``verdict:`` (the record-level diagnosis's
+        :meth:`~smd_statespace.person.diagnose.PersonDiagnosis.verdict` in its own evidence)."""
+        if self.adequate:
+            return "the model is adequate for this record (no candidate effect is a significant improvement)"
+        return f"missing effect '{self.best.name}': {self.best.evidence}"
+
     def notes(self) -> list:
         """Plain-word notes of the effects that were not found (what the residual cannot show)."""
         return list(self.effect_notes)
@@ -173,7 +180,7 @@ class Diagnosis:
     def report(self) -> dict:
         """The JSON report of ``smd-statespace diagnose --estimator ekf --json``.
 
-        The keys of the record-level report (``missing``, ``adequate``,
+        The keys of the record-level report (``missing``, ``adequate``, ``verdict``,
         ``alpha``, ``candidates``, ``notes``) plus this path's fit of the base
         model and, per missing effect, its evidence and identified values.
         """
@@ -181,6 +188,7 @@ class Diagnosis:
         return {
             "missing": self.missing,
             "adequate": bool(self.adequate),
+            "verdict": self.verdict(),
             "alpha": self.alpha,
             "candidates": table.reset_index().to_dict(orient="records") if not table.empty else [],
             "notes": self.notes(),

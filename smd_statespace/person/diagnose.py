@@ -236,6 +236,22 @@ class PersonDiagnosis:
         """True when no candidate is a significant improvement."""
         return not self.missing
 
+    def verdict(self) -> str:
+        """The verdict in one line, as ``diagnose`` prints it after ``verdict:``: the level it was tested at when
+        nothing is missing, else the best candidate with its physics, its (scaled) likelihood ratio and p-value,
+        and the person before and after it."""
+        if self.adequate:
+            tests = self.tests or len(self.rows) + len(self.failed)
+            return (f"no candidate effect is a significant improvement at alpha {self.alpha:g} (Bonferroni over "
+                    f"{tests}: each at {self.level:.2g})")
+        name = self.missing[0]
+        best = self.table().loc[name]
+        physics = f" = {best['physics']}" if best.get("physics") else ""
+        scaled = f" / {best['lr_scale']:.2g}" if best["lr_scale"] > 1 else ""
+        return (f"missing effect '{name}'{physics} (LR {best['lr']:.1f}{scaled} on {int(best['df'])} parameter(s), "
+                f"p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} Hz, xi_h "
+                f"{best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
+
     def held_out_pair(self, name: str) -> tuple | None:
         """``(without, with)``: the held-out validation of the person without and with candidate ``name``, on the
         same cut of the record; None when it was not judged on held-out data."""
@@ -362,7 +378,8 @@ class PersonDiagnosis:
         table = self.table()
         screened = self.screened.reset_index().to_dict(orient="records") if len(self.screened) else []
         return {"base": self.base.to_dict(), "candidates": table.reset_index().to_dict(orient="records"),
-                "missing": self.missing, "adequate": self.adequate, "alpha": self.alpha, "notes": self.notes(),
+                "missing": self.missing, "adequate": self.adequate, "verdict": self.verdict(), "alpha": self.alpha,
+                "notes": self.notes(),
                 "joint": self.joint, "screened": screened, "tests": self.tests,
                 "step_scans": {kind: {key: value for key, value in scan.items() if key != "table"}
                                for kind, scan in self.scans.items()}}
