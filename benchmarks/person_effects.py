@@ -283,7 +283,8 @@ def one(task) -> dict:
 
 def summary(frame: pd.DataFrame) -> list:
     """Markdown table: one row per kind, size and generator."""
-    lines = ["| hidden effect | size | generator | records (failed) | effect / noise (/ innovations' sd) | ranked first | "
+    lines = ["| hidden effect | size | generator | records (failed) | effect / noise (/ innovations' sd) | "
+             "ranked first | "
              "what came first | \\|f_h error\\| without -> with the true effect | f_h worse with it (by > 1 sd) | "
              "\\|xi_h error\\| without -> with | effect parameter error, covered | Ljung-Box passes before -> after | "
              "f_h determined before -> after; covered | s per record (diagnose, identify --effect) | "

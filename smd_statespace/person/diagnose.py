@@ -61,9 +61,9 @@ from ..errors import OptionError, SMDInputError
 from .effect_adapter import record_default, record_search_size
 from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
-from .supremum import log_p_value, scan_trim
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
+from .supremum import log_p_value, scan_trim
 from .threads import search_threads, thread_map
 from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white, verdict,
                       without_key)
@@ -209,7 +209,8 @@ class PersonDiagnosis:
         # joint fit kept the drift on top of the step (p 0.008) but not the step on top of the drift (p 0.57)
         gain = np.where(table["significant"], (table["held_out"] - table["held_out_before"])
                         / table["held_out_samples"], np.nan)
-        folds = {len((self.validation.get(name) or {}).get("folds", ())) for name in table.index[table["significant"]]}
+        folds = {len((self.validation.get(name) or {}).get("folds", ()))
+                 for name in table.index[table["significant"]]}
         if len(folds) > 1:
             gain = np.where(table["significant"], 0.0, np.nan)
         table = table.assign(_gain=np.nan_to_num(gain, nan=-np.inf))

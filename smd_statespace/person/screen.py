@@ -43,11 +43,11 @@ from scipy import stats
 from ..effects.generic import TERMS, GenericTerm, label
 from ..errors import SMDInputError
 from .breaks import located_step
-from .supremum import log_p_value, scan_trim
 from .extend import at_zero
 from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
 from .search import fit_model
+from .supremum import log_p_value, scan_trim
 from .threads import thread_map
 
 __all__ = ["STEPS", "PREFILTER", "RELINEARISED", "CHANGE_ALPHA", "TIME_KINDS", "generic_library", "score_test",

@@ -277,8 +277,9 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     """What ``diagnose`` found: the generic terms' score tests and the fitted candidates' likelihood ratios.
 
     Left: every generic term's robust score statistic (chi-square(1) under "absent"; a step a scan placed, the
-    largest of the scan's: its own level as a tick), with Holm's first level over the library (``alpha / terms``), in blue the terms whose quick fit passed over the library (the
-    largest of them are fitted: :func:`~smd_statespace.person.screen.screen`); right: each fitted candidate's likelihood
+    largest of the scan's: its own level as a tick), with Holm's first level over the library (``alpha / terms``),
+    in blue the terms whose quick fit passed over the library (the largest of them are fitted:
+    :func:`~smd_statespace.person.screen.screen`); right: each fitted candidate's likelihood
     ratio over its misspecification scale (:func:`~smd_statespace.person.robust.robust_scale`) against the level
     of its own test (Bonferroni over every test, and over a floor mode's frequency grid), proposed ones in blue.
     """
