@@ -113,10 +113,10 @@ class Coupling:
             raise OptionError("Coupling: point_index, mass, f_h and xi_h must have one value per person")
         if n and not (np.all(self.mass > 0) and np.all(self.f_h > 0) and np.all(self.xi_h > 0)):
             raise OptionError("Coupling: every person needs mass > 0 kg, f_h > 0 Hz and xi_h > 0")
-        self.k, self.c = person_coefficients(self.f_h, self.xi_h)
         self.phi = model.shapes[self.point_index] if n else np.zeros((0, model.n_modes))  # (N, m)
         m = model.n_modes
         self._links = modal_coupling(self.mass, self.f_h, self.xi_h, self.phi)
+        self.k, self.c = -self._links["u"], -self._links["u_dot"]  # person_coefficients, from the same coupling
         # M_i phi_i phi_i^T: the reaction on the modes per unit u_i'' (-M_i phi_i) times the floor under i, phi_i . q
         self._outer = -np.einsum("ij,ik->ijk", self._links["drive"], self.phi).reshape(n, m * m)
 
