@@ -15,8 +15,6 @@ import pytest
 import smd_statespace
 from smd_statespace.cli import main
 from smd_statespace.io import read_record
-from smd_statespace.signals import preprocess
-from smd_statespace.simulation import sample_path, sample_truth_path
 
 SIMULATE = ["simulate", "--mass", "70", "--fb", "2.0", "--fh", "2.5", "--xi", "0.3", "--duration", "12",
             "--seed", "1"]
@@ -25,11 +23,6 @@ SIMULATE = ["simulate", "--mass", "70", "--fb", "2.0", "--fh", "2.5", "--xi", "0
 def simulate(tmp_path, *extra, name="rec.csv"):
     out = tmp_path / name
     return main(SIMULATE + ["--out", str(out), *extra]), out
-
-
-def sample_preprocessed():
-    mass = json.loads(sample_truth_path().read_text())["mass"]
-    return preprocess(read_record(sample_path(), mass))
 
 
 def test_simulate_writes_a_readable_record_and_its_truth(tmp_path, capsys):
@@ -82,28 +75,6 @@ def test_simulate_effect_specs_are_checked_by_the_effect(tmp_path, capsys):
                        ("harmonics:blf=0.1/x", "blf")):
         assert simulate(tmp_path, "--effect", bad)[0] == 2
         assert re.search(words, capsys.readouterr().err)
-
-
-def test_demo_reports_the_sample_and_writes_the_figure(tmp_path, capsys):
-    assert main(["demo", "--out", str(tmp_path / "fig")]) == 0
-    text = capsys.readouterr().out
-    pre = sample_preprocessed()
-    f_b = np.median([c.f_b for c in pre.valid_cycles])
-    assert f"{len(pre.cycles)} ({len(pre.valid_cycles)} valid)" in text
-    assert f"median {f_b:.3f} Hz" in text
-    assert ", ".join(smd_statespace.SMDModel().state_names[:4]) in text.replace(" |", ",")
-    assert "identify" in text
-    # the answer first: the person from the whole record, against the sample's truth, before the per-cycle method
-    person = json.loads((tmp_path / "fig" / "person" / "person.json").read_text())
-    assert f"f_h          {person['f_h']:.3f} Hz, 90 % interval {person['f_h_low']:.2f}-{person['f_h_high']:.2f} Hz" in text
-    assert text.index("The person, from the whole record") < text.index("Per cycle, the article's method")
-    identified = pd.read_csv(tmp_path / "fig" / "results.csv")
-    assert f"{int((identified.status == 'ok').sum())} cycles identified" in text
-    assert (tmp_path / "fig" / "parameters.png").exists() and (tmp_path / "fig" / "convergence.png").exists()
-    png = tmp_path / "fig" / "pipeline.png"
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert str(png) in text
-    assert max(len(line) for line in text.splitlines() if str(tmp_path) not in line and ".csv" not in line) <= 110
 
 
 def test_demo_on_a_simulated_record_shows_its_truth(tmp_path, capsys):
@@ -216,17 +187,6 @@ def test_starting_the_cli_loads_no_heavy_module():
 def console_script():
     here = Path(sys.executable).parent / ("smd-statespace.exe" if os.name == "nt" else "smd-statespace")
     return str(here) if here.exists() else shutil.which("smd-statespace")
-
-
-@pytest.mark.slow
-@pytest.mark.skipif(console_script() is None, reason="the smd-statespace console script is not installed")
-def test_console_script_demo(tmp_path):
-    done = subprocess.run([console_script(), "demo", "--out", "tmp"], cwd=tmp_path, capture_output=True,
-                          text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    assert "Traceback" not in done.stderr
-    assert (tmp_path / "tmp" / "pipeline.png").exists()
-    assert f"{len(sample_preprocessed().cycles)} (" in done.stdout
 
 
 def test_console_script_error_is_one_line(tmp_path):
