@@ -334,47 +334,49 @@ class SMDModel:
         when ``harmonics`` is given.
         """
         theta = np.asarray(inputs.phase(t))[..., None]
-        if harmonics is None:
-            orders = np.arange(1, self.n_harmonics + 1)
-            lead = [np.ones(theta.shape)]
-        else:
-            orders = np.asarray(harmonics)
-            lead = []
-        cos, sin = np.cos(orders * theta), np.sin(orders * theta)
-        pairs = np.stack([cos, sin], axis=-1).reshape(theta.shape[:-1] + (2 * len(orders),))
-        return np.concatenate(lead + [pairs], axis=-1)
+        lead = 1 if harmonics is None else 0
+        orders = np.arange(1, self.n_harmonics + 1) if harmonics is None else np.asarray(harmonics)
+        angles = orders * theta
+        basis = np.empty(theta.shape[:-1] + (lead + 2 * orders.size,))
+        if lead:
+            basis[..., 0] = 1.0
+        basis[..., lead::2], basis[..., lead + 1::2] = np.cos(angles), np.sin(angles)
+        return basis
 
-    def force(self, x, t, inputs: CycleInputs):
-        """Biomechanical force per unit mass ``F_bio / M_h`` (m/s^2), Eq. 4."""
+    def force(self, x, t, inputs: CycleInputs, basis=None):
+        """Biomechanical force per unit mass ``F_bio / M_h`` (m/s^2), Eq. 4; ``basis``: :meth:`fourier_basis` at
+        ``t`` where it is at hand."""
         x = np.asarray(x, dtype=float)
         start = self._index["a0"]
         coefficients = x[..., start:start + 1 + 2 * self.n_harmonics]
         if not np.any(coefficients):  # no force (the record-level model linearises at such states): no basis to build
             return np.zeros(np.broadcast_shapes(coefficients.shape[:-1], np.shape(t)))
-        return G * np.sum(coefficients * self.fourier_basis(t, inputs), axis=-1)
+        basis = self.fourier_basis(t, inputs) if basis is None else basis
+        return G * np.sum(coefficients * basis, axis=-1)
 
-    def acceleration(self, x, t, inputs: CycleInputs):
+    def acceleration(self, x, t, inputs: CycleInputs, basis=None):
         """COM acceleration ``u''`` (m/s^2): the acceleration row of Eq. 10 plus effects.
 
-        ``u'' = -omega_h^2 u - 2 xi_h omega_h u' + F_bio / M_h``
+        ``u'' = -omega_h^2 u - 2 xi_h omega_h u' + F_bio / M_h``; ``basis`` as :meth:`force`.
         """
         x = np.asarray(x, dtype=float)
         u, v = x[..., U], x[..., U_DOT]
-        acc = equations.smd_acceleration(u, v, x[..., F_H], x[..., XI_H], self.force(x, t, inputs))  # Eq. 2, 10
+        acc = equations.smd_acceleration(u, v, x[..., F_H], x[..., XI_H], self.force(x, t, inputs, basis))  # Eq. 2, 10
         for effect in self.effects:
             acc = acc + _checked_shape(effect.acceleration(self, x, t, inputs), acc.shape, effect, "acceleration")
         return acc
 
-    def acceleration_jacobian(self, x, t, inputs: CycleInputs):
-        """Derivative of :meth:`acceleration` with respect to the state, shape ``x.shape``."""
+    def acceleration_jacobian(self, x, t, inputs: CycleInputs, basis=None):
+        """Derivative of :meth:`acceleration` with respect to the state, shape ``x.shape``; ``basis`` as
+        :meth:`force`."""
         x = np.asarray(x, dtype=float)
         eq2 = equations.acceleration_derivatives(x[..., U], x[..., U_DOT], x[..., F_H], x[..., XI_H])  # Eq. 2's own
         jac = np.zeros(x.shape)
         for column, name in ((U, "u"), (U_DOT, "u_dot"), (F_H, "f_h"), (XI_H, "xi_h")):
             jac[..., column] = eq2[name]
         start = self._index["a0"]
-        jac[..., start:start + 1 + 2 * self.n_harmonics] = (G * np.asarray(eq2["force_g"])[..., None]
-                                                            * self.fourier_basis(t, inputs))
+        basis = self.fourier_basis(t, inputs) if basis is None else basis
+        jac[..., start:start + 1 + 2 * self.n_harmonics] = G * np.asarray(eq2["force_g"])[..., None] * basis
         for effect in self.effects:
             jac = jac + _checked_shape(effect.acceleration_jacobian(self, x, t, inputs), jac.shape, effect,
                                        "acceleration_jacobian")
@@ -399,16 +401,27 @@ class SMDModel:
 
     def rate_jacobian(self, x, t, inputs: CycleInputs):
         """Derivative of :meth:`rate`, shape ``x.shape + (n_state,)``."""
+        return self.rate_and_jacobian(x, t, inputs)[1]
+
+    def rate_and_jacobian(self, x, t, inputs: CycleInputs):
+        """:meth:`rate` and :meth:`rate_jacobian` together (a step's stage needs both), the Fourier basis and the
+        acceleration computed once: ``(rate, jacobian)``."""
         x = np.asarray(x, dtype=float)
-        acc = self.acceleration(x, t, inputs)
-        acc_jac = self.acceleration_jacobian(x, t, inputs)
+        basis = self.fourier_basis(t, inputs)
+        acc = self.acceleration(x, t, inputs, basis)
+        acc_jac = self.acceleration_jacobian(x, t, inputs, basis)
+        rate = np.zeros(x.shape)
+        rate[..., U] = x[..., U_DOT]
+        rate[..., U_DOT] = acc
         jac = np.zeros(x.shape + (self.n_state,))
         jac[..., U, U_DOT] = 1.0
         jac[..., U_DOT, :] = acc_jac
         for effect, where in zip(self.effects, self._effect_slices):
             if where.stop > where.start:
+                rate[..., where] = _checked_shape(effect.slot_rates(self, x, t, inputs, acc), rate[..., where].shape,
+                                                  effect, "slot_rates")
                 jac[..., where, :] = effect.slot_rates_jacobian(self, x, t, inputs, acc, acc_jac)
-        return jac
+        return rate, jac
 
     def transition(self, x, t, dt, inputs: CycleInputs):
         """State at ``t + dt`` from state ``x`` at ``t`` without process noise (Eq. 11-12).
@@ -555,6 +568,8 @@ def _checked_shape(term, expected, effect, method):
     effect, the method and both shapes (a wrong shape would broadcast into a wrong model, or fail far from its cause).
     """
     term = np.asarray(term, dtype=float)
+    if term.shape == tuple(expected):
+        return term
     try:
         fits = np.broadcast_shapes(term.shape, tuple(expected)) == tuple(expected)  # a known constant's scalar fits
     except ValueError:

@@ -48,8 +48,8 @@ def step_jacobian(model, x, t, h, inputs, eye):
     Parameters
     ----------
     model : SMDModel
-        Its ``discretisation`` chooses the scheme; ``rate`` and
-        ``rate_jacobian`` give ``dX/dt`` and its derivative.
+        Its ``discretisation`` chooses the scheme; ``rate_and_jacobian``
+        gives ``dX/dt`` and its derivative.
     x : ndarray, shape (..., n_state)
         State(s) at ``t``.
     t : float
@@ -69,7 +69,8 @@ def step_jacobian(model, x, t, h, inputs, eye):
         ``d x_next / d x``: for Euler ``I + A h``, the ``A_d`` of Eq. 12.
     """
     if model.discretisation == "euler":
-        return x + h * model.rate(x, t, inputs), eye + h * model.rate_jacobian(x, t, inputs)
+        rate, jacobian = model.rate_and_jacobian(x, t, inputs)
+        return x + h * rate, eye + h * jacobian
     stages = []
     increment, increment_jac = 0.0, 0.0
     for c, weight in ((0.0, 1.0), (0.5, 2.0), (0.5, 2.0), (1.0, 1.0)):
@@ -79,8 +80,8 @@ def step_jacobian(model, x, t, h, inputs, eye):
             point_jac = eye + c * h * dk_prev
         else:
             point, point_jac = x, eye
-        k = model.rate(point, t + c * h, inputs)
-        dk = model.rate_jacobian(point, t + c * h, inputs) @ point_jac
+        k, dk = model.rate_and_jacobian(point, t + c * h, inputs)
+        dk = dk @ point_jac
         stages.append((k, dk))
         increment = increment + weight * k
         increment_jac = increment_jac + weight * dk
