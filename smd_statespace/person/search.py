@@ -49,6 +49,13 @@ QUICK_GAIN = 1e-3
 FINAL_GAIN = 1e-5
 """Stop rule of the final fit (log-likelihood units gained by the last step)."""
 
+SCORING_STEPS = 30
+"""Most Fisher-scoring steps of a search before L-BFGS-B (exact gradient) finishes it from where scoring stopped.
+
+Scoring converges in 3-21 steps where the profile's expected information is a good model of the likelihood; past
+that it crawls along a ridge (a nonlinear effect's linearised likelihood: a cubic spring's final fit gained 0.08 in
+100 steps, 6.1 s, where 30 steps and L-BFGS-B reached the same log-likelihood to 1e-4 in 2.7 s)."""
+
 
 TIMING_ITERATIONS = 3
 """Re-placements of the cycle starts from the model's own phase and rate errors (``timing="model"``)."""
@@ -168,7 +175,7 @@ def fit_model(model: RecordModel, start=None, quick=False, method="scoring") -> 
             "converged": bool(converged), "message": prefix + str(result.message)}
 
 
-def _scoring(model: RecordModel, start, gain, max_iterations=100) -> tuple:
+def _scoring(model: RecordModel, start, gain, max_iterations=SCORING_STEPS) -> tuple:
     """Fisher scoring, damped as Levenberg-Marquardt, inside the parameters' bounds.
 
     Each step solves ``(I + lambda diag(I)) step = g`` with ``g`` the exact
