@@ -107,21 +107,17 @@ def test_a_wrong_mass_and_quiet_standing_are_warnings_not_refusals(bouncing):
     assert abs(partly.active_seconds - 18.0) < 1.0
 
 
-@pytest.mark.slow
-def test_clean_bouncing_across_the_articles_range_raises_nothing():
-    """No refusal on any of 20 simulated people (f_b 1.5-3.5 Hz, both generators); warnings counted."""
-    rng = np.random.default_rng(2024)
-    warned = 0
-    for i in range(20):
-        f_b, f_h, xi_h = rng.uniform(1.5, 3.5), rng.uniform(1.8, 4.2), rng.uniform(0.1, 0.5)
-        blf = tuple(np.array(DEFAULT_BLF) * rng.uniform(0.7, 1.3, 4))
-        sim = simulate_bouncing(mass=MASS, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=30, seed=i, blf=blf,
-                                variation=("jumps", "smooth")[i % 2])
+@pytest.mark.parametrize("variation", ["jumps", "smooth"])
+def test_clean_bouncing_at_the_corners_of_the_articles_range_raises_nothing(variation):
+    """No refusal and no warning at the corners of the article's range (f_b 1.5-3.5 Hz, f_h 1.8-4.2 Hz, xi_h
+    0.1-0.5), with either generator; the rate over 80 people across the range is benchmarks/applicability.py's
+    (docs/applicability.md)."""
+    for seed, (f_b, f_h, xi_h) in enumerate([(1.5, 1.8, 0.1), (1.5, 4.2, 0.5), (3.5, 1.8, 0.5), (3.5, 4.2, 0.1)]):
+        sim = simulate_bouncing(mass=MASS, f_b=f_b, f_h=f_h, xi_h=xi_h, duration=30, seed=seed, blf=DEFAULT_BLF,
+                                variation=variation)
         check = check_bouncing(sim.record)
-        assert check.bouncing, (f_b, f_h, xi_h, check.findings)
+        assert check.bouncing and not check.findings, (f_b, f_h, xi_h, check.findings)
         assert abs(check.period * f_b - 1.0) < 0.05
-        warned += bool(check.findings)
-    assert warned <= 2  # the two-hump warning may fire near a resonance at 2 f_b (1 of 40 measured)
 
 
 @pytest.mark.slow
