@@ -91,7 +91,7 @@ def test_demo_on_a_simulated_record_shows_its_truth(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_demo_says_when_the_truth_beside_a_record_is_unreadable(tmp_path, capsys):
-    status, out = simulate(tmp_path, "--duration", "8")  # the shortest record the demo takes whole: 6 s of demo
+    status, out = simulate(tmp_path, "--duration", "8")  # 8 s: about 6 s of demo
     assert status == 0
     beside = out.with_name(f"{out.stem}_truth.json")
     beside.write_text('{"f_h": 2.5,')  # cut short
