@@ -74,7 +74,8 @@ def check_demo_report(text: str, out: Path):
     assert (out / "parameters.png").exists() and (out / "convergence.png").exists()
     assert (out / "pipeline.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert str(Path(out.name) / "pipeline.png") in text
-    assert max(len(line) for line in text.splitlines()) <= 110
+    # prose and tables fit a terminal; lines naming files (the installed sample's path, what was written) may not
+    assert max(len(line) for line in text.splitlines() if out.name not in line and ".csv" not in line) <= 110
 
 
 @pytest.mark.slow

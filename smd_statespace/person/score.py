@@ -85,6 +85,7 @@ import numpy as np
 
 from .model import RecordModel
 from .sensitivity import sensitivity_pass
+from .system import contiguous
 
 __all__ = ["DYNAMICS_STEP", "cycle_sums", "profile_out", "score", "system_derivatives", "sensitivity_pass"]
 
@@ -406,9 +407,9 @@ def score(model: RecordModel, params, fitted=None, method="auto", derivatives=No
     der = system_derivatives(model, params, sys, method=method) if derivatives is None else derivatives
     delta, sigma2 = np.asarray(fitted["delta"], dtype=float), float(fitted["sigma2"])
     v, f, dv, df = sensitivity_pass(
-        *sys.pass_arguments(model.y, model.n_coefficients), delta,
-        der["dyn"], der["d_hx"], der["d_Phi"], der["d_Gam"], der["d_offset"], der["d_X_tr"], der["d_y"],
-        der["d_Qx"], der["d_D"], der["d_E"], der["d_drift"], der["d_sphi"], der["d_sq"], der["d_sp0"])
+        *sys.pass_arguments(model.y, model.n_coefficients), *contiguous(
+            delta, der["dyn"], der["d_hx"], der["d_Phi"], der["d_Gam"], der["d_offset"], der["d_X_tr"], der["d_y"],
+            der["d_Qx"], der["d_D"], der["d_E"], der["d_drift"], der["d_sphi"], der["d_sq"], der["d_sp0"]))
     variance = sigma2 * f
     standard2 = v**2 / variance
     observed, n_obs = model.observed, model.n_observed  # a missing sample adds nothing (v, dv, df are 0 there)

@@ -85,10 +85,22 @@ class RecordSystem:
     def pass_arguments(self, y, n_template) -> tuple:
         """The positional arguments of :func:`~smd_statespace.person.kalman.augmented_pass` for the measured
         ``y`` (the known part subtracted) and ``n_template`` template coefficients; the first ones of
-        :func:`~smd_statespace.person.sensitivity.sensitivity_pass` too."""
-        return (y - self.y_known, self.hx, self.H, self.Phi, self.Gam, self.Qx, self.offset, self.X_obs, self.X_tr,
-                self.reset, self.code, self.D, self.E, self.drift, n_template, self.smooth_phi, self.smooth_q,
-                self.smooth_p0, self.observed)
+        :func:`~smd_statespace.person.sensitivity.sensitivity_pass` too.
+
+        Every array is C-contiguous (:func:`contiguous`): the compiled passes are compiled once per layout of
+        their arguments."""
+        return contiguous(y - self.y_known, self.hx, self.H, self.Phi, self.Gam, self.Qx, self.offset, self.X_obs,
+                          self.X_tr, self.reset, self.code, self.D, self.E, self.drift, n_template, self.smooth_phi,
+                          self.smooth_q, self.smooth_p0, self.observed)
+
+
+def contiguous(*arguments) -> tuple:
+    """``arguments`` with every array C-contiguous (copied only where it is not), the rest as given.
+
+    numba compiles a function once per layout of its array arguments: a transposed or sliced array (layout "A")
+    beside the usual C one made the two largest passes compile twice, about 25 s of a fresh installation's first
+    fit (the cache then holds both)."""
+    return tuple(np.ascontiguousarray(a) if isinstance(a, np.ndarray) else a for a in arguments)
 
 
 @dataclass(frozen=True)
