@@ -207,6 +207,11 @@ def _true_spec(kind, base) -> str:
     return FITTED[kind]
 
 
+def _finite(value):
+    """``value`` as a float for JSON, None where it is not finite (not validated)."""
+    return float(value) if np.isfinite(value) else None
+
+
 def one(task) -> dict:
     """Simulate, identify, diagnose and identify with the true effect one record; never raises."""
     _load_user_effect()
@@ -246,7 +251,9 @@ def one(task) -> dict:
         top = diagnosis.missing[0] if diagnosis.missing else None
         table = diagnosis.table()
         row["candidates"] = json.dumps({name: {"lr": round(float(r["lr"]), 3), "df": int(r["df"]),
-                                               "p": float(r["p_value"]), "significant": bool(r["significant"])}
+                                               "p": float(r["p_value"]), "significant": bool(r["significant"]),
+                                               "held_out_z": _finite(r["held_out_z"]),
+                                               "folds": len((diagnosis.validation.get(name) or {}).get("folds", ()))}
                                         for name, r in table.iterrows()} if not table.empty else {})
         suggested = diagnosis.fits[top] if top else base  # what following diagnose's verdict gives
         row.update(f_h_suggested=suggested.f_h, f_h_sd_suggested=float(suggested.se[0]))

@@ -67,7 +67,8 @@ def check_demo_report(text: str, out: Path):
     assert ", ".join(smd_statespace.SMDModel().state_names[:4]) in text.replace(" |", ",")
     # the answer first: the person from the whole record, against the sample's truth, before the per-cycle method
     person = json.loads((out / "person" / "person.json").read_text())
-    assert f"f_h          {person['f_h']:.3f} Hz, 90 % interval {person['f_h_low']:.2f}-{person['f_h_high']:.2f} Hz" in text
+    interval = f"{person['f_h_low']:.2f}-{person['f_h_high']:.2f} Hz"
+    assert f"f_h          {person['f_h']:.3f} Hz, 90 % interval {interval}" in text
     assert text.index("The person, from the whole record") < text.index("Per cycle, the article's method")
     identified = pd.read_csv(out / "results.csv")
     assert f"{int((identified.status == 'ok').sum())} cycles identified" in text
