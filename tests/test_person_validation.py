@@ -190,6 +190,7 @@ def test_a_held_out_gain_made_by_a_few_samples_is_weak_and_one_spread_over_the_c
     only the second."""
     from smd_statespace.person.diagnose import held_out_z
     from smd_statespace.person.validation import held_out_gain
+    from smd_statespace.person.verdict import CLEAR_GAIN
 
     rng = np.random.default_rng(np.random.SeedSequence(45))
     cycle = np.repeat(np.arange(60), 40)
@@ -212,5 +213,15 @@ def test_a_held_out_gain_made_by_a_few_samples_is_weak_and_one_spread_over_the_c
     weak = held_out(passed, before, spiked, level)
     assert weak["held_out_weak"] and not weak["held_out_worse"] and not weak["significant"]
     assert held_out(passed, before, spread, level)["significant"]
-    # innovations near Gaussian: the densities are a fair measure, and a positive gain is enough
+    # innovations near Gaussian: the densities are a fair measure, and a gain of one sd of its noise is enough
+    z = held_out_gain(before, spiked)["z"]
+    assert CLEAR_GAIN < z < held_out_z(level)
     assert held_out(passed, before, spiked, level, heavy_tailed=False)["significant"]
+    # ... but not one within it: the same noise with +5 in one sample is under a sd of the cycles' gains
+    small = dict(spiked, sample_loglike=spiked["sample_loglike"].copy())
+    small["sample_loglike"][500] -= 15.0
+    small["loglike"] = float(np.nansum(small["sample_loglike"]))
+    assert held_out_gain(before, small)["gain"] == pytest.approx(5.0)
+    assert 0.0 < held_out_gain(before, small)["z"] < CLEAR_GAIN
+    weak = held_out(passed, before, small, level, heavy_tailed=False)
+    assert weak["held_out_weak"] and not weak["held_out_worse"] and not weak["significant"]

@@ -37,8 +37,9 @@ does not grow with the library.
 A candidate that passes the test is also validated on held-out data
 (:func:`~smd_statespace.person.validation.cross_validated_loglike`): the
 person with and without it fitted on each half of the record and scored on the
-other half; one that predicts the held-out halves worse is not proposed, whatever
-its likelihood ratio on the whole record.
+other half; one that predicts the held-out halves worse, or better by less than the spread of the cycles'
+gains (:data:`~smd_statespace.person.verdict.CLEAR_GAIN`), is not proposed, whatever its likelihood ratio on the
+whole record.
 
 When two candidates both explain the residual (a cubic spring makes
 harmonics of the bouncing frequency; so does an asymmetric stiffness), the
@@ -65,8 +66,8 @@ from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
 from .threads import search_threads, thread_map
-from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white, verdict,
-                      without_key)
+from .verdict import (CLEAR_GAIN, HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z,
+                      less_white, verdict, without_key)
 
 __all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "held_out_z", "PersonDiagnosis",
            "diagnose_person", "candidate_row", "held_out", "verdict", "less_white", "HELD_OUT", "label",
@@ -316,13 +317,15 @@ class PersonDiagnosis:
                            f"person without it (held-out log-likelihood {table.loc[name, 'held_out_before']:.1f} -> "
                            f"{table.loc[name, 'held_out']:.1f}): it fits this record, not the person, so it is not "
                            "proposed")
+            heavy = kurtosis > HEAVY_TAILS
+            asked = (f"under {held_out_z(self.level):.2f}, its test's level, asked where the innovations are "
+                     "heavy-tailed" if heavy else f"under {CLEAR_GAIN:g}, the spread of the cycles' gains")
             for name in table.index[table["held_out_weak"].astype(bool)]:
                 row = table.loc[name]
                 out.append(f"{name}: fitted on each half of the record, it predicts the other half better than the "
                            f"person without it by only {row['held_out'] - row['held_out_before']:+.1f} in "
                            f"log-likelihood, {row['held_out_z']:.1f} sd of that gain's noise from cycle to cycle "
-                           f"(under {held_out_z(self.level):.2f}, its test's level, asked where the innovations are "
-                           "heavy-tailed): a few samples make it, so it is not proposed")
+                           f"({asked}): the held-out halves do not show it, so it is not proposed")
             for name in table.index[~table["settled"].astype(bool)]:
                 out.append(f"{name}: its linearised path had not settled after the last linearisation (the "
                            f"approximate likelihood kept rising, LR {table.loc[name, 'lr']:.1f}, as the path "
