@@ -225,3 +225,5 @@ def test_a_held_out_gain_made_by_a_few_samples_is_weak_and_one_spread_over_the_c
     assert 0.0 < held_out_gain(before, small)["z"] < CLEAR_GAIN
     weak = held_out(passed, before, small, level, heavy_tailed=False)
     assert weak["held_out_weak"] and not weak["held_out_worse"] and not weak["significant"]
+    # a change in time predicts the other half by extrapolating its course: there a positive gain is enough
+    assert held_out(passed, before, small, level, heavy_tailed=False, in_time=True)["significant"]
