@@ -389,7 +389,10 @@ class SMDModel:
         parameter rows zero; effects' dynamic slots by their own rates.
         """
         x = np.asarray(x, dtype=float)
-        acc = self.acceleration(x, t, inputs)
+        return self._rate(x, t, inputs, self.acceleration(x, t, inputs))
+
+    def _rate(self, x, t, inputs: CycleInputs, acc):
+        """:meth:`rate` at ``x`` whose acceleration is ``acc``."""
         rate = np.zeros(x.shape)
         rate[..., U] = x[..., U_DOT]
         rate[..., U_DOT] = acc
@@ -399,9 +402,20 @@ class SMDModel:
                                                   effect, "slot_rates")
         return rate
 
-    def rate_jacobian(self, x, t, inputs: CycleInputs):
-        """Derivative of :meth:`rate`, shape ``x.shape + (n_state,)``."""
-        return self.rate_and_jacobian(x, t, inputs)[1]
+    def rate_jacobian(self, x, t, inputs: CycleInputs, basis=None, acc=None):
+        """Derivative of :meth:`rate`, shape ``x.shape + (n_state,)``; ``basis`` as :meth:`force`, ``acc`` the
+        acceleration at ``x`` where it is at hand."""
+        x = np.asarray(x, dtype=float)
+        basis = self.fourier_basis(t, inputs) if basis is None else basis
+        acc = self.acceleration(x, t, inputs, basis) if acc is None else acc
+        acc_jac = self.acceleration_jacobian(x, t, inputs, basis)
+        jac = np.zeros(x.shape + (self.n_state,))
+        jac[..., U, U_DOT] = 1.0
+        jac[..., U_DOT, :] = acc_jac
+        for effect, where in zip(self.effects, self._effect_slices):
+            if where.stop > where.start:
+                jac[..., where, :] = effect.slot_rates_jacobian(self, x, t, inputs, acc, acc_jac)
+        return jac
 
     def rate_and_jacobian(self, x, t, inputs: CycleInputs):
         """:meth:`rate` and :meth:`rate_jacobian` together (a step's stage needs both), the Fourier basis and the
@@ -409,19 +423,7 @@ class SMDModel:
         x = np.asarray(x, dtype=float)
         basis = self.fourier_basis(t, inputs)
         acc = self.acceleration(x, t, inputs, basis)
-        acc_jac = self.acceleration_jacobian(x, t, inputs, basis)
-        rate = np.zeros(x.shape)
-        rate[..., U] = x[..., U_DOT]
-        rate[..., U_DOT] = acc
-        jac = np.zeros(x.shape + (self.n_state,))
-        jac[..., U, U_DOT] = 1.0
-        jac[..., U_DOT, :] = acc_jac
-        for effect, where in zip(self.effects, self._effect_slices):
-            if where.stop > where.start:
-                rate[..., where] = _checked_shape(effect.slot_rates(self, x, t, inputs, acc), rate[..., where].shape,
-                                                  effect, "slot_rates")
-                jac[..., where, :] = effect.slot_rates_jacobian(self, x, t, inputs, acc, acc_jac)
-        return rate, jac
+        return self._rate(x, t, inputs, acc), self.rate_jacobian(x, t, inputs, basis, acc)
 
     def transition(self, x, t, dt, inputs: CycleInputs):
         """State at ``t + dt`` from state ``x`` at ``t`` without process noise (Eq. 11-12).
