@@ -66,8 +66,8 @@ from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
 from .threads import search_threads, thread_map
-from .verdict import (CLEAR_GAIN, HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z,
-                      less_white, verdict, without_key)
+from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white,
+                      needed_z, verdict, without_key)
 
 __all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "held_out_z", "PersonDiagnosis",
            "diagnose_person", "candidate_row", "held_out", "verdict", "less_white", "HELD_OUT", "label",
@@ -317,9 +317,10 @@ class PersonDiagnosis:
                            f"person without it (held-out log-likelihood {table.loc[name, 'held_out_before']:.1f} -> "
                            f"{table.loc[name, 'held_out']:.1f}): it fits this record, not the person, so it is not "
                            "proposed")
-            heavy = kurtosis > HEAVY_TAILS
-            asked = (f"under {held_out_z(self.level):.2f}, its test's level, asked where the innovations are "
-                     "heavy-tailed" if heavy else f"under {CLEAR_GAIN:g}, the spread of the cycles' gains")
+            heavy = kurtosis > HEAVY_TAILS  # what held_out_checks asked (a change in time is weak only there)
+            asked = f"under {needed_z(self.level, heavy):.2f}, " + (
+                "its test's level, asked where the innovations are heavy-tailed" if heavy
+                else "the spread of the cycles' gains")
             for name in table.index[table["held_out_weak"].astype(bool)]:
                 row = table.loc[name]
                 out.append(f"{name}: fitted on each half of the record, it predicts the other half better than the "
