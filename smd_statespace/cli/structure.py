@@ -113,7 +113,7 @@ def _draws(args, model, points, options, result, directory, plot_draws):
 
     import numpy as np
 
-    from ..structure.limits import ROUTE2
+    from ..structure.limits import MODELS, ROUTE2
     from ..structure.montecarlo import CrowdDraws, monte_carlo, percentiles
 
     spec = CrowdDraws(model, args.people, args.active, points=None if points is None else tuple(points), **options)
@@ -133,13 +133,11 @@ def _draws(args, model, points, options, result, directory, plot_draws):
     limits = ROUTE2
     summary["draws"] = {"count": args.draws, "percentile": 95,
                         "points": {point: {k: float(v) for k, v in row.items()} for point, row in table.iterrows()},
-                        "limits": {point: {model: limits.classify(row[f"{model}_{limits.measure}"])
-                                           for model in ("coupled", "force_only")}
-                                   for point, row in table.iterrows()}}
+                        "limits": {point: limits.classify_models(row) for point, row in table.iterrows()}}
     summary_path.write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
     print(f"{args.draws} random crowds, 95th percentile at {worst}: rms_1s_max coupled "
           f"{table.loc[worst, 'coupled_rms_1s_max']:.3f} vs force-only {table.loc[worst, 'force_only_rms_1s_max']:.3f} "
           "m/s^2")
-    for model, label in (("coupled", "coupled"), ("force_only", "force-only")):
+    for model, label in MODELS.items():
         print(f"  {label} 95th percentile: {limits.sentence(table.loc[worst, f'{model}_{limits.measure}'])}")
     return [Path(p) for p in paths]

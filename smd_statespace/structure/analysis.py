@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from .coupled import Coupling, coupled_eigenvalues, modes_of, occupied_eigenvalues
-from .limits import ROUTE2, Limits
+from .limits import MODELS, ROUTE2, Limits
 from .modes import ModalModel
 from .people import Occupants
 from .response import MEASURES, measures
@@ -112,8 +112,7 @@ class StructureResult:
         """
         k = self.worst() if point is None else int(point)
         row = self._measured.iloc[k]
-        return {"point": row["point"], **{model: limits.classify(row[f"{model}_{limits.measure}"])
-                                          for model in ("coupled", "force_only")}}
+        return {"point": row["point"], **limits.classify_models(row)}
 
     def summary(self, limits: Limits = ROUTE2) -> dict:
         """JSON-able summary: modes empty and occupied, people, per point both models' measures and their
@@ -127,7 +126,7 @@ class StructureResult:
             ratios = {name: float(getattr(row, f"ratio_{name}")) for name in MEASURES}
             item["coupled_over_force_only"] = {name: (v if np.isfinite(v) else None) for name, v in ratios.items()}
             classified = self.classify(limits, k)
-            item["limits"] = {model: classified[model] for model in ("coupled", "force_only")}
+            item["limits"] = {model: classified[model] for model in MODELS}
             rows.append(item)
         settings = self.occupants.settings
         return {
@@ -152,7 +151,7 @@ class StructureResult:
         item = self.classify(limits)
         return [f"limits at {item['point']} ({limits.label}):",
                 *(f"  {label}: {limits.sentence(item[model]['value'])}"
-                  for model, label in (("coupled", "coupled"), ("force_only", "force-only")))]
+                  for model, label in MODELS.items())]
 
     def response_frame(self) -> pd.DataFrame:
         """``time`` and, per response point, ``<point>_coupled`` and ``<point>_force_only`` accelerations (m/s^2)."""

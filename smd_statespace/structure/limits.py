@@ -30,7 +30,11 @@ import numpy as np
 
 from .response import MEASURES
 
-__all__ = ["Criterion", "Limits", "ROUTE2", "LIMITS", "G_SOURCE"]
+__all__ = ["Criterion", "Limits", "ROUTE2", "LIMITS", "G_SOURCE", "MODELS"]
+
+MODELS = {"coupled": "coupled", "force_only": "force-only"}
+"""The two models of a structure's response, as its tables prefix their columns (``coupled_rms_1s_max``), and as
+they are printed."""
 
 G_SOURCE = 9.81
 """m/s^2: the g the Route 2 source converts %g with (``/9.81*100``); the criteria in m/s^2 are ``%g / 100 * 9.81``."""
@@ -155,6 +159,11 @@ class Limits:
         return {"measure": self.measure, "value": float(value), "percent_g": 100.0 * float(value) / G_SOURCE,
                 "band": band, "words": self.words(band),
                 "within": {f"{self.kind} {c.name}": k >= band for k, c in enumerate(self.criteria)}}
+
+    def classify_models(self, row) -> dict:
+        """Each model's value of :attr:`measure` in ``row`` (columns ``<model>_<measure>`` of :data:`MODELS`, as the
+        result's and the Monte Carlo percentiles' tables have), classified: ``{model: classify(value)}``."""
+        return {model: self.classify(row[f"{model}_{self.measure}"]) for model in MODELS}
 
     def describe(self) -> dict:
         """The limits as data, for ``summary.json``: name, measure, criteria, bands, citation and source."""
