@@ -413,7 +413,9 @@ def score(model: RecordModel, params, fitted=None, method="auto", derivatives=No
     variance = sigma2 * f
     standard2 = v**2 / variance
     observed, n_obs = model.observed, model.n_observed  # a missing sample adds nothing (v, dv, df are 0 there)
-    sample = np.where(observed, -0.5 * (np.log(2.0 * math.pi * variance) + standard2), 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a pass that broke down (variances <= 0 where a search
+        # tried unstable dynamics) gives NaN here, and the search steps back (search.fit_model)
+        sample = np.where(observed, -0.5 * (np.log(2.0 * math.pi * variance) + standard2), 0.0)
     relative = df / f[:, None]  # d log f
     per_sample = -0.5 * (relative * (1.0 - standard2)[:, None]) - (v / variance)[:, None] * dv
     weighted = dv / variance[:, None]
