@@ -150,6 +150,19 @@ def add_noise_floor_argument(parser):
                              "describes set f_h and xi_h; 0 fits the record as measured")
 
 
+FADE_CHOICES = {"auto": "auto", "on": True, "off": False}
+"""``--fade``'s words and ``identify_person``'s ``fade`` values."""
+
+
+def add_fade_argument(parser):
+    """``--fade auto|on|off``: let the force's first harmonics fade linearly over the record with the person."""
+    parser.add_argument("--fade", choices=list(FADE_CHOICES), default="auto",
+                        help="record estimator: let the force's harmonics fade (or grow) linearly over the "
+                             "record by one factor (a person who tires; no search dimension is added): auto (default) where the "
+                             "record was trimmed to a bout of bouncing (standing before and after), on for any "
+                             "record, off never")
+
+
 def _noise_floor(text):
     """argparse type of ``--noise-floor`` (:func:`~smd_statespace.person.noise_floor.check_noise_floor`)."""
     from ..person.noise_floor import MAX_NOISE_FLOOR, check_noise_floor
@@ -219,6 +232,9 @@ def check_record_level_options(args, floor_elsewhere: str):
         option = "--accelerometer" if accelerometer else "--units"
         raise OptionError(f"{option} works with the record-level model (--estimator record), not "
                           f"--estimator {args.estimator}")
+    if getattr(args, "fade", "auto") != "auto":
+        raise OptionError(f"--fade {args.fade} applies to the record-level model (--estimator record); --estimator "
+                          f"{args.estimator} fits every cycle's own force")
     if getattr(args, "no_floor", False):
         raise OptionError(f"--no-floor applies to the record-level model (--estimator record), which adds a record's "
                           f"measured floor by default; --estimator {args.estimator} {floor_elsewhere}")

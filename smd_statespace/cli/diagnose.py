@@ -10,7 +10,7 @@ import pandas as pd
 
 from ..diagnostics.check import INITIAL_STATES
 from ..estimators import ESTIMATORS
-from .common import (add_model_arguments, add_noise_floor_argument, add_rate_argument, add_record_arguments,
+from .common import (FADE_CHOICES, add_fade_argument, add_model_arguments, add_noise_floor_argument, add_rate_argument, add_record_arguments,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
                      out_dir, prepare_record, rate_of, read_person_record)
 from ..identify.runner import DEFAULT_ESTIMATOR
@@ -38,6 +38,7 @@ def add_diagnose(subparsers):
     add_rate_argument(parser)
     add_span_argument(parser)
     add_noise_floor_argument(parser)
+    add_fade_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--candidate", action="append", default=[], metavar="NAME[:key=value,...]",
@@ -131,7 +132,7 @@ def run_person_diagnose(args) -> int:
     directory = out_dir(args.out)
     base = identify_person(record, n_harmonics=args.harmonics, check=not args.ignore_checks, rate=rate_of(args),
                            span=args.span, progress=not args.quiet, effects=added, measured_floor=not args.no_floor,
-                           noise_floor=args.noise_floor)
+                           noise_floor=args.noise_floor, fade=FADE_CHOICES[args.fade])
     print(f"{record.source}: record-level model" + (f" with {', '.join(e.spec for e in base.effects)}"
                                                     if base.effects else ""))
     print(base.summary())

@@ -12,7 +12,7 @@ import pandas as pd
 from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError
-from .common import (PROG, _count, add_accelerometer_arguments, add_model_arguments, add_noise_floor_argument,
+from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_fade_argument, add_model_arguments, add_noise_floor_argument,
                      add_rate_argument,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
                      load_truth, out_dir, prepare_record, rate_of, read_person_record, truth_values)
@@ -73,6 +73,7 @@ def add_identify(subparsers):
     add_rate_argument(parser)
     add_span_argument(parser)
     add_noise_floor_argument(parser)
+    add_fade_argument(parser)
     add_model_arguments(parser)
     add_run_arguments(parser)
     parser.add_argument("--jobs", type=_count, default=1, metavar="N", help="parallel processes (default 1)")
@@ -216,7 +217,7 @@ def run_batch_identify(args) -> int:
     if args.no_floor:
         options["measured_floor"] = False
     if args.estimator == "record":
-        options["noise_floor"] = args.noise_floor
+        options["noise_floor"], options["fade"] = args.noise_floor, FADE_CHOICES[args.fade]
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
                         progress=not args.quiet, check=not args.ignore_checks)
@@ -253,13 +254,13 @@ def run_person(args) -> int:
     result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
                              intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args),
                              progress=not args.quiet, effects=effects, measured_floor=not args.no_floor,
-                             span=args.span, noise_floor=args.noise_floor)
+                             span=args.span, noise_floor=args.noise_floor, fade=FADE_CHOICES[args.fade])
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary(verbose=args.verbose))
     options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
                "harmonics": args.harmonics, "rate": rate_of(args), "span": args.span,
-               "noise_floor": args.noise_floor,
+               "noise_floor": args.noise_floor, "fade": args.fade,
                "effects": [e.spec for e in result.effects]}
     written = write_person(directory, result, options, truth=truth)
     print("wrote " + ", ".join(str(path) for path in written))

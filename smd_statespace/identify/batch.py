@@ -281,7 +281,8 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
             person = identify_person(measured, n_harmonics=model.n_harmonics, check=check,
                                      rate=runner_options.get("rate", RECORD_RATE), effects=model.effects,
                                      measured_floor=runner_options.get("measured_floor", True),
-                                     noise_floor=runner_options.get("noise_floor", NOISE_FLOOR))
+                                     noise_floor=runner_options.get("noise_floor", NOISE_FLOOR),
+                                     fade=runner_options.get("fade", "auto"))
             table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
         else:
             runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
@@ -372,8 +373,8 @@ def run_batch(records, out, model=None, estimator=RECORD_ESTIMATOR, runner_optio
     runner_options : dict, optional
         A per-cycle estimator's :class:`~smd_statespace.identify.runner.CycleRunner` options (``max_passes``,
         ``seed``, ``rate``, ``n_particles``, ...); with ``estimator="record"`` only ``rate`` (default
-        :data:`~smd_statespace.signals.RECORD_RATE`), ``measured_floor`` (default True) and ``noise_floor``
-        (default :data:`~smd_statespace.person.noise_floor.NOISE_FLOOR`) are used (see
+        :data:`~smd_statespace.signals.RECORD_RATE`), ``measured_floor`` (default True), ``noise_floor``
+        (default :data:`~smd_statespace.person.noise_floor.NOISE_FLOOR`) and ``fade`` (default "auto") are used (see
         :func:`~smd_statespace.person.fit.identify_person`).
     jobs : int
         Records identified in parallel processes (results do not depend on it); ignored with ``executor``.

@@ -196,7 +196,7 @@ def effect_model(result, effects, path=None) -> RecordModel:
         template = np.r_[template, np.zeros(2 * (n_harmonics - base.n_harmonics))]
     return RecordModel(base.time, base.y, base.timing, n_harmonics, base.variation, base.process_noise,
                        drift=base.drift, regressors=base.regressors, phase_template=template, dynamics=dynamics,
-                       nominal=nominal, observed=base.observed)
+                       nominal=nominal, observed=base.observed, fade=base.fade)
 
 
 def at_zero(result, effect) -> tuple:

@@ -35,6 +35,7 @@ from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
 from .comparison import comparison_row
 from .model import VARIATIONS, Regressor, RecordModel
+from .fade import fade_note, fading
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .screen import time_change
 from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing,
@@ -79,7 +80,7 @@ INTERVAL_METHODS = ("calibrated", "wald", "profile")
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type=WIDER_SANDWICH, drift=False, check=True,
                     rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto",
-                    check_change=True, noise_floor=NOISE_FLOOR, threads=None):
+                    check_change=True, noise_floor=NOISE_FLOOR, fade="auto", threads=None):
     """Identify one person's SMD model from a whole bouncing record.
 
     Parameters
@@ -166,6 +167,12 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         seeded by the record (:mod:`~smd_statespace.person.noise_floor`: a quiet plate otherwise lets details
         of the force's variation that no variation model describes set ``f_h`` and ``xi_h``); ``result.notes``
         says so. None (or 0) fits the record as measured.
+    fade : {"auto", True, False}
+        Let the force's harmonics fade (or grow) linearly over the record by one factor, estimated with the
+        person (a person who tires, :mod:`~smd_statespace.person.fade`; no search dimension: the factor is
+        estimated with the template). "auto" (default): where ``span``
+        trimmed the record to a bout of bouncing (a trial as labs export it); True: on any record; False:
+        never. ``result.notes`` says what the fade found.
     threads : int or None
         Threads for the searches that do not depend on each other (each variation model's re-placed cycle
         starts, the halves' fits; :mod:`~smd_statespace.person.threads`): the same answer, sooner on two
@@ -222,12 +229,14 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
     noise_floor, threads = check_noise_floor(noise_floor), search_threads(threads)
+    fading(fade, False)  # a bad value fails before the record is read
     prepared, observed = _prepared(record, rate, span, regressors, check)
     record_warnings = _applicable(record, prepared, check)
     measured_force, record = record.force, prepared.record  # the force as read seeds the noise floor's draw
     regressors = [replace(r, values=v) for r, v in zip(regressors, prepared.extra)]
     if prepared.trimmed:
         regressors += zero_drift(record.time)
+    faded = fading(fade, prepared.trimmed)
     y, floor_notes = raise_to_floor(record.force / record.mass - G, observed, record.fs, noise_floor,  # Eq. 3
                                     seed_from=measured_force)
     notes = list(prepared.notes) + floor_notes
@@ -246,7 +255,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
 
     def model_for(timing_, variation_, template):
         return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise, drift=drift,
-                           regressors=all_regressors, phase_template=template, observed=observed)
+                           regressors=all_regressors, phase_template=template, observed=observed, fade=faded)
 
     if cov_type not in COV_TYPES:
         raise OptionError(f"cov_type {cov_type!r} is not one of: {', '.join(COV_TYPES)}")
@@ -280,6 +289,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
                                comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
                                prepared=prepared, threads=threads)
         result = _changed_in_time(result, threads) if change is not None else result
+        if faded:
+            result.notes.append(fade_note(result))
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)

@@ -58,6 +58,7 @@ from ..errors import OptionError
 from ..io import G
 from . import kalman
 from .discretisation import exponentials, harmonic_gains
+from .fade import fade_regressor
 from .dynamics import PersonDynamics
 from .system import RecordSystem, Regressor, integrated_white_noise, matern32_step, regressor_steps, step_mean
 from .timing import CycleTiming
@@ -147,6 +148,16 @@ class RecordModel:
         False at samples that were not measured (a gap in a phone's clock, where
         ``y`` holds an interpolation): the likelihood predicts over them and does
         not use their value. Default: every sample measured.
+    fade : bool
+        The force's harmonics scaled by ``1 + c s(t)``, linear over the record (a
+        force that fades: :mod:`~smd_statespace.person.fade`), ``phase_template``
+        their shape; ``c`` joins the regressors' coefficients (:attr:`all_regressors`).
+        Only with a ``phase_template``. False (default): no fade.
+
+    Attributes
+    ----------
+    all_regressors : tuple of Regressor
+        ``regressors`` and the fade's, in the order of their coefficients in ``delta``.
     """
 
     time: np.ndarray
@@ -161,6 +172,7 @@ class RecordModel:
     dynamics: PersonDynamics | None = None
     nominal: np.ndarray | None = None
     observed: np.ndarray | None = None
+    fade: bool = False
     _phase: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -191,9 +203,12 @@ class RecordModel:
         self._timing_columns = self._phase_columns() if self.phase_template is not None else None
         self._H_all = self._H if self._timing_columns is None else np.hstack([self._H, self._timing_columns[0]])
         self._smooth_index = self.param_names.index("log_smooth_time") if VARIATIONS[self.variation].smooth else None
-        self._X = np.column_stack([r.values for r in self.regressors]) if self.regressors else np.zeros(
-            (self.time.size, 0))
-        self._X_obs = self._X * np.array([r.observed for r in self.regressors], dtype=float)
+        faded = self.fade and self.phase_template is not None
+        self.all_regressors = tuple(self.regressors) + ((fade_regressor(self.time, basis, self.phase_template),)
+                                                        if faded else ())
+        every = self.all_regressors
+        self._X = np.column_stack([r.values for r in every]) if every else np.zeros((self.time.size, 0))
+        self._X_obs = self._X * np.array([r.observed for r in every], dtype=float)
 
     # ------------------------------------------------------------------ layout
     @property
@@ -292,7 +307,7 @@ class RecordModel:
     def delta_names(self) -> list:
         """Names of the concentrated linear unknowns: ``u0, u_dot0``, the template, the regressors' coefficients."""
         return [f"{name}0" for name in self.dynamics.names] + [f"template_{c}" for c in self.coefficient_names] + [
-            r.name for r in self.regressors]
+            r.name for r in self.all_regressors]
 
     def unknowns(self, params) -> int:
         """How many unknowns a fit estimates: the searched ``params`` and the concentrated :attr:`delta_names`."""
@@ -462,7 +477,7 @@ class RecordModel:
         gam[:, :, :self.n_coefficients] *= G
         if self._timing_columns is not None:  # (their columns are in g already)
             gam[:, :, self.n_coefficients:] = g0[:, :, None] * self._timing_columns[1][:, None, :]
-        dynamic = np.array([r.dynamic for r in self.regressors], dtype=bool)
+        dynamic = np.array([r.dynamic for r in self.all_regressors], dtype=bool)
         out = {
             "hx": np.ascontiguousarray(lin.hx),
             "Phi": np.ascontiguousarray(phi),

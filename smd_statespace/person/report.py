@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io import G
+from .fade import fade_table
 from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
 from .phone_report import phone_words
 
@@ -141,6 +142,10 @@ def result_dict(result) -> dict:
     out["noise_bw"] = result.sigma / G
     for name, row in result.regressor_coefficients().iterrows():
         out[name], out[f"{name}_sd"] = float(row["value"]), float(row["sd"])
+    fade = fade_table(result)
+    if not fade.empty:  # the fading harmonics' load factors at the record's start and end
+        out["fade"] = {"c": float(fade["c"].iloc[0]), "c_sd": float(fade["c_sd"].iloc[0]),
+                       **{f"blf_{i}_{key}": float(row[key]) for i, row in fade.iterrows() for key in ("start", "end")}}
     out["variation"] = result.model.variation
     out["timing"] = result.model.timing.method
     out["f_b"] = float(np.median(result.model.timing.f_b))

@@ -20,10 +20,10 @@ from functools import cached_property
 
 import numpy as np
 import pandas as pd
-
 from scipy import stats
 
 from .calibration import model_error_floor
+from .fade import fade_shift
 from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, VARIATION_AIC_CLOSE,  # noqa: F401
                         VARIATION_DISAGREEMENT, WHITENESS_ALPHA, XI_H_RESONANCE_MIMIC, mimicked_harmonic,
                         plausible_variations, stands_in_for_force, variation_disagreement)
@@ -301,7 +301,7 @@ class PersonResult:
         """Coefficients of the regressors (the offset, effects) with sds."""
         delta, cov = self._delta()
         start = self.model.n_dynamic + self.model.n_coefficients
-        names = [r.name for r in self.model.regressors]
+        names = [r.name for r in self.model.all_regressors]
         return pd.DataFrame({"value": delta[start:], "sd": np.sqrt(np.diag(cov)[start:])}, index=names)
 
     def effect_estimates(self) -> pd.DataFrame:
@@ -498,7 +498,7 @@ class PersonResult:
         first = np.flatnonzero(np.r_[True, cycle[1:] != cycle[:-1]])
         last = np.r_[first[1:] - 1, cycle.size - 1]
         mid = (first + last) // 2
-        state = res.smoothed_state[nx:nx + p, mid].T
+        state = res.smoothed_state[nx:nx + p, mid].T + fade_shift(self, mid)  # the cycles' forces, fade included
         state_cov = res.smoothed_state_cov[nx:nx + p, nx:nx + p, mid].transpose(2, 0, 1) * self.filtered["sigma2"]
         b = model.timing.boundaries
         j = cycle[first]

@@ -209,7 +209,7 @@ def _dynamics_derivative(model: RecordModel, params, j, h, base: _Discretisation
     d_qx = np.zeros((n, n)) if rate == 0 else rate * (
         integrated_white_noise(plus.A.mean(axis=0), plus.b.mean(axis=0), dt)
         - integrated_white_noise(minus.A.mean(axis=0), minus.b.mean(axis=0), dt)) / (2.0 * h)
-    dynamic = np.array([r.dynamic for r in model.regressors], dtype=bool)
+    dynamic = np.array([r.dynamic for r in model.all_regressors], dtype=bool)
     d_c, d_d = diff("c"), diff("d")
     d_offset = np.zeros((N, n))
     if lin.c is not None:
