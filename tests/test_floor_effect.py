@@ -8,7 +8,7 @@ from smd_statespace.effects import EFFECTS, FloorMode, make_effect
 from smd_statespace.estimators import cycle_data
 from smd_statespace.io import G, make_record
 from smd_statespace.model import CycleInputs, SMDModel
-from smd_statespace.person.effect_adapter import record_search_size
+from smd_statespace.person.effect_adapter import fitted_record, record_search_size
 from smd_statespace.identify.runner import CycleRunner
 from smd_statespace.simulation import simulate_bouncing
 from smd_statespace.simulation.effect_adapter import draw_inputs, for_simulation
@@ -166,7 +166,7 @@ def test_a_searched_floor_frequency_counts_its_trials():
     assert row["p_value"] == pytest.approx(min(1.0, 5.3e-4 * (grid.size + 1)), rel=0.1)
     assert not row["significant"]
     Base.record.time = np.arange(3000) / 100.0  # 30 s resolve 18 Hz / (1 / 29.99 s) = 540 frequencies
-    assert searched.record_search_size(Base()) == 540 + 1
+    assert searched.record_search_size(fitted_record(Base())) == 540 + 1
 
 
 def test_option_errors_name_the_problem():
@@ -359,11 +359,12 @@ def test_drawing_a_floors_ambient_excitation_returns_a_new_floor():
 def test_diagnoses_floor_candidate_is_the_measured_floor_or_else_the_estimated_mode():
     """A record with floor_acc gets the measured floor as diagnose's candidate; one without it the estimated floor
     mode (a person on a vibrating floor without an accelerometer was otherwise read as missing harmonics)."""
-    from types import SimpleNamespace
-
     from smd_statespace.effects.floor_mode import FloorMode
+    from smd_statespace.model.fitted import FittedRecord
 
-    with_accelerometer = SimpleNamespace(record=SimpleNamespace(floor_acc=np.zeros(10)))
-    without = SimpleNamespace(record=SimpleNamespace(floor_acc=None))
+    def fitted(floor_acc):  # all an effect may read of the fit without it; these two are never called here
+        return FittedRecord(np.arange(10) / 100.0, floor_acc, predicted_displacement=None, strongest_line=None)
+
+    with_accelerometer, without = fitted(np.zeros(10)), fitted(None)
     assert FloorMode.record_default(with_accelerometer).source == "measured"
     assert FloorMode.record_default(without).spec == "floor_mode:source=modal"  # as the verdict prints it

@@ -57,7 +57,7 @@ class CubicStiffness(Effect):
     ``|beta_3| <= STIFFNESS_CHANGE / (3 u_rms^2)`` (the tangent stiffness is ``K_h (1 + 3 beta_3 u^2)``)."""
 
     @classmethod
-    def record_default(cls, result):
+    def record_default(cls, fitted):
         """The candidate ``diagnose`` tries, and ``identify --effect cubic_stiffness`` fits: ``beta_range``
         scaled to the record's displacement.
 
@@ -65,10 +65,10 @@ class CubicStiffness(Effect):
         (``beta_3`` 1500, a simulated record with ``f_h`` 3.1 Hz) ended on the bound 1000 and was
         not proposed, where the data asked for more (LR 362). The range is the one in which the
         stiffness changes by at most :data:`STIFFNESS_CHANGE` (200 %) at the RMS of the COM
-        displacement the fit without the spring predicts (rounded up to 100 1/m^2, at least +-1000).
+        displacement the fit without the spring predicts (``fitted``, a
+        :class:`~smd_statespace.model.fitted.FittedRecord`; rounded up to 100 1/m^2, at least +-1000).
         """
-        displacement = result.predicted_path()[:, 0]
-        rms = float(np.sqrt(np.mean(displacement**2)))
+        rms = float(np.sqrt(np.mean(fitted.displacement**2)))
         bound = 1000.0 if rms <= 0 else max(1000.0, 100.0 * np.ceil(cls.STIFFNESS_CHANGE / (3 * rms**2) / 100.0))
         return cls(beta_range=(-bound, bound))
 

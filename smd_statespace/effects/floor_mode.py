@@ -372,7 +372,7 @@ class FloorMode(Effect):
         return [note]
 
     @classmethod
-    def record_default(cls, result):
+    def record_default(cls, fitted):
         """The measured floor when the record has a floor acceleration; else the estimated floor mode (``modal``).
 
         Without an accelerometer a person on a vibrating floor was otherwise read as missing harmonics. The
@@ -380,7 +380,7 @@ class FloorMode(Effect):
         the 30 clean records of ``benchmarks/person_effects.py`` (seed 92, both generators, where it was a
         candidate) it was never proposed: its test passed on one (p 2.7e-5, LR 42 on 5) and the checks after
         the test (held-out prediction, bounds, whiteness) turned it down; on the others p was 0.004 or more."""
-        return cls("measured") if getattr(result.record, "floor_acc", None) is not None else cls("modal")
+        return cls("measured") if fitted.floor_acc is not None else cls("modal")
 
     RECORD_FREQUENCY_STEP = 0.01
     """Relative spacing of the trial floor frequencies over ``frequency_range`` (1 %: 230 trials over 2-20 Hz).
@@ -397,7 +397,7 @@ class FloorMode(Effect):
         low, high = self.frequency_range
         return int(np.ceil(np.log(high / low) / np.log1p(self.RECORD_FREQUENCY_STEP))) + 1
 
-    def record_search_size(self, result) -> int:
+    def record_search_size(self, fitted) -> int:
         """A modal floor without a given frequency is the best of the frequencies the record can tell apart.
 
         Without this, the best of about 230 trial frequencies was referred to one chi-square: on a
@@ -408,18 +408,16 @@ class FloorMode(Effect):
         2-20 Hz): the search refines ``f_f`` continuously from the best start, and a floor whose damping
         goes to 0 is a line of width ``1 / T``. Counted by the grid alone, an undamped "floor" at 2.64 Hz
         on a clean record whose force drifts smoothly (LR 33 on 5, p 4.6e-6 before the count) was proposed.
-        ``result`` is the fit without the floor (its record's duration); ``None``: the grid only.
+        ``fitted`` is the fit without the floor (a :class:`~smd_statespace.model.fitted.FittedRecord`: its
+        duration); ``None``: the grid only.
         """
         if not self.modal or self.known or self.frequency:
             return 1
         low, high = self.frequency_range
-        resolved = 0
-        if result is not None:
-            time = result.record.time
-            resolved = int(np.ceil((high - low) * (time[-1] - time[0])))
+        resolved = 0 if fitted is None else int(np.ceil((high - low) * fitted.duration))
         return max(self._trial_count(), resolved) + 1
 
-    def record_starts(self, result) -> list:
+    def record_starts(self, fitted) -> list:
         """A modal floor's trial starts: the innovations' strongest line (or the given frequency) and a fine log grid.
 
         A floor mode at a harmonic of the bouncing frequency (mode 1 of the
@@ -433,7 +431,7 @@ class FloorMode(Effect):
         if self.frequency:
             frequencies = [self.frequency]
         else:
-            frequencies = ([float(np.clip(result.innovation_line(), low, high))]
+            frequencies = ([float(np.clip(fitted.innovation_line, low, high))]
                            + list(np.geomspace(low, high, self._trial_count())))
         d_lo, d_hi = self.damping_range
         m_lo, m_hi = self.mass_ratio_range

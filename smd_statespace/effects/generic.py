@@ -162,7 +162,7 @@ class GenericTerm(Effect):
         return -c * terms[kind]()
 
     @classmethod
-    def record_default(cls, result):
+    def record_default(cls, fitted):
         """None: a generic term is not one of ``diagnose``'s default candidates (there are nine, one per kind;
         :func:`~smd_statespace.person.screen.generic_library` builds them for a record)."""
         return None

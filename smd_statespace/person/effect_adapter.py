@@ -19,17 +19,23 @@ The cubic spring scales its range to the record's displacement
 force's template (``record_harmonics``), the estimated floor mode starts
 from a grid of frequencies and counts them (``record_starts``,
 ``record_search_size``).
+
+What an effect reads of the fit without it is a :class:`~smd_statespace.model.fitted.FittedRecord`
+(:func:`fitted_record`), not the :class:`~smd_statespace.person.results.PersonResult`: the functions here
+take the result and hand the effect that view.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
+from ..model.fitted import FittedRecord
+
 if TYPE_CHECKING:  # annotations only
     from ..model import Effect, SMDModel
     from .results import PersonResult
 
-__all__ = ["RecordDefault", "RecordHarmonics", "RecordSearchSize", "RecordStarts", "record_default",
+__all__ = ["RecordDefault", "RecordHarmonics", "RecordSearchSize", "RecordStarts", "fitted_record", "record_default",
            "record_harmonics", "record_search_size", "record_starts"]
 
 
@@ -37,8 +43,8 @@ __all__ = ["RecordDefault", "RecordHarmonics", "RecordSearchSize", "RecordStarts
 class RecordDefault(Protocol):
     """An effect class that configures itself for a record (a cubic spring's range scaled to its displacement)."""
 
-    def record_default(self, result: "PersonResult") -> "Effect | None":
-        """The effect as a default candidate for the record of ``result``, or None to leave it out."""
+    def record_default(self, fitted: FittedRecord) -> "Effect | None":
+        """The effect as a default candidate for the record ``fitted`` describes, or None to leave it out."""
 
 
 @runtime_checkable
@@ -53,7 +59,7 @@ class RecordHarmonics(Protocol):
 class RecordStarts(Protocol):
     """An effect whose parameters need trial starts (a floor mode's frequency over a grid)."""
 
-    def record_starts(self, result: "PersonResult") -> list:
+    def record_starts(self, fitted: FittedRecord) -> list:
         """Candidate starting values of the effect's parameters, each a dict by slot name."""
 
 
@@ -61,8 +67,18 @@ class RecordStarts(Protocol):
 class RecordSearchSize(Protocol):
     """An effect whose search tries many values of a parameter and keeps the best."""
 
-    def record_search_size(self, result: "PersonResult") -> int:
+    def record_search_size(self, fitted: FittedRecord | None) -> int:
         """How many separate trials the search makes (``diagnose`` multiplies the p-value by it)."""
+
+
+def fitted_record(result: "PersonResult | FittedRecord") -> FittedRecord:
+    """What an effect may read of ``result``, the person fitted without it (``result`` itself if it is one)."""
+    if isinstance(result, FittedRecord):
+        return result
+    record = result.record
+    return FittedRecord(time=record.time, floor_acc=getattr(record, "floor_acc", None),
+                        predicted_displacement=lambda: result.predicted_path()[:, 0],
+                        strongest_line=lambda: result.innovation_line())
 
 
 def record_default(effect_class: type, result: "PersonResult") -> "Effect | None":
@@ -71,7 +87,8 @@ def record_default(effect_class: type, result: "PersonResult") -> "Effect | None
     ``result`` is the base :class:`~smd_statespace.person.results.PersonResult`.
     Default: the effect with its default options.
     """
-    return effect_class.record_default(result) if isinstance(effect_class, RecordDefault) else effect_class()
+    return effect_class.record_default(fitted_record(result)) if isinstance(effect_class, RecordDefault) else (
+        effect_class())
 
 
 def record_harmonics(effect: "Effect", model: "SMDModel") -> int:
@@ -88,7 +105,7 @@ def record_starts(effect: "Effect", result: "PersonResult") -> list:
     given start at 0 when their range holds 0 (the effect absent), else at
     their slot's nominal value.
     """
-    return effect.record_starts(result) if isinstance(effect, RecordStarts) else []
+    return effect.record_starts(fitted_record(result)) if isinstance(effect, RecordStarts) else []
 
 
 def record_search_size(effect: "Effect", result: "PersonResult") -> int:
@@ -99,4 +116,6 @@ def record_search_size(effect: "Effect", result: "PersonResult") -> int:
     ratio is the largest of that many: ``diagnose`` multiplies its p-value
     by this number (Bonferroni over the trials) before the test.
     """
-    return int(effect.record_search_size(result)) if isinstance(effect, RecordSearchSize) else 1
+    if not isinstance(effect, RecordSearchSize):
+        return 1
+    return int(effect.record_search_size(None if result is None else fitted_record(result)))

@@ -229,7 +229,6 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
     noise_floor, threads = check_noise_floor(noise_floor), search_threads(threads)
-    fading(fade, False)  # a bad value fails before the record is read
     prepared, observed = _prepared(record, rate, span, regressors, check)
     record_warnings = _applicable(record, prepared, check)
     measured_force, record = record.force, prepared.record  # the force as read seeds the noise floor's draw
@@ -289,8 +288,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
                                comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
                                prepared=prepared, threads=threads)
         result = _changed_in_time(result, threads) if change is not None else result
-        if faded:
-            result.notes.append(fade_note(result))
+        result.notes += [fade_note(result)] if faded else []  # what the fade found
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)
