@@ -18,10 +18,12 @@ def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
     tests = person.change["time"]
     assert len(tests["terms"]) == 8 and {t["term"].split("@")[0] for t in tests["terms"]} == {
         f"term:{kind}" for kind in TIME_KINDS}
-    assert tests["changed"] == ["f_h"] and person.change["changed"] == ["f_h"]
+    # a change found by a score test withholds "determined" from both: the tests name the best-fitting term, not
+    # surely the parameter that changed
+    assert tests["changed"] == ["f_h"] and person.change["changed"] == ["f_h", "xi_h"]
     best = tests["terms"][0]
     assert best["parameter"] == "f_h" and best["p_holm"] < CHANGE_ALPHA
-    assert not person.determined("f_h")
+    assert not person.determined("f_h") and not person.determined("xi_h")
     low, high = person.intervals["f_h"]
     for half in person.change["halves"]:  # the interval spans both halves'
         assert low <= half["f_h_low"] and half["f_h_high"] <= high
@@ -37,7 +39,7 @@ def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
     assert scores["lm_robust"] > cycles.sum() ** 2 / (cycles @ cycles)
     # the step added, as diagnose proposes it: the model has the change, the answer no longer warns of it
     stepped = fit_effects(person, [step])
-    assert stepped.change["changed"] == [] and person.change["changed"] == ["f_h"]
+    assert stepped.change["changed"] == [] and person.change["changed"] == ["f_h", "xi_h"]
     assert not any(w.startswith("the person changes") for w in stepped.warnings)
 
 
@@ -49,3 +51,26 @@ def test_a_person_who_does_not_change_is_not_said_to():
     assert not any(w.startswith("the person changes") for w in person.warnings)
     assert "  one person? halves f_h" in person.summary()  # the tests were made, and said so
     assert person.to_dict()["change"]["time"]["alpha"] == pytest.approx(CHANGE_ALPHA)
+
+
+def test_words_say_the_person_or_the_force_where_only_a_term_of_xi_h_was_found():
+    """A term of xi_h alone, the halves naming nothing: the force may be what changed (it stands in for a leg that
+    stiffens too), so the words say "the person or the force", and both parameters' halves are shown."""
+    from smd_statespace.person.change import compare_halves
+    from smd_statespace.person.report import change_words
+
+    halves = [{"start": 5.0, "end": 15.0, "f_h": 2.8, "f_h_sd": 0.2, "f_h_low": 2.5, "f_h_high": 3.1, "xi_h": 0.30,
+               "xi_h_sd": 0.05, "xi_h_low": 0.22, "xi_h_high": 0.38},
+              {"start": 15.0, "end": 25.0, "f_h": 2.9, "f_h_sd": 0.2, "f_h_low": 2.6, "f_h_high": 3.2, "xi_h": 0.34,
+               "xi_h_sd": 0.05, "xi_h_low": 0.26, "xi_h_high": 0.42}]
+    change = compare_halves(halves)
+    assert change["changed"] == []
+    term = {"parameter": "xi_h", "term": "term:xi_step@0.5", "physics": "a leg damping (xi_h) that steps",
+            "p": 1e-6, "p_holm": 8e-6}
+    found = {**change, "by_halves": [], "changed": ["f_h", "xi_h"], "time": {"changed": ["xi_h"], "terms": [term]}}
+    words = change_words(found)
+    assert words.startswith("the person or the force changes during the record: f_h 2.8 Hz (2.5-3.1)")
+    assert "score test of term:xi_step@0.5" in words and "term:f_step, term:f_drift, term:xi_step" in words
+    term = {**term, "parameter": "f_h", "term": "term:f_step@0.5"}
+    assert change_words({**found, "time": {"changed": ["f_h"], "terms": [term]}}).startswith(
+        "the person changes during the record")

@@ -334,11 +334,13 @@ def _change_left(change, effects):
     """``change`` (the tests of one unchanging person, made without effects) less the parameters whose change a
     time term among ``effects`` now models (:attr:`~smd_statespace.effects.generic.GenericTerm.changes`): once
     the model has the drift or the step, the person's answer no longer warns of it nor withholds "determined"
-    for it."""
+    for it, nor for the other parameter, withheld only because a score test found a change (what the halves or
+    a test named of it stays)."""
     modelled = {getattr(effect, "changes", None) for effect in effects} - {None}
     if not change or not modelled & set(change["changed"]):
         return change
-    return {**change, "changed": [name for name in change["changed"] if name not in modelled]}
+    found = set(change.get("by_halves", change["changed"])) | set(change.get("time", {}).get("changed", []))
+    return {**change, "changed": [name for name in change["changed"] if name in found - modelled]}
 
 
 def _settle_path(model: RecordModel, fitted, reference: float, progress=False) -> tuple:

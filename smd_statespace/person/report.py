@@ -305,8 +305,8 @@ def change_words(change) -> str:
     prefix = {"f_h": "f", "xi_h": "xi"}  # the generic terms of a parameter that changes in time
     kinds = ", ".join(f"term:{prefix[name]}_{shape}" for name in change["changed"] if name in prefix
                       for shape in ("step", "drift"))
-    # a xi_h that drifts stands in for a force that fades as well: alone, it does not say that the person changed
-    force_too = change["changed"] == ["xi_h"] and "xi_h" not in change.get("by_halves", change["changed"])
+    # a xi_h that changes stands in for a force that changes as well: alone, it does not say that the person changed
+    force_too = tests["changed"] == ["xi_h"] and not change.get("by_halves", change["changed"])
     return (f"the person{' or the force' if force_too else ''} changes during the record: " + "; ".join(parts) +
             ". One SMD model does not describe the "
             "whole record: read the halves, not one value; a parameter that varies in time (tiring, warming up, a "
