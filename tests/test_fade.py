@@ -76,3 +76,17 @@ def test_a_record_bouncing_end_to_end_has_no_fade_unless_asked_and_a_bad_value_i
     assert "--fade: invalid choice" in capsys.readouterr().err
     assert main(["identify", str(path), "--mass", "70", "--estimator", "ekf", "--fade", "on"]) == 2
     assert "--fade on applies to the record-level model" in capsys.readouterr().err
+
+
+def test_diagnoses_next_command_repeats_the_persons_options_given():
+    """The printed identify command fits the person diagnosed: options given away from their defaults go with it."""
+    from smd_statespace.cli.diagnose import person_options
+    from smd_statespace.cli.main import build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["diagnose", "rec.csv", "--mass", "70", "--fade", "off", "--span", "4.5:33",
+                              "--noise-floor", "0", "--no-floor"])
+    assert person_options(args) == "--span 4.5:33 --noise-floor 0 --fade off --no-floor "
+    assert person_options(parser.parse_args(["diagnose", "rec.csv", "--mass", "70"])) == ""
+    assert person_options(parser.parse_args(["diagnose", "rec.csv", "--mass", "70", "--span", "all"])) == (
+        "--span all ")

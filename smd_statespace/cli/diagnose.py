@@ -96,6 +96,17 @@ def _effects_and_candidates(args) -> tuple:
     return added, candidates
 
 
+def person_options(args) -> str:
+    """The record-level options given away from their defaults, to repeat in the printed ``identify`` command
+    (each ends with a space)."""
+    from ..person.noise_floor import NOISE_FLOOR
+
+    span = "" if args.span == "auto" else "all" if args.span is None else f"{args.span[0]:g}:{args.span[1]:g}"
+    return "".join(word + " " for word in (
+        f"--span {span}" if span else "", f"--noise-floor {args.noise_floor:g}" if args.noise_floor != NOISE_FLOOR
+        else "", f"--fade {args.fade}" if args.fade != "auto" else "", "--no-floor" if args.no_floor else "") if word)
+
+
 def _extra_effects(args) -> str:
     """``--effects FILE`` options to repeat in the printed next command (a user's effects file)."""
     return "".join(f"--effects {shlex.quote(str(path))} " for path in getattr(args, "effects", []))
@@ -156,7 +167,7 @@ def run_person_diagnose(args) -> int:
             quick = (f"quick LR {row['lr_quick']:7.1f} / {row['lr_scale']:<4.2g} (Holm p {row['p_quick_holm']:<7.2g})"
                      if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 28)
             print(f"  {row['label']:<17} robust LM {row['lm_robust']:7.1f}  {quick}  {row['physics']}")
-    _print_verdict(result, result.command(args.record, args.mass, _extra_effects(args)))
+    _print_verdict(result, result.command(args.record, args.mass, _extra_effects(args), person_options(args)))
     written = [directory / "person_diagnostics.png", directory / "person_candidates.png"]
     base.plot_diagnostics(written[0])
     plot_candidates(result, written[1])

@@ -261,16 +261,18 @@ class PersonDiagnosis:
         pair = (self.validation.get(key), self.validation.get(name))
         return None if None in pair else pair
 
-    def command(self, record: str, mass, extra: str = "") -> str:
+    def command(self, record: str, mass, extra: str = "", options: str = "") -> str:
         """The ``identify`` command that adds the best candidate (runs as printed); empty when adequate.
 
-        ``mass`` may be None for an accelerometer's record identified without one.
+        ``mass`` may be None for an accelerometer's record identified without one; ``extra``: the command line's
+        options before ``identify``, ``options``: the person's options after the record (``--fade off``), so that
+        the command fits the person diagnosed.
         """
         if self.adequate:
             return ""
         spec = self.table().loc[self.missing[0], "spec"]
         effects = " ".join(f"--effect {shlex.quote(part)}" for part in spec.split(" "))
-        return f"smd-statespace {extra}identify {self.base.record_arguments(record, mass)} {effects}"
+        return f"smd-statespace {extra}identify {self.base.record_arguments(record, mass)} {options}{effects}"
 
     def notes(self) -> list:
         """Plain-word notes: heavy-tailed innovations, refits on a bound, failures, what the joint fit of two
