@@ -7,7 +7,7 @@ from smd_statespace.cli import main
 from smd_statespace.errors import OptionError
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
-from smd_statespace.person.fade import fade_regressor, fade_table
+from smd_statespace.person.fade import NOTE_TAIL, fade_regressor, fade_table
 from smd_statespace.simulation import simulate_bouncing
 from smd_statespace.simulation.lab import simulate_lab_record
 
@@ -68,6 +68,11 @@ def test_a_record_bouncing_end_to_end_has_no_fade_unless_asked_and_a_bad_value_i
     assert "fade" not in plain.model.delta_names and fade_table(plain).empty
     asked = identify_person(sim.record, variation="independent", check_change=False, fade=True)
     assert asked.model.delta_names[-1] == "fade" and asked.loglike >= plain.loglike - 1e-6
+    # with an effect added, the note is the final fit's (the fit without the effect had its own)
+    extended = identify_person(sim.record, variation="independent", check_change=False, fade=True,
+                               effects=["harmonics:count=1"])
+    notes, table = [n for n in extended.notes if NOTE_TAIL in n], fade_table(extended)
+    assert len(notes) == 1 and f"BLF1 {table.loc[1, 'start']:.3f} g at its start" in notes[0]
     with pytest.raises(OptionError, match="fade='yes' is not one of"):
         identify_person(sim.record, fade="yes")
     path = tmp_path / "rec.csv"

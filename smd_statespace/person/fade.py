@@ -38,10 +38,13 @@ from ..errors import OptionError
 from ..io import G
 from .system import Regressor
 
-__all__ = ["FADE_OPTIONS", "fading", "fade_regressor", "fade_shift", "fade_table", "fade_note"]
+__all__ = ["FADE_OPTIONS", "NOTE_TAIL", "fading", "fade_regressor", "fade_shift", "fade_table", "fade_note"]
 
 FADE_OPTIONS = ("auto", True, False)
 """Values of ``identify_person``'s ``fade``."""
+
+NOTE_TAIL = "its harmonics were let fade linearly with the person"
+"""What every note of :func:`fade_note` says, by which a fit with effects replaces its base's note with its own."""
 
 CLEAR_FADE = 2.0
 """A fade is said in words when ``|c|`` is at least this many of its sds; else it is "within its noise"."""
@@ -139,5 +142,4 @@ def fade_note(result) -> str:
                 f"c {first['c']:+.3f}, sd {first['c_sd']:.3f})")
     else:
         said = f"the force's fade over the record is within its noise ({values})"
-    return (f"{said}; its harmonics were let fade linearly with the person (fade=False or --fade off leaves it "
-            "out; docs/lab-records.md)")
+    return f"{said}; {NOTE_TAIL} (fade=False or --fade off leaves it out; docs/lab-records.md)"
