@@ -158,9 +158,9 @@ def add_fade_argument(parser):
     """``--fade auto|on|off``: let the force's first harmonics fade linearly over the record with the person."""
     parser.add_argument("--fade", choices=list(FADE_CHOICES), default="auto",
                         help="record estimator: let the force's harmonics fade (or grow) linearly over the "
-                             "record by one factor (a person who tires; no search dimension is added): auto (default) where the "
-                             "record was trimmed to a bout of bouncing (standing before and after), on for any "
-                             "record, off never")
+                             "record by one factor (a person who tires; no search dimension is added): auto "
+                             "(default) where the record was trimmed to a bout of bouncing (standing before and "
+                             "after), on for any record, off never")
 
 
 def _noise_floor(text):

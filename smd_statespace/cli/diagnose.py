@@ -10,9 +10,10 @@ import pandas as pd
 
 from ..diagnostics.check import INITIAL_STATES
 from ..estimators import ESTIMATORS
-from .common import (FADE_CHOICES, add_fade_argument, add_model_arguments, add_noise_floor_argument, add_rate_argument, add_record_arguments,
-                     add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
-                     out_dir, prepare_record, rate_of, read_person_record)
+from .common import (FADE_CHOICES, add_fade_argument, add_model_arguments, add_noise_floor_argument,
+                     add_rate_argument, add_record_arguments, add_run_arguments, add_span_argument, build_model,
+                     check_record_level_options, estimator_options, out_dir, prepare_record, rate_of,
+                     read_person_record)
 from ..identify.runner import DEFAULT_ESTIMATOR
 
 
@@ -101,10 +102,16 @@ def person_options(args) -> str:
     (each ends with a space)."""
     from ..person.noise_floor import NOISE_FLOOR
 
-    span = "" if args.span == "auto" else "all" if args.span is None else f"{args.span[0]:g}:{args.span[1]:g}"
-    return "".join(word + " " for word in (
-        f"--span {span}" if span else "", f"--noise-floor {args.noise_floor:g}" if args.noise_floor != NOISE_FLOOR
-        else "", f"--fade {args.fade}" if args.fade != "auto" else "", "--no-floor" if args.no_floor else "") if word)
+    words = []
+    if args.span != "auto":
+        words.append("--span all" if args.span is None else f"--span {args.span[0]:g}:{args.span[1]:g}")
+    if args.noise_floor != NOISE_FLOOR:
+        words.append(f"--noise-floor {args.noise_floor:g}")
+    if args.fade != "auto":
+        words.append(f"--fade {args.fade}")
+    if args.no_floor:
+        words.append("--no-floor")
+    return "".join(f"{word} " for word in words)
 
 
 def _extra_effects(args) -> str:

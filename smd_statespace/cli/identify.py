@@ -12,8 +12,8 @@ import pandas as pd
 from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError
-from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_fade_argument, add_model_arguments, add_noise_floor_argument,
-                     add_rate_argument,
+from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_fade_argument,
+                     add_model_arguments, add_noise_floor_argument, add_rate_argument,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
                      load_truth, out_dir, prepare_record, rate_of, read_person_record, truth_values)
 

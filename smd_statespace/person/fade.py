@@ -118,7 +118,7 @@ def fade_table(result) -> pd.DataFrame:
         return pd.DataFrame(columns=columns)
     fade = result.regressor_coefficients().loc["fade"]
     c, c_sd = float(fade["value"]), float(fade["sd"])
-    delta = model.filter(result.params)["delta"]
+    delta = result.filtered["delta"]  # the fit's own template
     template, faded = delta[model.n_dynamic:model.n_dynamic + model.n_coefficients], np.asarray(model.phase_template)
     rows = {}
     for i in range(1, model.n_harmonics + 1):
