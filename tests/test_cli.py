@@ -225,6 +225,10 @@ def test_identify_writes_results_sidecar_and_figures(short_record, tmp_path, cap
     printed = capsys.readouterr().out
     ok = table[table.status == "ok"]
     assert f"{len(ok)} cycles identified" in printed and "truth" in printed
+    # the record's answer from its cycles, in the person's vocabulary, printed and written
+    pooled = pd.read_csv(out / "pooled.csv", index_col=0)
+    assert list(pooled.columns[:5]) == ["value", "sd", "low", "high", "determined"]
+    assert "the record's answer from its cycles" in printed and "pooled.csv" in printed
 
 
 def test_progress_bars_stay_out_of_logs(short_record, tmp_path, capsys):
@@ -244,7 +248,17 @@ def test_compare_runs_estimators_on_the_same_cycles(short_record, tmp_path, caps
     cycles = {name: set(group.cycle) for name, group in combined.groupby("estimator")}
     assert cycles["ekf"] == cycles["ukf"]
     printed = capsys.readouterr().out
-    assert "|err| f_h" in printed and (out / "compare.png").exists()
+    assert "|err| f_h" in printed and "f_h 90 %" in printed and (out / "compare.png").exists()
+    # every row answers in the person's vocabulary: its cycles pooled (identify.pooled), the error that answer's
+    from smd_statespace.identify.pooled import pooled_row
+
+    table = pd.read_csv(out / "compare_table.csv", index_col=0)
+    truth = json.loads(short_record.with_name("rec_truth.json").read_text())
+    for name, group in combined.groupby("estimator"):
+        answer = pooled_row(group)
+        for key in ("f_h", "f_h_low", "f_h_high", "f_h_determined", "xi_h", "xi_h_low", "xi_h_high"):
+            assert table.loc[name, key] == pytest.approx(answer[key])
+        assert table.loc[name, "|err| f_h"] == pytest.approx(abs(answer["f_h"] - truth["f_h"]))
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,9 @@ from .identify import identify, plausible_cycles
 
 COMPARED = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3")
 
+INTERVALS = ("f_h", "xi_h")
+"""Parameters whose interval and verdict (determined or not) every row shows."""
+
 DEFAULT_ESTIMATORS = "record,ekf,grid"
 """What docs/benchmarks.md recommends: the person from the whole record, the cheapest per-cycle Kalman
 filter (the UKF costs 7 times more for the same accuracy) and the exact grid, the only per-cycle
@@ -39,9 +42,12 @@ def add_compare(subparsers):
     parser = subparsers.add_parser(
         "compare",
         help="run several estimators on the same cycles and compare them",
-        description=("Identify the same cycles with each estimator and print, per estimator, the median estimates, "
-                     "their spread over cycles, the share of cycles that determine each parameter and the run time; "
-                     "with --truth also the median absolute error. Writes DIR/compare.csv and DIR/compare.png."),
+        description=("Identify the same record with each estimator and print, per estimator, its answer for the "
+                     "record in one vocabulary: the value of each parameter, the interval of f_h and xi_h and "
+                     "whether the record determines them (per-cycle estimators: their cycles pooled where most "
+                     "cycles determine a parameter, otherwise the cycles' median and range), the share of cycles "
+                     "that determine them on their own and the run time; with --truth also the answer's absolute "
+                     "error. Writes DIR/compare_table.csv, DIR/compare.csv (every cycle) and DIR/compare.png."),
     )
     add_record_arguments(parser)
     parser.add_argument("--estimators", default=DEFAULT_ESTIMATORS, metavar="LIST",
@@ -67,26 +73,64 @@ def parse_estimators(text: str) -> list:
     return names
 
 
-def comparison_table(tables: dict, seconds: dict, truth: dict | None = None) -> pd.DataFrame:
-    """One row per estimator: medians, interquartile range of f_h, determined shares, errors, time."""
-    rows = []
-    for name, table in tables.items():
-        ok = plausible_cycles(table)  # impossible estimates are not summarised (counted instead)
-        implausible = int((table["status"] == "ok").sum()) - len(ok)
-        row = {"estimator": name, "cycles": len(ok), "implausible": implausible,
-               "failed": int((table["status"] == "failed").sum())}
-        for parameter in COMPARED:
-            row[parameter] = ok[parameter].median()
-        row["f_h_iqr"] = ok["f_h"].quantile(0.75) - ok["f_h"].quantile(0.25)
-        row["f_h_det_%"] = 100.0 * ok["f_h_determined"].mean()
-        row["xi_h_det_%"] = 100.0 * ok["xi_h_determined"].mean()
-        for parameter in COMPARED:
-            if truth and parameter in truth:
-                row[f"|err| {parameter}"] = (ok[parameter] - truth[parameter]).abs().median()
-        row["s/cycle"] = seconds[name] / max(len(ok), 1)
-        row["f_h_cover_%"] = MEASURED_COVERAGE.get(name, float("nan"))
-        rows.append(row)
+def answer_row(estimator: str, answer: dict, seconds: float, truth: dict | None = None,
+               table: pd.DataFrame | None = None) -> dict:
+    """One estimator's answer for the record as a row of the comparison, in one vocabulary for all.
+
+    ``answer`` holds the flat keys of the person's ``to_dict`` (``f_h``, ``f_h_low``, ``f_h_high``,
+    ``f_h_determined``, ...; :func:`~smd_statespace.identify.pooled.pooled_row` gives them for a table of
+    cycles). ``table``: the per-cycle results the answer was pooled from (its cycles counted, and the
+    share of cycles that determine ``f_h`` and ``xi_h`` on their own); ``None`` for the record-level person.
+    """
+    row = {"estimator": estimator, "cycles": answer["n_cycles"], "implausible": 0, "failed": 0}
+    for parameter in COMPARED:
+        row[parameter] = answer.get(parameter, float("nan"))
+    for parameter in INTERVALS:
+        row[f"{parameter}_low"], row[f"{parameter}_high"] = answer[f"{parameter}_low"], answer[f"{parameter}_high"]
+        row[f"{parameter}_determined"] = bool(answer[f"{parameter}_determined"])
+    if table is not None:
+        ok = plausible_cycles(table)
+        row["implausible"] = int((table["status"] == "ok").sum()) - len(ok)
+        row["failed"] = int((table["status"] == "failed").sum())
+    for parameter in INTERVALS:  # one cycle at a time: the share that determine it (the person: all or none)
+        row[f"{parameter}_det_%"] = (100.0 * plausible_cycles(table)[f"{parameter}_determined"].mean()
+                                     if table is not None else 100.0 * row[f"{parameter}_determined"])
+    for parameter in COMPARED:
+        if truth and parameter in truth:
+            row[f"|err| {parameter}"] = abs(row[parameter] - truth[parameter])
+    row["s/cycle"] = seconds / max(row["cycles"], 1)
+    row["f_h_cover_%"] = MEASURED_COVERAGE.get(estimator, float("nan"))
+    return row
+
+
+def comparison_table(tables: dict, seconds: dict, truth: dict | None = None, level: float = 0.9) -> pd.DataFrame:
+    """One row per per-cycle estimator (:func:`answer_row`): its cycles pooled into the record's answer
+    (:func:`~smd_statespace.identify.pooled.pool_cycles`), the errors of that answer, time per cycle."""
+    from ..identify.pooled import pooled_row
+
+    rows = [answer_row(name, pooled_row(table, level, COMPARED), seconds[name], truth, table)
+            for name, table in tables.items()]
     return pd.DataFrame(rows).set_index("estimator")
+
+
+def printed_view(result: pd.DataFrame) -> pd.DataFrame:
+    """The comparison as printed: each interval in one column (``low-high``), its verdict beside it, the cycles'
+    losses only where there are any; ``compare_table.csv`` keeps every column."""
+    view = pd.DataFrame(index=result.index)
+    view["cycles"] = result["cycles"]
+    for column in ("implausible", "failed"):
+        if result[column].sum() > 0:
+            view[column] = result[column]
+    for parameter in INTERVALS:
+        view[parameter] = result[parameter].map("{:.3g}".format)
+        view[f"{parameter} 90 %"] = [f"{low:.3g}-{high:.3g}" for low, high in
+                                    zip(result[f"{parameter}_low"], result[f"{parameter}_high"])]
+        view[f"{parameter} det"] = result[f"{parameter}_determined"].map({True: "yes", False: "no"})
+    for column in [c for c in result.columns if c.startswith("blf_")] + [f"{p}_det_%" for p in INTERVALS]:
+        view[column] = result[column]
+    for column in [c for c in result.columns if c in ("|err| f_h", "|err| xi_h")] + ["s/cycle", "f_h_cover_%"]:
+        view[column] = result[column]
+    return view
 
 
 def coverage_warnings(names) -> list:
@@ -99,23 +143,6 @@ def coverage_warnings(names) -> list:
             out.append(f"warning: {name}: intervals over-confident: its 90 % intervals of f_h covered the truth on "
                        f"{cover} % of simulated records ({where}); read its sd as a lower bound")
     return out
-
-
-def person_row(person, seconds: float, truth: dict | None = None) -> dict:
-    """The record-level estimate as a row of the comparison: the person's values, not medians of cycles."""
-    d = person.to_dict()
-    row = {"estimator": "record", "cycles": d["n_cycles"], "implausible": 0, "failed": 0}
-    for parameter in COMPARED:
-        row[parameter] = d[parameter]
-    row["f_h_iqr"] = float("nan")
-    row["f_h_det_%"] = 100.0 * d["f_h_determined"]
-    row["xi_h_det_%"] = 100.0 * d["xi_h_determined"]
-    for parameter in COMPARED:
-        if truth and parameter in truth:
-            row[f"|err| {parameter}"] = abs(d[parameter] - truth[parameter])
-    row["s/cycle"] = seconds / max(d["n_cycles"], 1)
-    row["f_h_cover_%"] = MEASURED_COVERAGE["record"]
-    return row
 
 
 def run_compare(args) -> int:
@@ -143,25 +170,29 @@ def run_compare(args) -> int:
         _, tables[name], seconds[name] = identify(args, model, preprocessed, name)
     result = comparison_table(tables, seconds, truth) if tables else pd.DataFrame()
     if person is not None:
-        row = pd.DataFrame([person_row(person, person_seconds, truth)]).set_index("estimator")
+        row = pd.DataFrame([answer_row("record", person.to_dict(), person_seconds, truth)]).set_index(
+            "estimator")
         result = pd.concat([row, result])
     print(f"{record.source}: {len(preprocessed.valid_cycles)} cycles, {model}")
     with pd.option_context("display.float_format", "{:.3g}".format, "display.width", 160,
                            "display.max_columns", 30):
-        print(result.to_string())
+        print(printed_view(result).to_string())
     if truth:
         print("truth: " + ", ".join(f"{k} {v:.4g}" for k, v in truth.items() if k in COMPARED))
-    print("f_h_cover_%: how often each estimator's 90 % interval of f_h held the truth on simulated records "
-          "(measured in the docs, not on this record)")
+    print("f_h_cover_%: how often one cycle's 90 % interval of f_h (record: the person's) held the truth on "
+          "simulated records (measured in the docs, not on this record)")
+    if tables:
+        print("per-cycle rows: where most cycles determine a parameter, their random-effects pool and its 90 % "
+              "interval; otherwise the cycles' median and the range of the central 90 % of them, not determined")
     for line in coverage_warnings(names):
         print(line)
     if result.get("implausible", pd.Series(dtype=float)).sum() > 0:
         print("warning: implausible cycles (xi_h < 0, a parameter on its prior bound, ...) are left out of the "
-              "medians and counted in the column 'implausible'")
+              "per-cycle answers and counted in the column 'implausible'")
     if person is not None:
         print("record: the person from the whole record (its 90 % interval of f_h "
               f"{person.intervals['f_h'][0]:.3f}-{person.intervals['f_h'][1]:.3f} Hz; docs/person.md says how far "
-              "its intervals can be trusted); the other rows are medians over cycles")
+              "its intervals can be trusted)")
     written = [directory / "compare_table.csv"]
     result.to_csv(written[0])
     if tables:

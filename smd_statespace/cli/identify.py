@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -299,5 +300,26 @@ def run_identify(args) -> int:
             print(summary.to_string())
         print("'determined_%': plausible cycles whose posterior sd is under a quarter of the prior sd; "
               "the others do not pin the parameter down.")
+        written.append(print_pooled(table, directory))
     print("wrote " + ", ".join(str(path) for path in written))
     return 0
+
+
+def print_pooled(table: pd.DataFrame, directory) -> Path:
+    """Print the record's answer from its cycles (:func:`~smd_statespace.identify.pooled.pool_cycles`, the
+    person's vocabulary) and write it to ``DIR/pooled.csv``; returns the path."""
+    from ..identify.pooled import MAJORITY, pool_cycles
+
+    pooled = pool_cycles(table)
+    shown = pd.DataFrame({"value": pooled["value"].map("{:.4g}".format),
+                          "90 %": [f"{low:.4g}-{high:.4g}" for low, high in zip(pooled["low"], pooled["high"])],
+                          "determined": pooled["determined"].map({True: "yes", False: "no"}),
+                          "cycles determining": [f"{d} of {n}" for d, n in
+                                                 zip(pooled["determining"], pooled["cycles"])]},
+                         index=pooled.index)
+    print(f"the record's answer from its cycles (pooled where at least {100 * MAJORITY:g} % of them determine a "
+          "parameter; otherwise their median and the range of the central 90 % of them):")
+    print(shown.to_string())
+    path = Path(directory) / "pooled.csv"
+    pooled.to_csv(path)
+    return path

@@ -1,0 +1,116 @@
+"""How honest is the per-cycle method's answer for a record: its cycles pooled (identify.pooled) against the truth.
+
+Simulated people from the article's Table 2 (``sample_population``, ``f_h`` inside the prior 1-4 Hz, BLFs
+below the prior box's largest coefficient) bounce for ``--duration`` s at ``f_b`` cycling through 1.5-3.0 Hz,
+with the simulator's default cycle-to-cycle variation (``--variation``) and 1 % BW noise. Each record is
+identified cycle by cycle exactly as ``identify REC --estimator NAME`` does (``preprocess``, ``CycleRunner``
+with its defaults) and pooled with :func:`~smd_statespace.identify.pooled.pool_cycles`::
+
+    python benchmarks/pooled_cycles.py --records 24 --jobs 2 --seed 7 --csv benchmarks/results/pooled_cycles_seed7.csv
+
+Per parameter: how often the pool is *determined*; where it is, the coverage of its 90 % interval and its
+median absolute error; where it is not, how often the cycles' central 90 % range holds the truth. ``BLF_i``
+is per force cycle in the simulator: its truth here is the mean amplitude over the force cycles that the
+identified cycles span (:func:`realised_blf`). Same ``--seed``, same tables,
+whatever ``--jobs``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+
+from accuracy import markdown_table  # benchmarks/, the script's own folder
+from smd_statespace.identify import CycleRunner
+from smd_statespace.identify.pooled import POOLED, pool_cycles
+from smd_statespace.model import SMDModel
+from smd_statespace.signals import preprocess
+from smd_statespace.simulation import sample_population, simulate_bouncing
+
+FB_LEVELS = (1.5, 2.0, 2.5, 3.0)
+
+
+def realised_blf(force_cycles: pd.DataFrame, table: pd.DataFrame) -> dict:
+    """The mean amplitude of each of the first three harmonics over the force cycles the identified cycles span:
+    what a pool of the cycles estimates (the person's nominal ``blf_i`` differs from it by the simulator's
+    cycle-to-cycle variation)."""
+    ok = table[table["status"] == "ok"]
+    inside = force_cycles[(force_cycles["t_start"] >= ok["t_start"].min() - 0.05)
+                          & (force_cycles["t_end"] <= ok["t_end"].max() + 0.05)]
+    return {f"blf_{i}": float(inside[f"blf{i}"].mean()) for i in (1, 2, 3)}
+
+
+def one_record(task):
+    """Simulate, identify per cycle, pool: one row per parameter (truth, pool, verdict)."""
+    index, seed, options = task
+    people_seed, record_seed, runner_seed = seed.spawn(3)
+    person = sample_population(1, FB_LEVELS[index % len(FB_LEVELS)], seed=people_seed,
+                               bounds={"f_h": (1.0, 4.0), "blf": (0.0, 0.4)}).iloc[0]
+    blf = (person["blf1"], person["blf2"], person["blf3"], 0.02)
+    sim = simulate_bouncing(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"],
+                            blf=blf, duration=options["duration"], variation=options["variation"],
+                            seed=int(record_seed.generate_state(1)[0]))
+    started = time.perf_counter()
+    table = CycleRunner(SMDModel(), estimator=options["estimator"], progress=False,
+                        seed=int(runner_seed.generate_state(1)[0])).run(preprocess(sim.record))
+    seconds = time.perf_counter() - started
+    truth = {"f_h": person["f_h"], "xi_h": person["xi_h"], **realised_blf(sim.cycles, table)}
+    rows = []
+    for name, row in pool_cycles(table).iterrows():
+        rows.append({"record": index, "f_b": person["f_b"], "parameter": name, "truth": truth[name], **row.to_dict(),
+                     "held": bool(row["low"] <= truth[name] <= row["high"]),
+                     "error": float(row["value"] - truth[name]), "seconds": seconds})
+    return rows
+
+
+def summary(rows: pd.DataFrame) -> pd.DataFrame:
+    """Per parameter: determined share, coverage and error where determined, range holding the truth where not."""
+    out = []
+    for name in POOLED:
+        part = rows[rows["parameter"] == name]
+        det, rest = part[part["determined"].astype(bool)], part[~part["determined"].astype(bool)]
+        out.append({"parameter": name, "records": len(part), "determined": len(det),
+                    "covered (determined)": f"{int(det['held'].sum())}/{len(det)}" if len(det) else "-",
+                    "median |error| (determined)": det["error"].abs().median() if len(det) else np.nan,
+                    "median sd (determined)": det["sd"].median() if len(det) else np.nan,
+                    "range holds truth (not determined)":
+                        f"{int(rest['held'].sum())}/{len(rest)}" if len(rest) else "-",
+                    "median |error| (not determined)": rest["error"].abs().median() if len(rest) else np.nan})
+    return pd.DataFrame(out).set_index("parameter")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--records", type=int, default=24)
+    parser.add_argument("--duration", type=float, default=30.0)
+    parser.add_argument("--estimator", default="ekf")
+    parser.add_argument("--variation", default="jumps")
+    parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--csv", help="write every record's rows here")
+    args = parser.parse_args(argv)
+    options = {"duration": args.duration, "estimator": args.estimator, "variation": args.variation}
+    seeds = np.random.SeedSequence(args.seed).spawn(args.records)
+    tasks = [(i, seeds[i], options) for i in range(args.records)]
+    started = time.perf_counter()
+    if args.jobs > 1:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            results = list(pool.map(one_record, tasks))
+    else:
+        results = [one_record(task) for task in tasks]
+    rows = pd.DataFrame([row for record in results for row in record])
+    if args.csv:
+        rows.to_csv(args.csv, index=False)
+    print(f"{args.records} records of {args.duration:g} s ({args.variation}), {args.estimator}, seed {args.seed}: "
+          f"{time.perf_counter() - started:.0f} s")
+    table = summary(rows).reset_index()
+    print(markdown_table(table, {c: ".3g" for c in table.columns if "median" in c}))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
