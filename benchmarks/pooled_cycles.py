@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from accuracy import markdown_table  # benchmarks/, the script's own folder
+from smd_statespace.errors import SMDInputError
 from smd_statespace.identify import CycleRunner
 from smd_statespace.identify.pooled import POOLED, pool_cycles
 from smd_statespace.model import SMDModel
@@ -45,7 +46,15 @@ def realised_blf(force_cycles: pd.DataFrame, table: pd.DataFrame) -> dict:
 
 
 def one_record(task):
-    """Simulate, identify per cycle, pool: one row per parameter (truth, pool, verdict)."""
+    """Simulate, identify per cycle, pool: one row per parameter (truth, pool, verdict); a record the library
+    refuses (a bouncing frequency outside its range, ...) gives one row saying why."""
+    try:
+        return _one_record(task)
+    except SMDInputError as exc:
+        return [{"record": task[0], "parameter": "refused", "reason": " ".join(str(exc).split())}]
+
+
+def _one_record(task):
     index, seed, options = task
     people_seed, record_seed, runner_seed = seed.spawn(3)
     person = sample_population(1, FB_LEVELS[index % len(FB_LEVELS)], seed=people_seed,
@@ -103,10 +112,14 @@ def main(argv=None) -> int:
     else:
         results = [one_record(task) for task in tasks]
     rows = pd.DataFrame([row for record in results for row in record])
+    refused = rows[rows["parameter"] == "refused"]
+    rows = rows[rows["parameter"] != "refused"]
     if args.csv:
         rows.to_csv(args.csv, index=False)
     print(f"{args.records} records of {args.duration:g} s ({args.variation}), {args.estimator}, seed {args.seed}: "
           f"{time.perf_counter() - started:.0f} s")
+    for _, row in refused.iterrows():
+        print(f"record {row['record']} refused: {row['reason']}")
     table = summary(rows).reset_index()
     print(markdown_table(table, {c: ".3g" for c in table.columns if "median" in c}))
     return 0

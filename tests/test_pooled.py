@@ -48,3 +48,17 @@ def test_cycles_that_do_not_determine_give_their_median_and_range_not_a_pooled_s
     assert flat["n_cycles"] == 12 and flat["f_h_determined"] is False and flat["f_h_high"] == row["high"]
     with pytest.raises(ValueError, match="level"):
         pool_cycles(cycles_table(values, np.full(13, 0.3), determined), level=90)
+
+
+def test_load_factors_are_determined_only_where_f_h_is():
+    """Every cycle determines BLF_2; where the cycles also determine f_h the pool says so, where none does (their
+    f_h pulled to the prior's centre, which the BLFs are read through) BLF_2 is not determined either."""
+    n = 12
+    rng = np.random.default_rng(np.random.SeedSequence(7))
+    base = cycles_table(2.6 + rng.normal(0.0, 0.05, n), np.full(n, 0.05), np.ones(n, bool))
+    base["blf_2"], base["blf_2_sd"], base["blf_2_determined"] = 0.15 + rng.normal(0.0, 0.003, n), 0.003, True
+    assert pool_cycles(base).loc["blf_2", "determined"]
+    base["f_h_determined"] = False
+    pooled = pool_cycles(base)
+    assert not pooled.loc["f_h", "determined"] and not pooled.loc["blf_2", "determined"]
+    assert pooled.loc["blf_2", "determining"] == n and np.isnan(pooled.loc["blf_2", "sd"])

@@ -64,7 +64,11 @@ from .system import RecordSystem, Regressor, integrated_white_noise, matern32_st
 from .timing import CycleTiming
 from .variation import VARIATIONS
 
-__all__ = ["VARIATIONS", "Regressor", "RecordSystem", "RecordModel", "coefficient_names"]
+__all__ = ["PERSON", "VARIATIONS", "Regressor", "RecordSystem", "RecordModel", "coefficient_names"]
+
+PERSON = ("f_h", "xi_h")
+"""The person's parameters: they lead :attr:`RecordModel.param_names`, so ``params[:len(PERSON)]`` are
+``f_h`` (Hz) and ``xi_h`` (-) in every fit, whatever the variation model and effects."""
 
 
 F_H_BOUNDS = (0.5, 6.0)
@@ -321,7 +325,7 @@ class RecordModel:
     @property
     def param_names(self) -> list:
         """Names of the parameters searched by maximum likelihood."""
-        names = ["f_h", "xi_h"] + VARIATIONS[self.variation].variance_names(self.variance_groups)
+        names = list(PERSON) + VARIATIONS[self.variation].variance_names(self.variance_groups)
         if self.phase_template is not None:
             names += ["log_var_phase", "log_var_rate"]
         if self.drift:
@@ -337,7 +341,7 @@ class RecordModel:
         effects = {slot.name: tuple(slot.search or (slot.low, slot.high)) for slot in self.dynamics.parameters}
         return [F_H_BOUNDS, XI_H_BOUNDS] + [
             smooth if name == "log_smooth_time" else effects.get(name, LOG_VAR_BOUNDS)
-            for name in self.param_names[2:]]
+            for name in self.param_names[len(PERSON):]]
 
     @property
     def scales(self) -> np.ndarray:

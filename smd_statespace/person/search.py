@@ -22,7 +22,7 @@ from scipy import optimize, stats
 
 from ..errors import OptionError, SMDInputError
 from .comparison import comparison_row
-from .model import RecordModel
+from .model import PERSON, RecordModel
 from .threads import thread_map
 from .timing import CycleTiming
 
@@ -304,15 +304,16 @@ def information(model: RecordModel, params, cov_type="robust", threads=1) -> tup
     """
     params = np.asarray(params, dtype=float)
     bounds = np.asarray(model.bounds)
-    steps = np.where(np.arange(params.size) < 2, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3 * model.scales)
+    n_person = len(PERSON)  # f_h, xi_h lead the parameters: always free, differenced relative to their size
+    steps = np.where(np.arange(params.size) < n_person, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3 * model.scales)
     free = (params - steps > bounds[:, 0]) & (params + steps < bounds[:, 1])
-    free[:2] = True
+    free[:n_person] = True
     index = np.flatnonzero(free)
     hess = _hessian(model, params, index, steps[index], threads)
     cov = np.full((params.size, params.size), np.nan)
     w, v = np.linalg.eigh(-hess)
     if np.any(w <= 0):
-        core = -hess[:2, :2]
+        core = -hess[:n_person, :n_person]
         # on a search bound f_h or xi_h is no estimate and the likelihood need not be curved there: the
         # regularised inverse below gives it an sd as wide as the record leaves it (said "not determined")
         if np.any(np.linalg.eigvalsh(core) <= 0) and not model.person_at_bound(params):
@@ -322,11 +323,11 @@ def information(model: RecordModel, params, cov_type="robust", threads=1) -> tup
         w = np.maximum(w, w.max() * 1e-10)
     inverse = (v / w) @ v.T
     if cov_type == "robust":
-        inverse[:2, :2] = _robust_core(model, params, index, -hess)
+        inverse[:n_person, :n_person] = _robust_core(model, params, index, -hess)
     elif cov_type == "oim_or_robust":
-        ratio = np.sqrt(np.diag(_robust_core(model, params, index, -hess)) / np.diag(inverse)[:2])
+        ratio = np.sqrt(np.diag(_robust_core(model, params, index, -hess)) / np.diag(inverse)[:n_person])
         raise_by = np.ones(index.size)
-        raise_by[:2] = np.maximum(np.nan_to_num(ratio, nan=1.0), 1.0)
+        raise_by[:n_person] = np.maximum(np.nan_to_num(ratio, nan=1.0), 1.0)
         inverse = inverse * np.outer(raise_by, raise_by)  # a congruence: still a covariance
     cov[np.ix_(index, index)] = inverse
     return cov, free
@@ -342,7 +343,8 @@ def _robust_core(model, params, index, info):
     from .score import profile_out
 
     per_cycle = _cluster_scores(model, params, index)
-    effective_info, effective_scores = profile_out(info, per_cycle, range(2), range(2, index.size), 1e-8)
+    n_person = len(PERSON)
+    effective_info, effective_scores = profile_out(info, per_cycle, range(n_person), range(n_person, index.size), 1e-8)
     bread = np.linalg.inv(effective_info)
     return bread @ (effective_scores.T @ effective_scores) @ bread
 
