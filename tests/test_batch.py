@@ -162,6 +162,18 @@ def test_cli_batch_reports_each_bad_file_and_exits_1(records, tmp_path, capsys):
     errors = captured.err.strip().splitlines()
     assert len(errors) == 1 and errors[0].startswith("smd-statespace: error: ") and "flat.csv" in errors[0]
     assert "4 records: 4 identified now" in captured.out and (tmp_path / "o" / "results.csv").exists()
+    # each record's cycles pooled into one row in the person's columns (identify.pooled), which stats reads as people
+    from smd_statespace.identify.pooled import pooled_row
+
+    cycles = pd.read_csv(tmp_path / "o" / "results.csv")
+    pooled = pd.read_csv(tmp_path / "o" / "pooled.csv").set_index("record")
+    assert list(pooled.index) == cycles["record"].drop_duplicates().tolist() and "pooled.csv" in captured.out
+    assert pooled.loc["flat.csv", "status"] == "failed" and "not a bouncing record" in pooled.loc["flat.csv", "reason"]
+    answer = pooled_row(cycles[cycles["record"] == "rec1.csv"])
+    for key in ("f_h", "f_h_low", "f_h_high", "f_h_determined", "blf_2", "n_cycles"):
+        assert pooled.loc["rec1.csv", key] == pytest.approx(answer[key])
+    assert main(["stats", str(tmp_path / "o" / "pooled.csv"), "--out", str(tmp_path / "s"), "--bootstrap", "5"]) == 0
+    assert "4 people read from 1 file(s): 3 ok, 1 failed left out" in capsys.readouterr().out
     assert main(["identify", str(records), "--max-passes", "2", "--out", str(tmp_path / "p"), "--quiet"]) == 2
     assert "--mass KG" in capsys.readouterr().err
 

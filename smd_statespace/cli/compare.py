@@ -44,8 +44,8 @@ def add_compare(subparsers):
         help="run several estimators on the same cycles and compare them",
         description=("Identify the same record with each estimator and print, per estimator, its answer for the "
                      "record in one vocabulary: the value of each parameter, the interval of f_h and xi_h and "
-                     "whether the record determines them (per-cycle estimators: their cycles pooled where most "
-                     "cycles determine a parameter, otherwise the cycles' median and range), the share of cycles "
+                     "whether the record determines them (per-cycle estimators: the cycles' median and the range "
+                     "of the central 90 % of them, never determined), the share of cycles "
                      "that determine them on their own and the run time; with --truth also the answer's absolute "
                      "error. Writes DIR/compare_table.csv, DIR/compare.csv (every cycle) and DIR/compare.png."),
     )
@@ -79,7 +79,7 @@ def answer_row(estimator: str, answer: dict, seconds: float, truth: dict | None 
 
     ``answer`` holds the flat keys of the person's ``to_dict`` (``f_h``, ``f_h_low``, ``f_h_high``,
     ``f_h_determined``, ...; :func:`~smd_statespace.identify.pooled.pooled_row` gives them for a table of
-    cycles). ``table``: the per-cycle results the answer was pooled from (its cycles counted, and the
+    cycles: their median and central range, never determined). ``table``: the per-cycle results the answer was pooled from (its cycles counted, and the
     share of cycles that determine ``f_h`` and ``xi_h`` on their own); ``None`` for the record-level person.
     """
     row = {"estimator": estimator, "cycles": answer["n_cycles"], "implausible": 0, "failed": 0}
@@ -104,7 +104,7 @@ def answer_row(estimator: str, answer: dict, seconds: float, truth: dict | None 
 
 
 def comparison_table(tables: dict, seconds: dict, truth: dict | None = None, level: float = 0.9) -> pd.DataFrame:
-    """One row per per-cycle estimator (:func:`answer_row`): its cycles pooled into the record's answer
+    """One row per per-cycle estimator (:func:`answer_row`): its cycles' answer for the record
     (:func:`~smd_statespace.identify.pooled.pool_cycles`), the errors of that answer, time per cycle."""
     from ..identify.pooled import pooled_row
 
@@ -182,8 +182,8 @@ def run_compare(args) -> int:
     print("f_h_cover_%: how often one cycle's 90 % interval of f_h (record: the person's) held the truth on "
           "simulated records (measured in the docs, not on this record)")
     if tables:
-        print("per-cycle rows: where most cycles determine a parameter, their random-effects pool and its 90 % "
-              "interval; otherwise the cycles' median and the range of the central 90 % of them, not determined")
+        print("per-cycle rows: the cycles' median and the range of the central 90 % of them, never determined: the "
+              "cycles share the estimator's error, which no pooling removes (docs/benchmarks.md)")
     for line in coverage_warnings(names):
         print(line)
     if result.get("implausible", pd.Series(dtype=float)).sum() > 0:

@@ -222,7 +222,7 @@ def run_batch_identify(args) -> int:
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
                         progress=not args.quiet, check=not args.ignore_checks)
-    written = [summary.results, directory / "run.json"]
+    written = [summary.results] + ([summary.pooled] if summary.pooled else []) + [directory / "run.json"]
     if (summary.table["status"] == "ok").any():
         if args.estimator == "record":
             written.append(directory / "people.png")
@@ -308,17 +308,19 @@ def run_identify(args) -> int:
 def print_pooled(table: pd.DataFrame, directory) -> Path:
     """Print the record's answer from its cycles (:func:`~smd_statespace.identify.pooled.pool_cycles`, the
     person's vocabulary) and write it to ``DIR/pooled.csv``; returns the path."""
-    from ..identify.pooled import MAJORITY, pool_cycles
+    from ..identify.pooled import pool_cycles
 
     pooled = pool_cycles(table)
     shown = pd.DataFrame({"value": pooled["value"].map("{:.4g}".format),
-                          "90 %": [f"{low:.4g}-{high:.4g}" for low, high in zip(pooled["low"], pooled["high"])],
-                          "determined": pooled["determined"].map({True: "yes", False: "no"}),
+                          "central 90 % of cycles": [f"{low:.4g}-{high:.4g}" for low, high in
+                                                     zip(pooled["low"], pooled["high"])],
+                          "determined": "no",
                           "cycles determining": [f"{d} of {n}" for d, n in
                                                  zip(pooled["determining"], pooled["cycles"])]},
                          index=pooled.index)
-    print(f"the record's answer from its cycles (pooled where at least {100 * MAJORITY:g} % of them determine a "
-          "parameter; otherwise their median and the range of the central 90 % of them):")
+    print("the record's answer from its cycles: their median and the range of the central 90 % of them; the "
+          "per-cycle method determines no parameter of the person, since its cycles share the estimator's error "
+          "(docs/benchmarks.md); the person from the whole record does: drop --estimator")
     print(shown.to_string())
     path = Path(directory) / "pooled.csv"
     pooled.to_csv(path)

@@ -80,10 +80,14 @@ def path_sensitivity(model, states, data, channel) -> np.ndarray:
     ndarray, shape (m, n_state)
         Row ``k``: ``d y_k / d x_0`` (output unit per state unit).
     """
+    steps = np.diff(data.t)
     with np.errstate(over="ignore", invalid="ignore"):
-        jacobians = np.array([model.transition_jacobian(states[k - 1], data.t[k - 1],
-                                                        data.t[k] - data.t[k - 1], data.inputs)
-                              for k in range(1, len(data.t))]).reshape(-1, model.n_state, model.n_state)
+        if steps.size and np.ptp(steps) <= 1e-9 * abs(steps[0]):  # evenly sampled: every step's Jacobian at once
+            jacobians = model.transition_jacobian(states[:-1], data.t[:-1], float(steps[0]), data.inputs)
+        else:
+            jacobians = np.array([model.transition_jacobian(states[k - 1], data.t[k - 1], steps[k - 1], data.inputs)
+                                  for k in range(1, len(data.t))])
+        jacobians = jacobians.reshape(-1, model.n_state, model.n_state)
         observation = model.observation_jacobian(states, data.t, data.inputs)[:, channel, :]
     return chain_sensitivity(jacobians, observation)
 

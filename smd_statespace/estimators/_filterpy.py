@@ -25,8 +25,8 @@ class _ModelEKF(ExtendedKalmanFilter):
     def predict_x(self, u=0):
         full = self.free_state.embed(self.x[:, 0])
         free = self.free_state.free
-        self.F = self.model.transition_jacobian(full, self.t, self.step, self.data.inputs)[np.ix_(free, free)]
-        self.x = self.model.transition(full, self.t, self.step, self.data.inputs)[free][:, None]
+        moved, jacobian = self.model.transition_and_jacobian(full, self.t, self.step, self.data.inputs)
+        self.F, self.x = jacobian[np.ix_(free, free)], moved[free][:, None]
 
     def h_jacobian(self, x, t):
         full = self.free_state.embed(x[:, 0])

@@ -76,8 +76,8 @@ class ConditionalKalman:
     def predict(self, x, P, t, dt, inputs):
         """Move means by the model's transition, covariances by its Jacobian (Eq. 11-12)."""
         lin = self.linear
-        F = self.model.transition_jacobian(x, t, dt, inputs)[:, lin][:, :, lin]
-        x = self.model.transition(x, t, dt, inputs)
+        x, jacobian = self.model.transition_and_jacobian(x, t, dt, inputs)
+        F = jacobian[:, lin][:, :, lin]
         return x, F @ P @ F.transpose(0, 2, 1) + self.Q
 
     def predict_observation(self, x, P, t, inputs):

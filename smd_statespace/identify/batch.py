@@ -32,6 +32,8 @@ Layout of ``OUT``::
     run.json          version, options, seed and the records (a resumed run must match it)
     parts/NAME.csv    one finished record each (its person, or all its cycles; a ``record`` column first)
     results.csv       every record's rows, in the run's record order (written at the end)
+    pooled.csv        a per-cycle estimator's: each record's cycles pooled into one person's row
+                      (:func:`~smd_statespace.identify.pooled.pooled_people`; ``stats`` reads it as people)
 """
 
 from __future__ import annotations
@@ -108,7 +110,8 @@ class BatchSummary:
     ``failures`` maps each record that could not be identified at all to the reason; ``table`` is
     what ``results`` holds (every record's cycles, in the run's record order); ``implausible``
     counts the ``ok`` cycles flagged implausible, ``implausible_reasons`` how often each reason
-    was given.
+    was given; ``pooled``: a per-cycle estimator's ``pooled.csv``, each record's cycles pooled into
+    one row in the person's columns (:func:`~smd_statespace.identify.pooled.pooled_people`).
     """
 
     records: int
@@ -120,6 +123,7 @@ class BatchSummary:
     table: pd.DataFrame | None = None
     implausible: int = 0
     implausible_reasons: dict = field(default_factory=dict)
+    pooled: Path | None = None
 
     @property
     def failed_records(self) -> list:
@@ -421,10 +425,16 @@ def run_batch(records, out, model=None, estimator=RECORD_ESTIMATOR, runner_optio
                       ignore_index=True)
     results = out / "results.csv"
     atomic_write_csv(table, results)
+    pooled = None
+    if estimator != RECORD_ESTIMATOR:  # the per-cycle method's person of each record, in the person's columns
+        from .pooled import pooled_people
+
+        pooled = out / "pooled.csv"
+        atomic_write_csv(pooled_people(table), pooled)
     cycle = table["cycle"] if "cycle" in table else pd.Series(np.nan, index=table.index)
     failed = table[(table["status"] == "failed") & cycle.isna()]  # a record's one row: it was not identified
     _, bad, reasons = implausible_ok(table)
     return BatchSummary(records=len(records), identified=len(pending), resumed=len(records) - len(pending),
                         failures=dict(zip(failed["record"], failed["reason"])),
                         cycles=table["status"].value_counts().to_dict(), results=results, table=table,
-                        implausible=int(bad.sum()), implausible_reasons=reasons)
+                        implausible=int(bad.sum()), implausible_reasons=reasons, pooled=pooled)

@@ -449,6 +449,11 @@ class SMDModel:
         Exact for the chosen discretisation (chain rule through the stages),
         so it is the ``A_d`` of Eq. 12 for Euler.
         """
+        return self.transition_and_jacobian(x, t, dt, inputs)[1]
+
+    def transition_and_jacobian(self, x, t, dt, inputs: CycleInputs):
+        """:meth:`transition` and :meth:`transition_jacobian` from one pass through the stages (an extended
+        Kalman filter's prediction needs both): ``(x_next, jacobian)``."""
         x = np.asarray(x, dtype=float)
         eye = np.broadcast_to(np.eye(self.n_state), x.shape + (self.n_state,))
         jac = eye.copy()
@@ -456,7 +461,7 @@ class SMDModel:
         for i in range(self.substeps):
             x, step_jac = step_jacobian(self, x, t + i * h, h, inputs, eye)
             jac = step_jac @ jac
-        return jac
+        return x, jac
 
     def observe(self, x, t, inputs: CycleInputs):
         """Noise-free observation ``Y = C_d X`` (Eq. 13-16), shape ``x.shape[:-1] + (n_obs,)``.
