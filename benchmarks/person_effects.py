@@ -62,7 +62,8 @@ from smd_statespace.effects import EFFECTS, load_effects_file
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
 from smd_statespace.person.diagnose import diagnose_person, label
-from smd_statespace.person.effect_adapter import record_default
+from smd_statespace.model.fitted import propose
+from smd_statespace.person.effect_adapter import fitted_record
 from smd_statespace.person.extend import configured_for_record, fit_effects
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing, simulate_lab_record
 
@@ -244,7 +245,7 @@ def one(task) -> dict:
             newton = row["effect_size"] * (sim.truth["noise_n"] if generator.startswith("lab")
                                            else NOISE * person["mass"] * G)
             row["effect_vs_innovations"] = newton / (base.sigma * person["mass"])
-        candidates = [record_default(cls, base) for cls in EFFECTS.values()]
+        candidates = [propose(cls, fitted_record(base)) for cls in EFFECTS.values()]
         candidates = [c for c in candidates if c is not None]  # without floor_acc the floor is the estimated mode
         diagnosis = diagnose_person(base, candidates=candidates, library=True)
         row["diagnose_seconds"] = time.perf_counter() - started

@@ -6,7 +6,8 @@ with the simulator's cycle-to-cycle variation (``--variation``) and 1 % BW noise
 cycle by cycle exactly as ``identify REC --estimator NAME`` does (``preprocess``, ``CycleRunner`` with its
 defaults)::
 
-    python benchmarks/pooled_cycles.py --records 64 --jobs 2 --seed 7 --csv benchmarks/results/pooled_cycles_jumps_seed7.csv
+    python benchmarks/pooled_cycles.py --records 64 --jobs 2 --seed 7 \
+        --csv benchmarks/results/pooled_cycles_jumps_seed7.csv
 
 Per parameter, two answers for the record:
 

@@ -366,5 +366,5 @@ def test_diagnoses_floor_candidate_is_the_measured_floor_or_else_the_estimated_m
         return FittedRecord(np.arange(10) / 100.0, floor_acc, predicted_displacement=None, strongest_line=None)
 
     with_accelerometer, without = fitted(np.zeros(10)), fitted(None)
-    assert FloorMode.record_default(with_accelerometer).source == "measured"
-    assert FloorMode.record_default(without).spec == "floor_mode:source=modal"  # as the verdict prints it
+    assert FloorMode.propose(with_accelerometer).source == "measured"
+    assert FloorMode.propose(without).spec == "floor_mode:source=modal"  # as the verdict prints it

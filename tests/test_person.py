@@ -568,7 +568,7 @@ def test_a_bare_effect_name_is_configured_for_the_record_as_diagnose_proposes_it
     from smd_statespace.person.effect_adapter import fitted_record
     from smd_statespace.person.extend import configured_for_record
 
-    scaled = EFFECTS["cubic_stiffness"].record_default(fitted_record(long_fit))  # what the effect reads of the fit
+    scaled = EFFECTS["cubic_stiffness"].propose(fitted_record(long_fit))  # what the effect reads of the fit
     bare = configured_for_record("cubic_stiffness", long_fit)
     assert bare.spec == scaled.spec and bare.beta_range[1] > 1000.0
     assert configured_for_record("cubic_stiffness:beta_range=-500/500", long_fit).beta_range == (-500.0, 500.0)

@@ -79,8 +79,9 @@ def answer_row(estimator: str, answer: dict, seconds: float, truth: dict | None 
 
     ``answer`` holds the flat keys of the person's ``to_dict`` (``f_h``, ``f_h_low``, ``f_h_high``,
     ``f_h_determined``, ...; :func:`~smd_statespace.identify.pooled.pooled_row` gives them for a table of
-    cycles: their median and central range, never determined). ``table``: the per-cycle results the answer was pooled from (its cycles counted, and the
-    share of cycles that determine ``f_h`` and ``xi_h`` on their own); ``None`` for the record-level person.
+    cycles: their median and central range, never determined). ``table``: the per-cycle results the answer
+    was made from (its cycles counted, and the share of cycles that determine ``f_h`` and ``xi_h`` on their
+    own); ``None`` for the record-level person.
     """
     row = {"estimator": estimator, "cycles": answer["n_cycles"], "implausible": 0, "failed": 0}
     for parameter in COMPARED:

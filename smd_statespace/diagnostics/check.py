@@ -34,7 +34,8 @@ from ..errors import OptionError
 from ..io import G
 from .correlation import cross_correlation_table
 from .cycles import absorbable_bases, checked_series, cycle_harmonic, identified_runner, state_over_record
-from .effect_adapter import candidate, score_terms
+from ..model.fitted import propose
+from .effect_adapter import fitted_record, score_terms
 from ..measures import fit_percent, rms
 from .free_simulation import path_sensitivity
 from .phase import phase_locked, phase_profile
@@ -42,8 +43,7 @@ from .report import summary_text
 from .residual_tests import (cycle_numbers, default_lags, jarque_bera_test, ljung_box_table, pooled_acf, split_cycles,
                              variance_change_test)
 from .spectra import HARMONIC_TOLERANCE, PEAK_FALSE_ALARM, SEGMENT_CYCLES  # noqa: F401 (importable from here too)
-from .spectra import residual_spectrum as spectrum_with_peaks
-from .spectra import welch_spectrum
+from .spectra import residual_spectrum as spectrum_with_peaks, welch_spectrum
 from .subspace import remove_projections
 
 __all__ = ["ModelCheck", "check_model", "fit_percent", "INITIAL_STATES"]
@@ -449,10 +449,9 @@ class ModelCheck:
     def default_candidates(self) -> dict:
         """Candidate terms of the COM acceleration that a missing physical effect would add.
 
-        Every registered effect not in the model (:mod:`smd_statespace.effects`,
-        a user's included), as its class configures itself for this record
-        (:func:`~smd_statespace.diagnostics.effect_adapter.candidate`),
-        contributes its own terms (:meth:`effect_terms`), named by the effect:
+        Every registered effect not in the model (:mod:`smd_statespace.effects`, a user's included), as
+        it proposes itself (:func:`~smd_statespace.model.fitted.propose`), contributes its own terms
+        (:meth:`effect_terms`), named by the effect:
         ``harmonics`` (``g cos(j theta), g sin(j theta)`` for the two orders above
         the model's), ``cubic_stiffness`` (``-w_h^2 u^3``), ``floor_mode`` (with a
         measured floor: ``w_h^2 z + 2 xi_h w_h z'``, Section 6); a term that needs
@@ -475,8 +474,9 @@ class ModelCheck:
         pre = self.preprocessed
         out = {}
         present = {effect.name for effect in self.model.effects}
+        fitted = fitted_record(self)
         for name, cls in EFFECTS.items():
-            effect = None if name in present else candidate(cls, self)
+            effect = None if name in present else propose(cls, fitted)
             terms = {} if effect is None else self.effect_terms(effect)
             if terms:
                 columns = np.column_stack(list(terms.values()))

@@ -1,17 +1,17 @@
-"""How the per-cycle diagnosis uses an effect: as a candidate, its score terms, its notes.
+"""How the per-cycle diagnosis uses an effect: what it reads of the check, its score terms, its notes.
 
 An :class:`~smd_statespace.model.Effect` declares slots and terms only. The
 per-cycle diagnosis (:func:`~smd_statespace.diagnostics.missing.diagnose`,
-:class:`~smd_statespace.diagnostics.ModelCheck`) needs three more things of
-it; each has a default here, derived from the effect's term, and an effect
-that knows better implements the method the matching ``Protocol`` names (the
-floor mode picks its candidate from the residual's spectrum and explains
-what the residual cannot say about a floor):
+:class:`~smd_statespace.diagnostics.ModelCheck`) proposes it as a candidate
+where the record-level one does (:func:`~smd_statespace.model.fitted.propose`,
+given :func:`fitted_record` of the check) and needs two more things of it;
+each has a default here, derived from the effect's term, and an effect that
+knows better implements the method the matching ``Protocol`` names (the floor
+mode explains what the residual cannot say about a floor):
 
 ======================= ========================= ===============================================
 function                protocol                  default
 ======================= ========================= ===============================================
-:func:`candidate`       :class:`CandidateSetup`        the effect with its default options
 :func:`score_terms`     (none: derived)           derivative of the acceleration in each parameter
 :func:`diagnosis_notes` :class:`DiagnosisNotes`   none
 ======================= ========================= ===============================================
@@ -23,21 +23,14 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..model.fitted import FittedRecord
 from ..model.jacobians import expand_time, numeric_jacobian
 
 if TYPE_CHECKING:  # annotations only
     from ..model import CycleInputs, Effect, SMDModel
     from .check import ModelCheck
 
-__all__ = ["CandidateSetup", "DiagnosisNotes", "candidate", "diagnosis_notes", "score_terms"]
-
-
-@runtime_checkable
-class CandidateSetup(Protocol):
-    """An effect class that configures itself as a candidate for a record (a floor mode at a residual's line)."""
-
-    def candidate(self, check: "ModelCheck") -> "Effect | None":
-        """The effect configured for the record of ``check`` (the model without it), or None to leave it out."""
+__all__ = ["DiagnosisNotes", "diagnosis_notes", "fitted_record", "score_terms", "unlocked_line"]
 
 
 @runtime_checkable
@@ -48,13 +41,39 @@ class DiagnosisNotes(Protocol):
         """Plain-word notes: ``base`` is the base model's check, ``judged`` the candidates' refits."""
 
 
-def candidate(effect_class: type, check: "ModelCheck") -> "Effect | None":
-    """``effect_class`` configured as a candidate for the record of ``check``, or None to leave it out.
+def fitted_record(check: "ModelCheck") -> FittedRecord:
+    """What an effect may read of the per-cycle fit without it (``per_cycle``): the record's samples, its
+    measured floor, the free simulation's COM displacement and the residual's strongest line that is not
+    locked to the bouncing cycle (:func:`unlocked_line`)."""
+    pre = check.preprocessed
+    floor = getattr(pre, "floor_acc", None)
+    return FittedRecord(time=np.asarray(pre.time, dtype=float),
+                        floor_acc=None if floor is None else np.asarray(floor, dtype=float),
+                        predicted_displacement=lambda: check.simulated_state("u"),
+                        strongest_line=lambda: unlocked_line(check), per_cycle=True)
 
-    ``check`` is the :class:`~smd_statespace.diagnostics.ModelCheck` of the
-    model without it. Default: the effect with its default options.
+
+def unlocked_line(check: "ModelCheck") -> float:
+    """The frequency (Hz) of the residual's strongest line that is not locked to the bouncing cycle; NaN if none.
+
+    A floor excited by anything but this person moves at its own frequency with
+    no fixed phase to the bouncing cycle. The residual's phase-locked part
+    (:meth:`~smd_statespace.diagnostics.ModelCheck.phase_locked`: missing
+    harmonics, a nonlinearity) is removed first, so that such a line is found
+    even next to a multiple of ``f_b``; a peak is taken only where at least half
+    of the residual's power is unlocked. Weak lines at ``(k + 1/2) f_b`` come
+    from cycle-to-cycle variation of the force: one is taken only when it is
+    stronger than every harmonic line of the residual.
     """
-    return effect_class.candidate(check) if isinstance(effect_class, CandidateSetup) else effect_class()
+    freq, psd, whole = check.residual_spectrum()
+    _, psd_unlocked, peaks = check.residual_spectrum(values=check.residual - check.phase_locked())
+    bins = np.clip(np.searchsorted(freq, peaks["frequency"]), 0, freq.size - 1)
+    mostly_unlocked = psd_unlocked[bins] >= 0.5 * psd[bins]
+    half = (peaks["f_over_fb"] % 1.0 - 0.5).abs() < 0.1
+    harmonic_power = whole.loc[whole["label"] != "non-harmonic", "power"].max()
+    dominant = peaks["power"] > (0.0 if np.isnan(harmonic_power) else harmonic_power)
+    other = peaks[mostly_unlocked & (~half | dominant)]
+    return float(other["frequency"].iloc[0]) if len(other) else float("nan")  # peaks: strongest first
 
 
 def diagnosis_notes(effect_class: type, base: "ModelCheck", judged: list) -> list:

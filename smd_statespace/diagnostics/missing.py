@@ -68,10 +68,11 @@ import numpy as np
 import pandas as pd
 
 from .check import ModelCheck, check_model
-from .effect_adapter import candidate, diagnosis_notes
+from .effect_adapter import diagnosis_notes, fitted_record
 from ..effects import EFFECTS, make_effect
 from ..errors import OptionError
 from ..model import SMDModel
+from ..model.fitted import propose
 
 
 @dataclass
@@ -224,13 +225,15 @@ def _effect_parameters(check: ModelCheck) -> dict:
 def default_candidates(model: SMDModel, base: ModelCheck) -> list:
     """Every registered effect not yet in ``model``, configured for this record by its own class.
 
-    :func:`~smd_statespace.diagnostics.effect_adapter.candidate` decides
-    (``floor_mode``: the measured floor when the record has one, else a known
-    mode at the strongest line of the residual that is not locked to the
-    bouncing cycle, or nothing); an effect that returns None is left out.
+    :func:`~smd_statespace.model.fitted.propose` decides, as for the
+    record-level diagnosis (``floor_mode``: the measured floor when the record
+    has one, else a known mode at the strongest line of the residual that is
+    not locked to the bouncing cycle, or nothing; ``cubic_stiffness``: its
+    range scaled to the displacement); an effect that returns None is left out.
     """
     present = {effect.name for effect in model.effects}
-    chosen = (candidate(cls, base) for name, cls in EFFECTS.items() if name not in present)
+    fitted = fitted_record(base)
+    chosen = (propose(cls, fitted) for name, cls in EFFECTS.items() if name not in present)
     return [effect for effect in chosen if effect is not None]
 
 

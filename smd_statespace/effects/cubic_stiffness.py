@@ -57,9 +57,9 @@ class CubicStiffness(Effect):
     ``|beta_3| <= STIFFNESS_CHANGE / (3 u_rms^2)`` (the tangent stiffness is ``K_h (1 + 3 beta_3 u^2)``)."""
 
     @classmethod
-    def record_default(cls, fitted):
-        """The candidate ``diagnose`` tries, and ``identify --effect cubic_stiffness`` fits: ``beta_range``
-        scaled to the record's displacement.
+    def propose(cls, fitted):
+        """The candidate both diagnoses try, and ``identify --effect cubic_stiffness`` fits
+        (:func:`~smd_statespace.model.fitted.propose`): ``beta_range`` scaled to the record's displacement.
 
         The fixed default (+-1000 1/m^2) can be too narrow: a spring whose tangent stiffness is 2.8 times K_h at 2 cm
         (``beta_3`` 1500, a simulated record with ``f_h`` 3.1 Hz) ended on the bound 1000 and was

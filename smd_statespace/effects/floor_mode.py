@@ -305,40 +305,6 @@ class FloorMode(Effect):
     """Damping ratio of the modal floor candidate seeded from the residual spectrum (floors: about 0.3-3 %)."""
 
     @classmethod
-    def candidate(cls, check):
-        """The measured floor, or a known mode at the residual's strongest unlocked line (or None).
-
-        A floor excited by anything but this person moves at its own
-        frequency with no fixed phase to the bouncing cycle. The residual's
-        phase-locked part (:meth:`~smd_statespace.diagnostics.ModelCheck.phase_locked`:
-        missing harmonics, a nonlinearity) is removed first, so that such a
-        line is found even next to a multiple of ``f_b``; a peak is taken
-        only where at least half of the residual's power is unlocked. Weak
-        lines at ``(k + 1/2) f_b`` come from cycle-to-cycle variation of the
-        force: one is taken only when it is stronger than every harmonic
-        line of the residual. The line's frequency, read off the record,
-        counts as one fitted parameter (:attr:`record_parameters`).
-        """
-        if check.preprocessed.floor_acc is not None:
-            return cls("measured")
-        freq, psd, whole = check.residual_spectrum()
-        unlocked = check.residual - check.phase_locked()
-        _, psd_unlocked, peaks = check.residual_spectrum(values=unlocked)
-        bins = np.clip(np.searchsorted(freq, peaks["frequency"]), 0, freq.size - 1)
-        mostly_unlocked = psd_unlocked[bins] >= 0.5 * psd[bins]
-        half = (peaks["f_over_fb"] % 1.0 - 0.5).abs() < 0.1
-        harmonic_power = whole.loc[whole["label"] != "non-harmonic", "power"].max()
-        dominant = peaks["power"] > (0.0 if np.isnan(harmonic_power) else harmonic_power)
-        other = peaks[mostly_unlocked & (~half | dominant)]
-        if other.empty:
-            return None
-        frequency = float(other["frequency"].iloc[0])  # peaks are sorted strongest first
-        # A floor mode is one frequency for the whole record: a known mode at the line, not a per-cycle estimate.
-        effect = cls("modal", frequency=round(frequency, 3), damping=cls.CANDIDATE_DAMPING)
-        effect.record_parameters = 1
-        return effect
-
-    @classmethod
     def diagnosis_notes(cls, base, judged) -> list:
         """What the residual cannot say about a measured floor motion (see :mod:`smd_statespace.diagnostics.missing`).
 
@@ -372,15 +338,35 @@ class FloorMode(Effect):
         return [note]
 
     @classmethod
-    def record_default(cls, fitted):
-        """The measured floor when the record has a floor acceleration; else the estimated floor mode (``modal``).
+    def propose(cls, fitted):
+        """The floor as a candidate (:func:`~smd_statespace.model.fitted.propose`): the measured floor when the
+        record has a floor acceleration; else an estimated floor mode.
 
-        Without an accelerometer a person on a vibrating floor was otherwise read as missing harmonics. The
-        estimated mode's p-value counts the frequencies it is the best of (:meth:`record_search_size`), and on
-        the 30 clean records of ``benchmarks/person_effects.py`` (seed 92, both generators, where it was a
-        candidate) it was never proposed: its test passed on one (p 2.7e-5, LR 42 on 5) and the checks after
-        the test (held-out prediction, bounds, whiteness) turned it down; on the others p was 0.004 or more."""
-        return cls("measured") if fitted.floor_acc is not None else cls("modal")
+        Without an accelerometer a person on a vibrating floor was otherwise read as missing harmonics.
+        The record-level person searches the mode's frequency (``modal``, starting at the missed line,
+        :meth:`record_starts`); its p-value counts the frequencies it is the best of
+        (:meth:`record_search_size`), and on the 30 clean records of ``benchmarks/person_effects.py``
+        (seed 92, both generators, where it was a candidate) it was never proposed: its test passed on
+        one (p 2.7e-5, LR 42 on 5) and the checks after the test (held-out prediction, bounds,
+        whiteness) turned it down; on the others p was 0.004 or more.
+
+        The per-cycle method (``fitted.per_cycle``) cannot estimate one frequency for the whole record:
+        the candidate is a known mode at the strongest line the fit misses that is not locked to the
+        bouncing cycle (``fitted.innovation_line``, found by
+        :meth:`~smd_statespace.diagnostics.ModelCheck.unlocked_line`), damped by
+        :data:`CANDIDATE_DAMPING`, none where there is no such line. That frequency, read off the record,
+        counts as one fitted parameter (:attr:`record_parameters`).
+        """
+        if fitted.floor_acc is not None:
+            return cls("measured")
+        if not fitted.per_cycle:
+            return cls("modal")
+        line = fitted.innovation_line
+        if not np.isfinite(line):
+            return None
+        effect = cls("modal", frequency=round(line, 3), damping=cls.CANDIDATE_DAMPING)
+        effect.record_parameters = 1
+        return effect
 
     RECORD_FREQUENCY_STEP = 0.01
     """Relative spacing of the trial floor frequencies over ``frequency_range`` (1 %: 230 trials over 2-20 Hz).

@@ -162,14 +162,9 @@ class GenericTerm(Effect):
         return -c * terms[kind]()
 
     @classmethod
-    def record_default(cls, fitted):
-        """None: a generic term is not one of ``diagnose``'s default candidates (there are nine, one per kind;
-        :func:`~smd_statespace.person.screen.generic_library` builds them for a record)."""
-        return None
-
-    @classmethod
-    def candidate(cls, check):
-        """None: nor one of the per-cycle diagnosis's candidates."""
+    def propose(cls, fitted):
+        """None: a generic term is not one of the diagnoses' default candidates (the record-level diagnosis
+        screens nine, one per kind, built by :func:`~smd_statespace.person.screen.generic_library`)."""
         return None
 
     def __repr__(self):

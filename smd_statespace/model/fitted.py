@@ -1,22 +1,31 @@
-"""What an effect may read of the person fitted without it: :class:`FittedRecord`.
+"""What an effect may read of the person fitted without it (:class:`FittedRecord`), and how it proposes itself.
 
 An effect configures itself for a record from the fit of the person without it: a cubic spring scales its
-search range to the displacement that fit predicts, an estimated floor mode starts its frequency search at the
-innovations' strongest line and counts the frequencies the record's duration resolves. The estimator hands it
-this view, not its own result object, so that what an effect reads is declared here, in the layer below the
-effects, and an estimator's results can change without breaking an effect (a user's too). The record-level
-person builds it with :func:`smd_statespace.person.effect_adapter.fitted_record`.
+search range to the displacement that fit predicts, a floor mode is the measured floor where the record has
+one and otherwise a mode at the line the fit misses. The estimator hands it this view, not its own result
+object, so that what an effect reads is declared here, in the layer below the effects, and an estimator's
+results can change without breaking an effect (a user's too). The record-level person builds it with
+:func:`smd_statespace.person.effect_adapter.fitted_record`, the per-cycle check with
+:func:`smd_statespace.diagnostics.effect_adapter.fitted_record`.
+
+:func:`propose` is the one place where an effect becomes a candidate, for both diagnoses (the
+record-level :func:`~smd_statespace.person.diagnose.diagnose_person` and the per-cycle
+:func:`~smd_statespace.diagnostics.missing.diagnose`) and for ``identify --effect NAME``: the effect's
+own :meth:`Proposes.propose` where it has one, else the effect with its default options.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable
+from typing import TYPE_CHECKING, Callable, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["FittedRecord"]
+if TYPE_CHECKING:  # annotations only
+    from .effect import Effect
+
+__all__ = ["FittedRecord", "Proposes", "propose"]
 
 
 @dataclass(frozen=True)
@@ -34,14 +43,20 @@ class FittedRecord:
         ``() -> ndarray (N,)``: the COM displacement ``u`` (m, Eq. 2) the fit predicts at the samples;
         called once, when an effect first asks (:attr:`displacement`).
     strongest_line : callable
-        ``() -> float``: the frequency (Hz) of the strongest line of the fit's innovations, what the model
-        misses most; called once (:attr:`innovation_line`).
+        ``() -> float``: the frequency (Hz) of the strongest line of what the fit misses that is not locked
+        to the bouncing cycle (a floor's own motion), NaN when there is none; called once
+        (:attr:`innovation_line`).
+    per_cycle : bool
+        The fit is the article's per-cycle method (every parameter a state estimated cycle by cycle), not
+        the record-level person: what must be one value for the record (a floor's frequency) cannot be
+        searched and is read off the record instead.
     """
 
     time: np.ndarray
     floor_acc: np.ndarray | None
     predicted_displacement: Callable[[], np.ndarray] = field(repr=False)
     strongest_line: Callable[[], float] = field(repr=False)
+    per_cycle: bool = False
 
     @property
     def duration(self) -> float:
@@ -55,5 +70,23 @@ class FittedRecord:
 
     @cached_property
     def innovation_line(self) -> float:
-        """The frequency (Hz) of the strongest line of the fit's innovations."""
+        """The frequency (Hz) of the strongest line the fit misses that is not locked to the bouncing cycle
+        (NaN: none)."""
         return float(self.strongest_line())
+
+
+@runtime_checkable
+class Proposes(Protocol):
+    """An effect class that configures itself as a candidate for a record (a cubic spring's range scaled to
+    the displacement, the measured floor or a mode at the missed line), or leaves itself out."""
+
+    def propose(self, fitted: FittedRecord) -> "Effect | None":
+        """The effect as a candidate for the record ``fitted`` describes, or None to leave it out."""
+
+
+def propose(effect_class: type, fitted: FittedRecord) -> "Effect | None":
+    """``effect_class`` as a candidate for the record of ``fitted`` (the fit without it), or None.
+
+    Its :meth:`Proposes.propose` where it has one; else the effect with its default options.
+    """
+    return effect_class.propose(fitted) if isinstance(effect_class, Proposes) else effect_class()

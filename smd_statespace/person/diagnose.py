@@ -19,7 +19,7 @@ it, the cycle starts re-placed and the variation model chosen again with it in
 the model, so that its row shows the numbers ``identify --effect`` gives (its
 test stays the screening's, made where the person without it was fitted).
 
-Candidates, by default (:func:`~smd_statespace.person.effect_adapter.record_default`): every registered effect
+Candidates, by default (:func:`~smd_statespace.model.fitted.propose`): every registered effect
 (a user's too); the floor as the measured floor when the record has a
 ``floor_acc`` column, else as an estimated floor mode (``floor_mode:source=modal``),
 whose frequency is searched over a fine grid of about 230 trials, which costs
@@ -59,7 +59,8 @@ import pandas as pd
 
 from ..effects import EFFECTS
 from ..errors import OptionError, SMDInputError
-from .effect_adapter import record_default, record_search_size
+from ..model.fitted import propose
+from .effect_adapter import fitted_record, record_search_size
 from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
 from .robust import MIN_SCALE, added_unknowns, robust_scale
@@ -440,7 +441,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
         Effects to try (names, ``NAME:key=value`` specs or objects), none of them in ``result`` already;
         a bare name as its class configures itself for this record (as by default).
         Default: every registered effect not in ``result`` as its class configures itself for this
-        record (:func:`~smd_statespace.person.effect_adapter.record_default`).
+        record (:func:`~smd_statespace.model.fitted.propose`).
     alpha : float
         Family-wise significance level; each candidate is tested at
         ``alpha / len(candidates)``.
@@ -460,8 +461,9 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     present, threads = {label(effect) for effect in result.effects}, search_threads(threads)
     screened, failed = pd.DataFrame(), {}
     if candidates is None:
+        fitted = fitted_record(result)
         effects = [effect for name, cls in EFFECTS.items() if name not in present
-                   for effect in [record_default(cls, result)] if effect is not None]
+                   for effect in [propose(cls, fitted)] if effect is not None]
     else:
         effects = [configured_for_record(candidate, result) for candidate in candidates]
         names = [label(effect) for effect in effects]

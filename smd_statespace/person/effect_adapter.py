@@ -1,24 +1,23 @@
-"""How the record-level person uses an effect: as a default candidate, as force harmonics, its trial starts.
+"""How the record-level person uses an effect: as force harmonics, its trial starts, the size of its search.
 
 An :class:`~smd_statespace.model.Effect` declares slots and terms only. The
-record-level estimator and its diagnosis need four more things of it; each
-has a default here, and an effect that knows better implements the method
-the matching ``Protocol`` names:
+record-level estimator proposes it as a candidate where the per-cycle
+diagnosis does (:func:`~smd_statespace.model.fitted.propose`, given
+:func:`fitted_record` of the fit without it) and needs three more things of
+it; each has a default here, and an effect that knows better implements the
+method the matching ``Protocol`` names:
 
 ========================== ===================== =====================================================
 function                   protocol              default
 ========================== ===================== =====================================================
-:func:`record_default`     :class:`RecordDefault`     the effect with its default options
 :func:`record_harmonics`   :class:`RecordHarmonics`   0 (the effect's parameters are estimated)
 :func:`record_starts`      :class:`RecordStarts`      none (0 where the range holds 0, else the nominal)
 :func:`record_search_size` :class:`RecordSearchSize`  1 (one search, no multiple testing)
 ========================== ===================== =====================================================
 
-The cubic spring scales its range to the record's displacement
-(``record_default``), the extra harmonics enter as more harmonics of the
-force's template (``record_harmonics``), the estimated floor mode starts
-from a grid of frequencies and counts them (``record_starts``,
-``record_search_size``).
+The extra harmonics enter as more harmonics of the force's template
+(``record_harmonics``), the estimated floor mode starts from a grid of
+frequencies and counts them (``record_starts``, ``record_search_size``).
 
 What an effect reads of the fit without it is a :class:`~smd_statespace.model.fitted.FittedRecord`
 (:func:`fitted_record`), not the :class:`~smd_statespace.person.results.PersonResult`: the functions here
@@ -35,16 +34,8 @@ if TYPE_CHECKING:  # annotations only
     from ..model import Effect, SMDModel
     from .results import PersonResult
 
-__all__ = ["RecordDefault", "RecordHarmonics", "RecordSearchSize", "RecordStarts", "fitted_record", "record_default",
-           "record_harmonics", "record_search_size", "record_starts"]
-
-
-@runtime_checkable
-class RecordDefault(Protocol):
-    """An effect class that configures itself for a record (a cubic spring's range scaled to its displacement)."""
-
-    def record_default(self, fitted: FittedRecord) -> "Effect | None":
-        """The effect as a default candidate for the record ``fitted`` describes, or None to leave it out."""
+__all__ = ["RecordHarmonics", "RecordSearchSize", "RecordStarts", "fitted_record", "record_harmonics",
+           "record_search_size", "record_starts"]
 
 
 @runtime_checkable
@@ -79,16 +70,6 @@ def fitted_record(result: "PersonResult | FittedRecord") -> FittedRecord:
     return FittedRecord(time=record.time, floor_acc=getattr(record, "floor_acc", None),
                         predicted_displacement=lambda: result.predicted_path()[:, 0],
                         strongest_line=lambda: result.innovation_line())
-
-
-def record_default(effect_class: type, result: "PersonResult") -> "Effect | None":
-    """``effect_class`` as a default candidate of the record-level diagnosis, or None to leave it out.
-
-    ``result`` is the base :class:`~smd_statespace.person.results.PersonResult`.
-    Default: the effect with its default options.
-    """
-    return effect_class.record_default(fitted_record(result)) if isinstance(effect_class, RecordDefault) else (
-        effect_class())
 
 
 def record_harmonics(effect: "Effect", model: "SMDModel") -> int:

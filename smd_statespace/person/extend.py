@@ -46,7 +46,8 @@ from ..model import SMDModel
 from ..model.effect import FloorMotion
 from ..progress import tqdm
 from .dynamics import PersonDynamics
-from .effect_adapter import record_default, record_harmonics, record_starts
+from ..model.fitted import propose
+from .effect_adapter import fitted_record, record_harmonics, record_starts
 from .fade import NOTE_TAIL, fade_note
 from .model import RecordModel
 from .search import WIDER_SANDWICH
@@ -136,14 +137,14 @@ def configured_for_record(effect, result):
     """``effect`` as the record-level model takes it: a bare name (no options) as its class configures itself.
 
     ``identify --effect cubic_stiffness`` then searches the range ``diagnose`` proposed it with
-    (:func:`~smd_statespace.person.effect_adapter.record_default`, from ``result``, the fit
+    (:func:`~smd_statespace.model.fitted.propose`, from ``result``, the fit
     without it: a cubic spring's range scaled to the record's displacement), not a fixed default that a
     strong spring ends on. Specs with options and :class:`Effect` objects are taken as given.
     """
     from ..effects import EFFECTS, make_effect
 
     if isinstance(effect, str) and effect.strip() in EFFECTS:
-        configured = record_default(EFFECTS[effect.strip()], result)
+        configured = propose(EFFECTS[effect.strip()], fitted_record(result))
         if configured is not None and configured.name == effect.strip():
             return configured
     return make_effect(effect)

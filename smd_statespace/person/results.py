@@ -351,7 +351,7 @@ class PersonResult:
 
         The path a nonlinear effect is linearised about
         (:func:`~smd_statespace.person.statespace.nominal_path`); an effect's
-        :func:`~smd_statespace.person.effect_adapter.record_default` may read its size.
+        :meth:`~smd_statespace.model.fitted.Proposes.propose` may read its size.
         """
         from .statespace import nominal_path  # statsmodels: imported when a path is asked for
 
