@@ -86,9 +86,10 @@ def answer_row(estimator: str, answer: dict, seconds: float, truth: dict | None 
     row = {"estimator": estimator, "cycles": answer["n_cycles"], "implausible": 0, "failed": 0}
     for parameter in COMPARED:
         row[parameter] = answer.get(parameter, float("nan"))
-    for parameter in INTERVALS:
-        row[f"{parameter}_low"], row[f"{parameter}_high"] = answer[f"{parameter}_low"], answer[f"{parameter}_high"]
-        row[f"{parameter}_determined"] = bool(answer[f"{parameter}_determined"])
+    for parameter in INTERVALS:  # an estimator without a plausible cycle has no answer: NaN, not determined
+        row[f"{parameter}_low"] = answer.get(f"{parameter}_low", float("nan"))
+        row[f"{parameter}_high"] = answer.get(f"{parameter}_high", float("nan"))
+        row[f"{parameter}_determined"] = bool(answer.get(f"{parameter}_determined", False))
     if table is not None:
         ok = plausible_cycles(table)
         row["implausible"] = int((table["status"] == "ok").sum()) - len(ok)
