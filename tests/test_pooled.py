@@ -45,3 +45,20 @@ def test_a_batch_gives_one_row_per_record_and_keeps_a_failure_and_its_reason():
     assert people.loc["flat.csv", "reason"] == "not a bouncing record"
     assert people.loc["odd.csv", "status"] == "failed" and people.loc["odd.csv", "reason"] == \
         "no plausible identified cycle"
+
+
+def test_the_comparison_figure_draws_each_answer_filled_where_determined_and_hollow_where_not():
+    from matplotlib.colors import to_rgba
+
+    from smd_statespace.plotting.cycles import plot_comparison
+
+    table = cycles_table([2.4, 2.6, 2.5], [False] * 3).assign(t_start=[0.0, 0.5, 1.0], t_end=[0.5, 1.0, 1.5],
+                                                              xi_h=0.3, xi_h_sd=0.1, xi_h_determined=False)
+    answers = pd.DataFrame([{"f_h": 2.6, "f_h_low": 2.4, "f_h_high": 2.8, "f_h_determined": True},
+                            {**pooled_row(table, parameters=("f_h",))}], index=["record", "ekf"])
+    fig = plot_comparison({"ekf": table}, truth={"f_h": 2.6}, names=("f_h", "xi_h"), answers=answers)
+    assert len(fig.axes) == 4  # the cycles and, beside them, the answers, per parameter
+    markers = [line for line in fig.axes[1].get_lines() if line.get_marker() == "o"]
+    faces = {line.get_xdata()[0]: to_rgba(line.get_markerfacecolor()) for line in markers}
+    assert faces[0] != to_rgba("white") and faces[1] == to_rgba("white")  # record determined, the cycles not
+    assert [t.get_text() for t in fig.axes[3].get_xticklabels()] == ["record", "ekf"]

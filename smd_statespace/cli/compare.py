@@ -86,7 +86,7 @@ def answer_row(estimator: str, answer: dict, seconds: float, truth: dict | None 
     row = {"estimator": estimator, "cycles": answer["n_cycles"], "implausible": 0, "failed": 0}
     for parameter in COMPARED:
         row[parameter] = answer.get(parameter, float("nan"))
-    for parameter in INTERVALS:  # an estimator without a plausible cycle has no answer: NaN, not determined
+    for parameter in COMPARED:  # an estimator without a plausible cycle has no answer: NaN, not determined
         row[f"{parameter}_low"] = answer.get(f"{parameter}_low", float("nan"))
         row[f"{parameter}_high"] = answer.get(f"{parameter}_high", float("nan"))
         row[f"{parameter}_determined"] = bool(answer.get(f"{parameter}_determined", False))
@@ -200,7 +200,7 @@ def run_compare(args) -> int:
     if tables:
         combined = pd.concat(tables.values(), ignore_index=True)
         combined.to_csv(directory / "compare.csv", index=False)
-        plot_comparison(tables, directory / "compare.png", truth=truth)
+        plot_comparison(tables, directory / "compare.png", truth=truth, answers=result)
         written += [directory / "compare.csv", directory / "compare.png"]
     print("wrote " + ", ".join(str(path) for path in written))
     return 0

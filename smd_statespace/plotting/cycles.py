@@ -120,8 +120,8 @@ def plot_parameters(table: pd.DataFrame, path=None, truth: dict | None = None,
 
 
 def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("f_h", "xi_h", "blf_1", "blf_2"),
-                    title: str = "Estimators compared on the same cycles") -> Figure:
-    """Per-cycle estimates of several runs side by side (one marker style per run).
+                    title: str = "Estimators compared on the same cycles", answers=None) -> Figure:
+    """Per-cycle estimates of several runs side by side (one marker style per run), and each run's answer.
 
     Parameters
     ----------
@@ -132,11 +132,23 @@ def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("
         simulation's truth (``blf`` as a list), as :func:`~smd_statespace.io.truth_values` reads it.
     title : str
         The figure's title (say "Models compared ..." when the tables come from two models).
+    answers : DataFrame, optional
+        Each estimator's answer for the record (``compare``'s table: index the estimator, columns ``name``,
+        ``name_low``, ``name_high``, ``name_determined``), drawn in a panel beside the cycles: the value with
+        its 90 % interval, filled where the record determines it, hollow where not (a per-cycle estimator's
+        bar is then the range of the central 90 % of its cycles). An estimator without cycles (the
+        record-level person) appears there only.
     """
     truth = truth_values(truth)
-    fig = Figure(figsize=(9.0, 1.9 * len(names) + 0.6))
-    axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    answers = None if answers is None or not len(answers) else answers
+    fig = Figure(figsize=(9.0 + (1.6 if answers is not None else 0.0), 1.9 * len(names) + 0.6))
+    grid = {"width_ratios": [5.0, 1.0], "wspace": 0.04} if answers is not None else {}
+    panels = fig.subplots(len(names), 2 if answers is not None else 1, sharex="col", sharey="row", squeeze=False,
+                          gridspec_kw=grid)
+    axes = panels[:, 0]
     markers = "osD^v<>"
+    colors = {label: f"C{k}" for k, label in enumerate(list(tables) + [a for a in (answers.index if answers is not
+                                                                                   None else []) if a not in tables])}
     width = 0.8 / max(len(tables), 1)
     for k, (label, table) in enumerate(tables.items()):
         ok = table[table["status"] == "ok"]
@@ -146,19 +158,46 @@ def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("
             if name in ok:
                 sd = ok.get(f"{name}_sd")
                 ax.errorbar(middle, ok[name], yerr=sd, fmt=markers[k % len(markers)], ms=3.5, lw=0.7, capsize=1.5,
-                            label=label, alpha=0.85)
+                            label=label, alpha=0.85, color=colors[label])
     for ax, name in zip(axes, names):
         if truth and name in truth:
             ax.axhline(truth[name], color="k", ls="--", lw=1, label="truth")
         ax.set_ylabel(PARAMETER_LABELS.get(name, name))
         ax.grid(alpha=0.3)
+    if answers is not None:
+        _draw_answers(panels[:, 1], answers, names, colors, truth)
     handles, labels = axes[0].get_legend_handles_labels()
     axes[0].legend(handles, labels, fontsize=7, ncol=len(labels), loc="lower right", bbox_to_anchor=(1.0, 1.0),
                    frameon=False)
     axes[-1].set_xlabel("time (s)")
     fig.suptitle(f"{title} (bars ±1 sd)", fontsize=11, x=0.02, ha="left")
-    fig.tight_layout()
+    if answers is None:
+        fig.tight_layout()
+    else:  # tight_layout cannot place the shared rows of two columns
+        fig.subplots_adjust(left=0.08, right=0.985, top=0.9, bottom=0.1, hspace=0.15)
     return save(fig, path, DPI)
+
+
+def _draw_answers(axes, answers, names, colors, truth) -> None:
+    """The answers' panel of :func:`plot_comparison`: one column per estimator, its value and 90 % bar."""
+    positions = np.arange(len(answers))
+    for ax, name in zip(axes, names):
+        for x, (label, row) in zip(positions, answers.iterrows()):
+            value, low, high = (row.get(key, np.nan) for key in (name, f"{name}_low", f"{name}_high"))
+            if not np.isfinite(value):
+                continue
+            determined = bool(row.get(f"{name}_determined", False))
+            below, above = max(value - low, 0.0), max(high - value, 0.0)
+            ax.errorbar([x], [value], yerr=[[below], [above]] if np.isfinite(low + high) else None, fmt="o", ms=6,
+                        lw=1.6, capsize=3, color=colors.get(label, "k"),
+                        mfc=colors.get(label, "k") if determined else "white")
+        if truth and name in truth:
+            ax.axhline(truth[name], color="k", ls="--", lw=1)
+        ax.grid(alpha=0.3, axis="y")
+        ax.tick_params(labelleft=False)
+    axes[0].set_title("answer (90 %);\nhollow: not determined", fontsize=8)
+    axes[-1].set_xticks(positions, list(answers.index), rotation=45, fontsize=8)
+    axes[-1].set_xlim(-0.7, len(answers) - 0.3)
 
 
 def plot_before_after(before, after, path=None, seconds: float = 2.0) -> Figure:
