@@ -27,6 +27,8 @@ def test_the_cycles_median_and_central_range_every_cycle_determining_or_not():
         assert (row["low"], row["high"]) == pytest.approx(tuple(np.quantile(values[:12], [0.05, 0.95])))
         assert not row["determined"] and np.isnan(row["sd"])
         assert row["cycles"] == 12 and row["determining"] == 12 * determined[0]
+    as_read = cycles_table(values, np.where(np.arange(13) < 4, "True", "False"), implausible)  # from a CSV
+    assert pool_cycles(as_read).loc["f_h", "determining"] == 4
     flat = pooled_row(cycles_table(values, np.ones(13, bool), implausible), level=0.5)
     assert flat["n_cycles"] == 12 and flat["f_h_determined"] is False
     assert flat["f_h_high"] == pytest.approx(np.quantile(values[:12], 0.75))

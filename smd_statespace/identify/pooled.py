@@ -80,10 +80,10 @@ def pool_cycles(table: pd.DataFrame, level: float = 0.9, parameters=POOLED) -> p
         if name not in plausible:
             continue
         values = plausible[name][np.isfinite(plausible[name])]
-        flags = plausible.loc[values.index, f"{name}_determined"] if f"{name}_determined" in plausible else []
+        determining = flagged(plausible.loc[values.index], f"{name}_determined")  # bools, or as read from a CSV
         rows[name] = {"value": values.median(), "sd": np.nan, "low": values.quantile(tail),
                       "high": values.quantile(1.0 - tail), "determined": False, "cycles": len(values),
-                      "determining": int(np.sum(np.asarray(flags, dtype=bool)))}
+                      "determining": int(determining.sum())}
     return pd.DataFrame.from_dict(rows, orient="index", columns=COLUMNS).rename_axis("parameter")
 
 
