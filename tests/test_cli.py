@@ -249,6 +249,7 @@ def test_compare_runs_estimators_on_the_same_cycles(short_record, tmp_path, caps
     assert cycles["ekf"] == cycles["ukf"]
     printed = capsys.readouterr().out
     assert "|err| f_h" in printed and "f_h 90 %" in printed and (out / "compare.png").exists()
+    assert "blf_1_low" not in printed  # the BLFs' intervals are in compare_table.csv, not on the terminal
     # every row answers in the person's vocabulary: its cycles pooled (identify.pooled), the error that answer's
     from smd_statespace.identify.pooled import pooled_row
 

@@ -128,7 +128,7 @@ def printed_view(result: pd.DataFrame) -> pd.DataFrame:
         view[f"{parameter} 90 %"] = [f"{low:.3g}-{high:.3g}" for low, high in
                                     zip(result[f"{parameter}_low"], result[f"{parameter}_high"])]
         view[f"{parameter} det"] = result[f"{parameter}_determined"].map({True: "yes", False: "no"})
-    for column in [c for c in result.columns if c.startswith("blf_")] + [f"{p}_det_%" for p in INTERVALS]:
+    for column in [c for c in COMPARED if c not in INTERVALS and c in result] + [f"{p}_det_%" for p in INTERVALS]:
         view[column] = result[column]
     for column in [c for c in result.columns if c in ("|err| f_h", "|err| xi_h")] + ["s/cycle", "f_h_cover_%"]:
         view[column] = result[column]
