@@ -74,7 +74,8 @@ def plot_spectrum(result, path=None) -> Figure:
     is a harmonic the model lacks (extra force harmonics, a nonlinear spring),
     a line elsewhere a resonance it lacks (a floor mode).
     """
-    fig = Figure(figsize=(9.5, 4.2), layout="constrained")
+    fig = Figure(figsize=(9.5, 4.2))
+    fig.subplots_adjust(left=0.105, right=0.985, bottom=0.12, top=0.91)  # fixed: a layout engine costs 0.15 s here
     ax = fig.subplots()
     fs = result.record.fs
     f_b = float(np.median(result.model.timing.f_b))
