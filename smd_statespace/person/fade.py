@@ -46,8 +46,11 @@ FADE_OPTIONS = ("auto", True, False)
 NOTE_TAIL = "its harmonics were let fade linearly with the person"
 """What every note of :func:`fade_note` says, by which a fit with effects replaces its base's note with its own."""
 
-CLEAR_FADE = 2.0
-"""A fade is said in words when ``|c|`` is at least this many of its sds; else it is "within its noise"."""
+CLEAR_FADE = 2.576
+"""A fade is said in words when ``|c|`` is at least this many of its sds (two-sided level 0.01, the level of the
+person's other tests in words: a change in time, whiteness); else it is "within its noise". On 24 steady lab
+exports (20 s bouts) ``c / sd`` scattered as a standard normal (at 2 sds, 2 of them were told their force faded
+or grew: one in twenty, as a standard normal has it); a person tiring by 30-40 % gives 20 sds or more."""
 
 
 def fading(fade, trimmed: bool) -> bool:
