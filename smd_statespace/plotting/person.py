@@ -110,7 +110,8 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None, meas
     ``one_step``: one-step predictions ``[(color key, label, prediction)]`` drawn as their errors in a first panel.
     Samples a run does not predict (NaN) are left out of its fit % and of the middle window.
     """
-    fig = Figure(figsize=(10.0, 7.5 if one_step is None else 9.6), layout="constrained")
+    fig = Figure(figsize=(10.0, 7.5 if one_step is None else 9.6))
+    fig.subplots_adjust(left=0.08, right=0.985, bottom=0.07, top=0.955, hspace=0.42)  # fixed: no layout engine
     axes = list(fig.subplots(3 if one_step is None else 4, 1))
     panels = [(axes.pop(0), one_step, "one-step prediction error (m/s$^2$)")] if one_step is not None else []
     panels.append((axes[0], runs, "measured - simulated (m/s$^2$)"))
@@ -223,8 +224,8 @@ def plot_person_fit(result, path=None, seconds=3.0, truth=None) -> Figure:
     worst = int(np.argmax(power))
     apart = np.abs(np.arange(power.size) - worst) >= width  # the best window does not overlap the worst
     best = int(np.argmin(np.where(apart, power, np.inf))) if apart.any() else int(np.argmin(power))
-    fig = Figure(figsize=(11, 6.8), layout="constrained")
-    grid = fig.add_gridspec(2, 2)
+    fig = Figure(figsize=(11, 6.8))
+    grid = fig.add_gridspec(2, 2, left=0.065, right=0.985, bottom=0.08, top=0.89, hspace=0.38, wspace=0.12)
     known = (f" (truth {truth['f_h']:.2f} Hz, {truth['xi_h']:.2f})" if {"f_h", "xi_h"} <= set(truth) else "")
     fig.suptitle(f"{_name(result)}: f_h {result.f_h:.2f} Hz, xi_h {result.xi_h:.2f}{known}")
     for column, (first, label) in enumerate(((best, "best"), (worst, "worst"))):
