@@ -155,7 +155,7 @@ FADE_CHOICES = {"auto": "auto", "on": True, "off": False}
 
 
 def add_fade_argument(parser):
-    """``--fade auto|on|off``: let the force's first harmonics fade linearly over the record with the person."""
+    """``--fade auto|on|off``: let the force's harmonics fade linearly over the record with the person."""
     parser.add_argument("--fade", choices=list(FADE_CHOICES), default="auto",
                         help="record estimator: let the force's harmonics fade (or grow) linearly over the "
                              "record by one factor (a person who tires; no search dimension is added): auto "

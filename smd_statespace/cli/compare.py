@@ -8,7 +8,8 @@ from ..errors import OptionError
 from ..estimators import ESTIMATORS
 from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments, build_model,
                      load_truth, out_dir, prepare_record, truth_values)
-from .identify import identify, plausible_cycles
+from ..identify.plausibility import plausible_cycles
+from .identify import identify
 
 COMPARED = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3")
 
@@ -84,19 +85,17 @@ def answer_row(estimator: str, answer: dict, seconds: float, truth: dict | None 
     own); ``None`` for the record-level person.
     """
     row = {"estimator": estimator, "cycles": answer["n_cycles"], "implausible": 0, "failed": 0}
-    for parameter in COMPARED:
-        row[parameter] = answer.get(parameter, float("nan"))
     for parameter in COMPARED:  # an estimator without a plausible cycle has no answer: NaN, not determined
-        row[f"{parameter}_low"] = answer.get(f"{parameter}_low", float("nan"))
-        row[f"{parameter}_high"] = answer.get(f"{parameter}_high", float("nan"))
+        for key in ("", "_low", "_high"):
+            row[f"{parameter}{key}"] = answer.get(f"{parameter}{key}", float("nan"))
         row[f"{parameter}_determined"] = bool(answer.get(f"{parameter}_determined", False))
+    ok = None if table is None else plausible_cycles(table)
     if table is not None:
-        ok = plausible_cycles(table)
         row["implausible"] = int((table["status"] == "ok").sum()) - len(ok)
         row["failed"] = int((table["status"] == "failed").sum())
     for parameter in INTERVALS:  # one cycle at a time: the share that determine it (the person: all or none)
-        row[f"{parameter}_det_%"] = (100.0 * plausible_cycles(table)[f"{parameter}_determined"].mean()
-                                     if table is not None else 100.0 * row[f"{parameter}_determined"])
+        row[f"{parameter}_det_%"] = 100.0 * (ok[f"{parameter}_determined"].mean() if ok is not None
+                                             else row[f"{parameter}_determined"])
     for parameter in COMPARED:
         if truth and parameter in truth:
             row[f"|err| {parameter}"] = abs(row[parameter] - truth[parameter])

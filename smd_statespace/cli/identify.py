@@ -13,6 +13,7 @@ import pandas as pd
 from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError
+from ..identify.plausibility import plausible_cycles
 from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_fade_argument,
                      add_model_arguments, add_noise_floor_argument, add_rate_argument,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
@@ -101,14 +102,6 @@ def identify(args, model, preprocessed, estimator: str):
         runner = CycleRunner(model, **options)
         table = runner.run(preprocessed)
     return runner, table, time.perf_counter() - started
-
-
-def plausible_cycles(table: pd.DataFrame) -> pd.DataFrame:
-    """The ``ok`` cycles whose estimates are possible (not flagged ``implausible``)."""
-    from ..identify.plausibility import flagged
-
-    ok = table["status"] == "ok" if "status" in table else pd.Series(False, index=table.index)
-    return table[ok.to_numpy() & ~flagged(table)]
 
 
 def summary_table(table: pd.DataFrame, truth: dict | None = None) -> pd.DataFrame:

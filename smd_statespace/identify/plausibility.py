@@ -40,7 +40,7 @@ import pandas as pd
 from ..model import acceleration_frf
 
 __all__ = ["XI_H_MIN", "C_H_MIN", "PRIOR_MARGIN", "MAX_BLF", "MAX_GRF_HARMONIC", "implausible_reasons",
-           "flagged", "reason_counts", "implausible_ok"]
+           "flagged", "reason_counts", "implausible_ok", "plausible_cycles"]
 
 XI_H_MIN = 0.0
 """Smallest damping ratio ``xi_h`` (-): below 0 the SMD's damper would feed energy into the body (Eq. 2)."""
@@ -159,3 +159,9 @@ def implausible_ok(table: pd.DataFrame) -> tuple:
     bad = ok & flagged(table)
     reasons = reason_counts(table.loc[bad, "implausible_reason"]) if "implausible_reason" in table else {}
     return ok, bad, reasons
+
+
+def plausible_cycles(table: pd.DataFrame) -> pd.DataFrame:
+    """The ``ok`` cycles whose estimates are possible (not flagged ``implausible``)."""
+    ok, bad, _ = implausible_ok(table)
+    return table[ok & ~bad]

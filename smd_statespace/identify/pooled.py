@@ -10,7 +10,7 @@ record, so that ``compare``, batch tables and ``stats`` read both the same way.
 
 The answer
 ----------
-Over the plausible identified cycles (:func:`~smd_statespace.identify.plausibility.flagged`): the value is
+Over the plausible identified cycles (:func:`~smd_statespace.identify.plausibility.plausible_cycles`): the value is
 their median, ``low``-``high`` the range that holds the central ``level`` of them, and the parameter is
 **never determined** by the per-cycle method, whatever share of its cycles determine it one by one
 (``determining`` counts those). The sd is NaN: the cycles give no standard error of the person.
@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .plausibility import flagged
+from .plausibility import flagged, plausible_cycles
 
 __all__ = ["POOLED", "pool_cycles", "pooled_row", "pooled_people"]
 
@@ -42,12 +42,6 @@ POOLED = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3")
 """Parameters answered (those the per-cycle table and the person both report)."""
 
 COLUMNS = ["value", "sd", "low", "high", "determined", "cycles", "determining"]
-
-
-def _plausible(table: pd.DataFrame) -> pd.DataFrame:
-    """The identified cycles whose estimates are possible."""
-    ok = table[(table["status"] == "ok").to_numpy()] if "status" in table else table.iloc[:0]
-    return ok[~np.asarray(flagged(ok), dtype=bool)]
 
 
 def pool_cycles(table: pd.DataFrame, level: float = 0.9, parameters=POOLED) -> pd.DataFrame:
@@ -73,7 +67,7 @@ def pool_cycles(table: pd.DataFrame, level: float = 0.9, parameters=POOLED) -> p
     """
     if not 0.0 < level < 1.0:
         raise ValueError(f"level: {level!r} is not between 0 and 1")
-    plausible = _plausible(table)
+    plausible = plausible_cycles(table)
     tail = (1.0 - level) / 2.0
     rows = {}
     for name in parameters:
@@ -111,7 +105,7 @@ def pooled_people(table: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     rows = []
     for record, cycles in table.groupby("record", sort=False):
         row = {"record": record, "mass": cycles["mass"].iloc[0] if "mass" in cycles else np.nan}
-        plausible = _plausible(cycles)
+        plausible = plausible_cycles(cycles)
         if plausible.empty:
             failed = cycles[cycles["status"] == "failed"]
             reason = (failed["reason"].iloc[0] if len(cycles) == 1 and len(failed) else

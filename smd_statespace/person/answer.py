@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .calibration import CALIBRATION, model_error_floor, wald_interval
+from .fade import NOTE_TAIL, fade_note
 from .results import PRIOR_SD, VARIATION_DISAGREEMENT, PersonResult
 from .search import WIDER_SANDWICH, information, profile_interval
 
@@ -54,7 +55,9 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     result = PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
                           intervals=interval, interval_method=method, level=level, comparison=list(comparison),
                           n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),
-                          notes=list(notes), **extra)
+                          notes=[note for note in notes if NOTE_TAIL not in note], **extra)
+    if "fade" in model.delta_names:  # what the fade found: this fit's own note, not one given for another fit
+        result.notes.append(fade_note(result))
     if intervals == "calibrated":
         result.narrow_intervals = dict(result.intervals)
         result.intervals.update(honest_intervals(result))

@@ -48,7 +48,6 @@ from ..progress import tqdm
 from .dynamics import PersonDynamics
 from ..model.fitted import propose
 from .effect_adapter import fitted_record, record_harmonics, record_starts
-from .fade import NOTE_TAIL, fade_note
 from .model import RecordModel
 from .search import WIDER_SANDWICH
 
@@ -314,8 +313,7 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
     if not fitted["converged"]:
         raise FitError(f"{result.record.source}: the likelihood search with {', '.join(e.spec for e in effects)} "
                        f"did not converge ({fitted['message']})")
-    notes = [note for note in root.notes if NOTE_TAIL not in note]  # the fade's note is this fit's own (below)
-    warnings = list(root.record_warnings)
+    notes, warnings = list(root.notes), list(root.record_warnings)
     if model.approximate:
         names = ", ".join(e.name for e in effects)
         notes.append(f"the likelihood is exact: {names} changes in time but is linear in the state, so its "
@@ -325,14 +323,12 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         if not settled:
             warnings.append(f"the path of {names} had not settled after {NOMINAL_ITERATIONS} linearisations: its "
                             "estimates are approximate")
-    out = person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
-                        comparison=comparison, record_warnings=warnings, notes=notes,
-                        before=result, effects=tuple(effects), linearisations=linearisations,
-                        settled=settled, tested_loglike=tested, tested_df=tested_df,
-                        change=_change_left(root.change, effects),
-                        prepared=root.prepared, threads=threads)
-    out.notes += [fade_note(out)] if "fade" in model.delta_names else []
-    return out
+    return person_result(result.record, model, fitted, intervals=intervals, level=result.level, cov_type=cov_type,
+                         comparison=comparison, record_warnings=warnings, notes=notes,
+                         before=result, effects=tuple(effects), linearisations=linearisations,
+                         settled=settled, tested_loglike=tested, tested_df=tested_df,
+                         change=_change_left(root.change, effects),
+                         prepared=root.prepared, threads=threads)
 
 
 def _change_left(change, effects):

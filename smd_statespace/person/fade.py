@@ -44,7 +44,8 @@ FADE_OPTIONS = ("auto", True, False)
 """Values of ``identify_person``'s ``fade``."""
 
 NOTE_TAIL = "its harmonics were let fade linearly with the person"
-"""What every note of :func:`fade_note` says, by which a fit with effects replaces its base's note with its own."""
+"""What every note of :func:`fade_note` says, by which :func:`~smd_statespace.person.answer.person_result` gives a fit
+its own note, not one handed on from the fit it extends."""
 
 CLEAR_FADE = 2.576
 """A fade is said in words when ``|c|`` is at least this many of its sds (two-sided level 0.01, the level of the

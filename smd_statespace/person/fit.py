@@ -34,8 +34,8 @@ from ..signals import RECORD_RATE, prepare_record
 from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
 from .comparison import comparison_row
-from .model import VARIATIONS, Regressor, RecordModel
-from .fade import fade_note, fading
+from .model import PERSON, VARIATIONS, Regressor, RecordModel
+from .fade import fading
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .screen import time_change
 from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing,
@@ -288,7 +288,6 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
                                comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
                                prepared=prepared, threads=threads)
         result = _changed_in_time(result, threads) if change is not None else result
-        result.notes += [fade_note(result)] if faded else []  # what the fade found
         step()
     if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)
@@ -312,9 +311,8 @@ def _changed_in_time(result, threads: int):
         return result
     change = result.change
     change["time"], change["by_halves"] = tests, list(change["changed"])
-    person = ("f_h", "xi_h")
-    named = set(change["changed"]) | (set(person) if tests["changed"] else set())
-    change["changed"] = [name for name in person if name in named]
+    named = set(change["changed"]) | (set(PERSON) if tests["changed"] else set())
+    change["changed"] = [name for name in PERSON if name in named]
     if result.narrow_intervals:
         result.intervals.update(honest_intervals(result))
     return result

@@ -147,8 +147,8 @@ def plot_comparison(tables: dict, path=None, truth: dict | None = None, names=("
                           gridspec_kw=grid)
     axes = panels[:, 0]
     markers = "osD^v<>"
-    colors = {label: f"C{k}" for k, label in enumerate(list(tables) + [a for a in (answers.index if answers is not
-                                                                                   None else []) if a not in tables])}
+    only_answers = [] if answers is None else [label for label in answers.index if label not in tables]
+    colors = {label: f"C{k}" for k, label in enumerate([*tables, *only_answers])}
     width = 0.8 / max(len(tables), 1)
     for k, (label, table) in enumerate(tables.items()):
         ok = table[table["status"] == "ok"]
