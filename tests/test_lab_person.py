@@ -174,3 +174,21 @@ def test_a_trimmed_records_sds_are_the_wider_of_the_information_and_the_sandwich
     for i, name in enumerate(("f_h", "xi_h")):
         assert lab.sd(name) == pytest.approx(plain.sd(name), rel=1e-12)
         assert lab.sd(name) == pytest.approx(factors[name] * max(oim[i], sandwich[i]), rel=1e-9)
+
+
+@pytest.mark.slow
+def test_compare_puts_the_person_identify_gives_beside_the_cycles_on_a_lab_export(lab, tmp_path, capsys):
+    """compare's record row is the person identify fits from the record as read (1000 Hz, hum found and removed
+    at that rate, the bout trimmed), not a person of the record compare decimated to --rate for its cycles
+    (2.594 Hz there against 2.637 Hz on this record)."""
+    from smd_statespace.io import read_record
+
+    path = tmp_path / "lab.csv"
+    lab.write(path)
+    assert main(["compare", str(path), "--mass", str(lab.record.mass), "--estimators", "record", "--quiet",
+                 "--out", str(tmp_path / "c")]) == 0
+    capsys.readouterr()
+    row = pd.read_csv(tmp_path / "c" / "compare_table.csv", index_col=0).loc["record"]
+    person = identify_person(read_record(path, lab.record.mass))
+    assert row["f_h"] == pytest.approx(person.f_h, rel=1e-9)
+    assert (row["f_h_low"], row["f_h_high"]) == pytest.approx(person.intervals["f_h"], rel=1e-9)
