@@ -172,10 +172,10 @@ class PersonDynamics:
         return True, True
 
     def _path_jacobian(self, at) -> np.ndarray:
-        """Central differences of the rates along a path in the dynamic slots only, shape (N, n, n).
+        """Central differences of the dynamic slots' rates along a path, in the dynamic slots, shape (N, n_x, n_x).
 
-        The columns a linearisation needs (the model's full ``rate_jacobian``
-        differences every slot, five times the work); the others are left 0.
+        Only the block a linearisation needs (the model's full ``rate_jacobian``
+        differences every slot, five times the work, and fills an (N, n, n) array of which this is a corner).
         """
         columns = self.dynamic
         step = JACOBIAN_STEP * np.maximum(1.0, np.abs(at[:, columns]))  # (N, c)
@@ -184,9 +184,7 @@ class PersonDynamics:
         moment = expand_time(self.time)
         plus = self.model.rate(at[:, None, :] + shift, moment, self.inputs)
         minus = self.model.rate(at[:, None, :] - shift, moment, self.inputs)
-        jac = np.zeros(at.shape + (at.shape[1],))
-        jac[:, :, columns] = np.swapaxes(plus - minus, 1, 2) / (2.0 * step[:, None, :])
-        return jac
+        return np.ascontiguousarray(np.swapaxes((plus - minus)[:, :, columns], 1, 2) / (2.0 * step[:, None, :]))
 
     def linearise(self, f_h, xi_h, values=None, nominal=None) -> LinearisedSystem:
         """``A, b, c, h_x, d`` at ``f_h`` (Hz), ``xi_h`` and the effects' parameter ``values``.
@@ -210,17 +208,18 @@ class PersonDynamics:
             if nominal is None:
                 raise OptionError("a nonlinear effect needs a nominal path to be linearised about")
             at = self._states(f_h, xi_h, values, nominal, self.time.size)
-            jac = self._path_jacobian(at)
-            A_full = jac[:, dyn][:, :, dyn]
-            c = model.rate(at, self.time, self.inputs)[:, dyn] - np.einsum("kij,kj->ki", A_full, nominal)
+            A = self._path_jacobian(at)
+            c = model.rate(at, self.time, self.inputs)[:, dyn] - np.einsum("kij,kj->ki", A, nominal)
             d = c[:, dyn.index(U_DOT)]
             # the force enters linearly with a gain that does not depend on the state (checked in _linearity):
             # its column from the rest state, exact, where differences along a far path lose it to rounding
+            # (the force's gain of 1 was checked once, _linearity; along a path the differences' rounding grows
+            # with the rates, so it is not checked again here)
             rest = self._states(f_h, xi_h, values, None, 1)
-            jac[:, :, self._a0] = model.rate_jacobian(rest, self.time[:1], self.inputs)[:, :, self._a0]
+            column = model.rate_jacobian(rest, self.time[:1], self.inputs)[0, dyn, self._a0] / G
+            return LinearisedSystem(A, np.repeat(column[None, :], A.shape[0], axis=0), c,
+                                    np.ascontiguousarray(A[:, dyn.index(U_DOT), :]), d)
         A = jac[:, dyn][:, :, dyn]
         b = jac[:, dyn, self._a0] / G
         hx = jac[:, U_DOT, dyn]
-        # the force's gain of 1 was checked once (_linearity); along a path the differences' rounding grows with
-        # the rates (a nonlinear term on a far path), so it is not checked again here
         return LinearisedSystem(A, b, c, hx, d)
