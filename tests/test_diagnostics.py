@@ -308,3 +308,23 @@ def test_summary_and_figures(harmonics, tmp_path):
     assert chosen.axes[0].get_xlim()[0] >= harmonics.time[harmonics.cycle_index == harmonics.cycle_index[-1]][0]
     with pytest.raises(OptionError):
         harmonics.plot_fit(cycles=[10_000])
+
+
+def test_the_person_and_the_per_cycle_check_draw_the_same_four_innovation_panels(harmonics, long_fit):
+    """One drawing of the innovations for every estimator: each figure's first four panels carry the result's own
+    tests (the per-cycle check's within cycles, the person's from statsmodels at the estimate)."""
+    person = long_fit.plot_diagnostics()
+    check = harmonics.plot_diagnostics()
+    titles = [[ax.get_title(loc="left") for ax in figure.axes[:4]] for figure in (person, check)]
+    for figure in titles:
+        assert [title[:3] for title in figure] == ["(1)", "(2)", "(3)", "(4)"]
+    tests = long_fit.test_pvalues()
+    assert titles[0][3].endswith(f"Ljung-Box p = {tests['ljung_box_p']:.2g}")
+    assert titles[0][1].endswith(f"Jarque-Bera p = {tests['jarque_bera_p']:.2g}")
+    assert titles[1][3] == f"(4) ACF within cycles; Ljung-Box p = {harmonics.whiteness_pvalue():.2g}"
+    # the person's series is drawn against its record's time, with a mark at every cycle start inside it
+    series = person.axes[0]
+    assert np.array_equal(series.get_lines()[0].get_xdata(), long_fit.model.time)
+    boundaries = long_fit.model.timing.boundaries
+    inside = (boundaries >= long_fit.model.time[0]) & (boundaries <= long_fit.model.time[-1])
+    assert len(series.get_lines()) == 4 + int(inside.sum())  # the series, the +-2 and 0 lines, the marks

@@ -3,9 +3,9 @@
 :class:`PersonResult` is returned by
 :func:`~smd_statespace.person.fit.identify_person`. Like statsmodels'
 ``MLEResults`` it carries its tests (``test_serial_correlation``,
-``test_normality``, ``test_heteroskedasticity``) and ``plot_diagnostics``,
-delegated to statsmodels' results at the estimate
-(:class:`~smd_statespace.person.statespace.RecordStateSpace`), plus what a
+``test_normality``, ``test_heteroskedasticity``: statsmodels' at the estimate,
+:class:`~smd_statespace.person.statespace.RecordStateSpace`) and ``plot_diagnostics``
+(:mod:`~smd_statespace.plotting.innovations`, as a per-cycle check), plus what a
 structural engineer needs: ``f_h``, ``xi_h``, ``K_h``, ``C_h`` (Eq. 17-18) and
 the force template's load factors (Eq. 5) with standard errors and their
 cycle-to-cycle spread, one row per cycle from the smoother (:attr:`cycles`),
@@ -482,7 +482,7 @@ class PersonResult:
     # ------------------------------------------------------------------ statsmodels view
     @cached_property
     def statespace_results(self):
-        """statsmodels' ``MLEResults`` at the estimate (smoother, tests, ``plot_diagnostics``)."""
+        """statsmodels' ``MLEResults`` at the estimate (smoother, tests)."""
         from .statespace import RecordStateSpace
 
         ssm = RecordStateSpace(self.model, self.filtered["delta"])
@@ -586,8 +586,8 @@ class PersonResult:
 
     # ------------------------------------------------------------------ figures
     def plot_diagnostics(self, path=None, lags=None):
-        """statsmodels' four-panel residual diagnostics of the standardised innovations; saved as PNG if ``path``
-        (:func:`~smd_statespace.plotting.person.plot_person_diagnostics`)."""
+        """The innovations' four panels (over time, histogram, Q-Q, autocorrelation), as a per-cycle check's
+        (:func:`~smd_statespace.plotting.person.plot_person_diagnostics`); saved as PNG if ``path``."""
         from ..plotting.person import plot_person_diagnostics  # the result's own figure: matplotlib when drawn
 
         return plot_person_diagnostics(self, path, lags)

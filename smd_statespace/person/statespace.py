@@ -7,8 +7,8 @@ runs on the compiled pass of :mod:`smd_statespace.person.kalman` (measured:
 about 2-3 ms per likelihood on a 30 s record at 100 Hz, against tens of ms for
 statsmodels' filter with 3000 time-varying transition matrices); statsmodels
 then gives, at the estimate, its smoother (the force coefficients of every
-cycle), its residual tests (``test_serial_correlation``, ``test_normality``,
-``test_heteroskedasticity``) and ``plot_diagnostics``.
+cycle) and its residual tests (``test_serial_correlation``, ``test_normality``,
+``test_heteroskedasticity``).
 
 The linear unknowns that the compiled pass concentrates out (template,
 initial ``u, u_dot``, regressor coefficients) enter here at their estimates:

@@ -13,10 +13,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
-
 from ..diagnostics.check import PEAK_FALSE_ALARM
 from ..errors import OptionError
+from .innovations import Innovations, plot_innovation_panels
 from .save import save
 
 __all__ = ["plot_fit", "plot_diagnostics"]
@@ -136,10 +135,7 @@ def plot_diagnostics(check, path=None, lags=None):
     bottom = grid[3, :].subgridspec(1, 2, width_ratios=[1.9, 1.0], wspace=0.42)
     ax_phase = fig.add_subplot(bottom[0, 0])
     ax_corr = fig.add_subplot(bottom[0, 1])
-    _plot_innovations(check, ax_time)
-    _plot_histogram(check, ax_hist)
-    _plot_qq(check, ax_qq)
-    _plot_acf(check, ax_acf, lags)
+    plot_innovation_panels(_innovations(check, lags), ax_time, ax_hist, ax_qq, ax_acf)
     _plot_spectrum(check, ax_spec)
     _plot_phase_profile(check, ax_phase)
     _plot_correlations(check, ax_corr)
@@ -149,65 +145,16 @@ def plot_diagnostics(check, path=None, lags=None):
                  f"{check.residual_rms_bw:.2f} % BW, {check.n_cycles} cycles", fontsize=12, x=0.07, ha="left")
     return save(fig, path, 100)
 
-def _plot_innovations(check, ax):
-    """Panel (1): standardised innovations over time, with cycle starts."""
-    z = check.innovations
-    ax.plot(check.time, z, color="tab:blue", lw=0.6)
-    for level in (-2, 2):
-        ax.axhline(level, color="tab:red", lw=0.8, ls="--")
-    ax.axhline(0.0, color="0.3", lw=0.6)
-    _cycle_marks(check, ax, check.time)
-    ax.set_xlim(check.time[0], check.time[-1])
-    outside = float(np.mean(np.abs(z) > 2.0))
-    ax.set_title(f"(1) Standardised innovations of $\\ddot u$: sd {np.std(z):.2f} (1 expected), "
-                      f"{100 * outside:.1f} % beyond $\\pm$2 (4.6 % expected); grey lines: cycle starts",
-                      loc="left", fontsize=10)
-    ax.set_xlabel("time (s)")
-    ax.grid(True, lw=0.4, alpha=0.5)
 
-def _plot_histogram(check, ax):
-    """Panel (2): histogram of the innovations against N(0, 1)."""
-    z = check.innovations
-    normal = check.test_normality()
-    span = max(4.0, float(np.max(np.abs(z))) if z.size else 4.0)
-    ax.hist(z, bins=np.linspace(-span, span, 41), density=True, color="tab:blue", alpha=0.6,
-                 label="innovations")
-    grid_x = np.linspace(-span, span, 200)
-    ax.plot(grid_x, stats.norm.pdf(grid_x), color="k", lw=1.2, label="N(0, 1)")
-    ax.plot(grid_x, stats.norm.pdf(grid_x, scale=max(np.std(z), 1e-12)), color="tab:green", lw=1.0,
-                 ls="--", label=f"N(0, {np.std(z):.2f}$^2$)")
-    ax.set_title(f"(2) Histogram; Jarque-Bera p = {normal['pvalue']:.2g}", loc="left", fontsize=10)
-    ax.legend(fontsize=7, loc="upper right")
-    ax.set_xlabel("standardised innovation")
+def _innovations(check, lags: int) -> Innovations:
+    """The check's standardised innovations and their tests, for the four panels every diagnostics figure begins
+    with (:mod:`~smd_statespace.plotting.innovations`): the filter starts afresh in every cycle, so the
+    autocorrelation and the Ljung-Box test are within cycles."""
+    return Innovations(time=check.time, values=check.innovations, acf=check.pooled_acf(lags),
+                       ljung_box_p=check.whiteness_pvalue(lags), normality=check.test_normality(),
+                       sample_interval=1.0 / check.fs, marks=np.array([c.t_start for c in check.cycles]),
+                       acf_name="ACF within cycles")
 
-def _plot_qq(check, ax):
-    """Panel (3): normal Q-Q plot of the innovations."""
-    z = check.innovations
-    normal = check.test_normality()
-    (theoretical, ordered), _ = stats.probplot(z, dist="norm")
-    ax.plot(theoretical, ordered, ".", ms=2.5, color="tab:blue")
-    limit = max(float(np.max(np.abs(theoretical))), float(np.max(np.abs(ordered))))
-    ax.plot([-limit, limit], [-limit, limit], color="k", lw=1.0, label="N(0, 1)")
-    ax.set_title(f"(3) Normal Q-Q: skew {normal['skew']:.2f}, kurtosis {normal['kurtosis']:.2f}",
-                    loc="left", fontsize=10)
-    ax.set_xlabel("normal quantile")
-    ax.set_ylabel("innovation quantile")
-    ax.legend(fontsize=7, loc="upper left")
-
-def _plot_acf(check, ax, lags):
-    """Panel (4): autocorrelation within cycles with the Ljung-Box p-value."""
-    z = check.innovations
-    acf = check.pooled_acf(lags)
-    pvalue = check.whiteness_pvalue(lags)
-    ax.vlines(np.arange(1, lags + 1), 0.0, acf[1:], color="tab:blue", lw=2.0)
-    ax.plot(np.arange(1, lags + 1), acf[1:], "o", color="tab:blue", ms=3)
-    band = 1.96 / np.sqrt(z.size)
-    ax.axhspan(-band, band, color="tab:blue", alpha=0.15, lw=0, label="$\\pm 1.96/\\sqrt{n}$")
-    ax.axhline(0.0, color="0.3", lw=0.6)
-    ax.set_xlabel(f"lag (samples, 1/{check.fs:g} s)")
-    ax.set_title(f"(4) ACF within cycles; Ljung-Box p = {pvalue:.2g}", loc="left", fontsize=10)
-    ax.legend(fontsize=7, loc="upper right")
-    ax.set_xlim(0.3, lags + 0.7)
 
 def _plot_spectrum(check, ax):
     """Panel (5): residual spectrum with the noise floor, k f_b lines and labelled peaks."""

@@ -2,8 +2,8 @@
 
 - :func:`plot_person_fit`: measured against one-step predicted COM acceleration where the fit
   is best and worst, and every cycle's load factors (``PersonResult.plot_fit``);
-- :func:`plot_person_diagnostics`: statsmodels' residual diagnostics of the innovations, against
-  time (``PersonResult.plot_diagnostics``);
+- :func:`plot_person_diagnostics`: the innovations' four panels, as a per-cycle check's
+  (``PersonResult.plot_diagnostics``, :mod:`~smd_statespace.plotting.innovations`);
 - :func:`plot_spectrum`: the innovations' spectrum with the multiples of the
   bouncing frequency marked, without and with the effects;
 - :func:`plot_compare`: measured against free-run simulated COM acceleration
@@ -28,6 +28,7 @@ from scipy import signal
 from ..measures import fit_percent
 from ..person.supremum import critical_value
 from ..person.noise_floor import measured_label
+from .innovations import Innovations, plot_innovation_panels
 from .save import save
 
 __all__ = ["free_run", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
@@ -260,18 +261,28 @@ def plot_person_fit(result, path=None, seconds=3.0, truth=None) -> Figure:
 
 
 def plot_person_diagnostics(result, path=None, lags=None) -> Figure:
-    """statsmodels' four-panel residual diagnostics of the standardised innovations; saved as PNG if ``path``."""
-    fig = result.statespace_results.plot_diagnostics(lags=lags or min(result.default_lags(), 40), figsize=(10, 7))
-    fig.suptitle(f"{_name(result)}: innovations of GRF/M - g (record-level model)")
-    series, correlogram = fig.axes[0], fig.axes[3]
-    time = result.model.time
-    for line in series.get_lines():  # statsmodels draws against the sample index: time in seconds instead
-        index = np.asarray(line.get_xdata(), dtype=float)
-        line.set_xdata(np.interp(index, np.arange(time.size), time))
-    series.set_xlim(time[0], time[-1])
-    series.set(xlabel="time (s)", title="standardised innovations")
-    correlogram.set(xlabel=f"lag (samples of {1.0 / result.record.fs:g} s)")
-    fig.subplots_adjust(hspace=0.35)  # room for the time axis' label above the Q-Q panel's title
+    """The standardised innovations over time, their histogram, normal Q-Q plot and autocorrelation with the
+    residual tests' p-values (:func:`~smd_statespace.plotting.innovations.plot_innovation_panels`, as a per-cycle
+    check's first four panels); saved as PNG if ``path``.
+
+    ``lags``: of the autocorrelation and the Ljung-Box test (default: the result's, whose p-value the summary and
+    ``test_pvalues`` give).
+    """
+    from statsmodels.tsa.stattools import acf
+
+    lags = int(lags or result.default_lags())
+    values = np.where(result.model.observed, result.standardized_innovations(), np.nan)
+    normality = result.test_normality()[0]  # statsmodels' (statistic, p-value, skew, kurtosis)
+    innovations = Innovations(time=result.model.time, values=values, acf=acf(values, nlags=lags, missing="drop"),
+                              ljung_box_p=float(result.test_serial_correlation(lags)[0, 1, lags - 1]),
+                              normality={"pvalue": normality[1], "skew": normality[2], "kurtosis": normality[3]},
+                              sample_interval=result.model.dt, marks=result.model.timing.boundaries)
+    fig = Figure(figsize=(11.0, 7.5))
+    grid = fig.add_gridspec(2, 3, height_ratios=[0.8, 1.0], hspace=0.45, wspace=0.28, left=0.07, right=0.98,
+                            top=0.9, bottom=0.08)
+    plot_innovation_panels(innovations, fig.add_subplot(grid[0, :]), *(fig.add_subplot(grid[1, i]) for i in range(3)))
+    fig.suptitle(f"{_name(result)}: innovations of GRF/M - g (record-level model, {_label(result)})", x=0.07,
+                 ha="left")
     return save(fig, path, DPI)
 
 
