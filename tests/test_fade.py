@@ -81,6 +81,11 @@ def test_a_record_bouncing_end_to_end_has_no_fade_unless_asked_and_a_bad_value_i
     assert "--fade: invalid choice" in capsys.readouterr().err
     assert main(["identify", str(path), "--mass", "70", "--estimator", "ekf", "--fade", "on"]) == 2
     assert "--fade on applies to the record-level model" in capsys.readouterr().err
+    # asked for where there is no template to fade (cycle starts from a fixed timing): said, not silently left out
+    with pytest.raises(OptionError, match="fade=True needs timing='model'"):
+        identify_person(sim.record, fade=True, timing="peaks")
+    assert main(["identify", str(path), "--mass", "70", "--fade", "on", "--timing", "template"]) == 2
+    assert "fade=True needs timing='model'" in capsys.readouterr().err
 
 
 def test_diagnoses_next_command_repeats_the_persons_options_given():

@@ -172,7 +172,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         person (a person who tires, :mod:`~smd_statespace.person.fade`; no search dimension: the factor is
         estimated with the template). "auto" (default): where ``span``
         trimmed the record to a bout of bouncing (a trial as labs export it); True: on any record; False:
-        never. ``result.notes`` says what the fade found.
+        never. ``result.notes`` says what the fade found. It scales the template of ``timing="model"``: with
+        another timing "auto" leaves it out and True is an :class:`OptionError`.
     threads : int or None
         Threads for the searches that do not depend on each other (each variation model's re-placed cycle
         starts, the halves' fits; :mod:`~smd_statespace.person.threads`): the same answer, sooner on two
@@ -241,6 +242,9 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     notes = list(prepared.notes) + floor_notes
     if timing not in ("model",) + TIMING_METHODS:
         raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
+    if fade is True and timing != "model":  # the fade scales the template the model's own timing estimates
+        raise OptionError(f"fade=True needs timing='model' (the default; --timing model): the fade scales the force "
+                          f"template that timing estimates, and timing={timing!r} has none")
     first = "template" if timing == "model" else timing
     cycle_timing = estimate_timing(record.time, record.force, n_harmonics, first, source=record.source)
     inside = np.sum((cycle_timing.boundaries > record.time[0]) & (cycle_timing.boundaries < record.time[-1]))
