@@ -21,9 +21,9 @@ of a change (3 to 0 of 16).
 So a record whose measured noise (:func:`measured_noise`) is below :data:`NOISE_FLOOR` of body
 weight is fitted with independent normal noise added to make up the difference (the level at
 which the intervals were calibrated, :data:`~smd_statespace.person.calibration.CALIBRATION`),
-drawn from a generator seeded by the record's own samples: the same record gives the same
-answer. The result says so in its notes; ``noise_floor=None`` (``--noise-floor 0``) fits the
-record as measured.
+drawn from a generator seeded by the record's own samples (:func:`record_seed`, rounded: the same
+record, also read back from a CSV, gives the same answer). The result says so in its notes;
+``noise_floor=None`` (``--noise-floor 0``) fits the record as measured.
 """
 
 from __future__ import annotations
@@ -35,8 +35,8 @@ import numpy as np
 from ..errors import OptionError
 from ..io import G
 
-__all__ = ["NOISE_FLOOR", "MAX_NOISE_FLOOR", "NOISE_BAND", "check_noise_floor", "measured_noise", "raise_to_floor",
-           "noise_added", "measured_label"]
+__all__ = ["NOISE_FLOOR", "MAX_NOISE_FLOOR", "NOISE_BAND", "SEED_BLOCKS", "check_noise_floor", "measured_noise",
+           "record_seed", "raise_to_floor", "noise_added", "measured_label"]
 
 NOISE_FLOOR = 0.01
 """Default noise floor: the sd of the fitted samples' noise, as a fraction of body weight (1 % BW)."""
@@ -101,6 +101,27 @@ def measured_noise(y, fs) -> float:
     return float(np.sqrt(np.mean(power[band]))) if band.sum() >= 8 else float("nan")
 
 
+SEED_BLOCKS = 16
+"""Blocks of the record whose means (with its length and sd) seed the noise floor's draw (:func:`record_seed`)."""
+
+
+def record_seed(samples) -> np.random.SeedSequence:
+    """The seed of the noise floor's draw, from the record itself: its number of samples, sd and the means of
+    :data:`SEED_BLOCKS` consecutive blocks of it, each rounded to 0.1 of the samples' unit.
+
+    Rounded so that a copy of the record written with fewer digits draws the same noise: a CSV at 6 decimals (the
+    library's own, :func:`~smd_statespace.io.write_record`) moves a block's mean by about 1e-7. Seeded by the
+    samples' bytes, as it was until 2026-11-29, a lab export and its copy read back from the library's CSV gave
+    2.64 and 2.48 Hz. Records that differ by less than the rounding draw the same noise, which is as good a draw
+    for each.
+    """
+    x = np.asarray(samples, dtype=float)
+    summary = [np.nanstd(x)] + [np.nanmean(block) for block in np.array_split(x, SEED_BLOCKS) if block.size]
+    key = f"{x.size} " + " ".join(f"{value:.1f}" for value in summary)
+    digest = hashlib.sha256(key.encode("ascii")).digest()
+    return np.random.SeedSequence(int.from_bytes(digest[:16], "little"))
+
+
 def raise_to_floor(y, observed, fs, noise_floor, seed_from=None) -> tuple:
     """``y`` with white noise added up to ``noise_floor`` g of sd, and the note that says so.
 
@@ -115,9 +136,9 @@ def raise_to_floor(y, observed, fs, noise_floor, seed_from=None) -> tuple:
     noise_floor : float
         Fraction of body weight (:func:`check_noise_floor`); 0 leaves ``y`` as it is.
     seed_from : ndarray, optional
-        The samples whose bytes seed the draw (default ``y``): ``identify_person`` gives the force as
-        read from the file, which is the same on every machine, where ``y`` has been through the front
-        end's floating-point arithmetic.
+        The samples that seed the draw (:func:`record_seed`; default ``y``): ``identify_person`` gives the
+        force as read from the file, which is the same on every machine, where ``y`` has been through the
+        front end's floating-point arithmetic.
 
     Returns
     -------
@@ -134,8 +155,7 @@ def raise_to_floor(y, observed, fs, noise_floor, seed_from=None) -> tuple:
     if not np.isfinite(measured) or measured >= target:
         return y, []
     added = float(np.sqrt(target**2 - measured**2))
-    digest = hashlib.sha256(np.ascontiguousarray(y if seed_from is None else seed_from, dtype=float).tobytes()).digest()
-    rng = np.random.default_rng(np.random.SeedSequence(int.from_bytes(digest[:16], "little")))
+    rng = np.random.default_rng(record_seed(y if seed_from is None else seed_from))
     note = (f"{NOTE_START}{100 * measured / G:.2g} % BW noise per fitted sample) than the "
             f"{100 * noise_floor:g} % BW the model is trusted to: white noise of {100 * added / G:.2g} % BW was added "
             "before the fit (drawn from the record's own samples, so the same record gives the same answer), so that "
