@@ -54,11 +54,16 @@ exports (20 s bouts) ``c / sd`` scattered as a standard normal (at 2 sds, 2 of t
 or grew: one in twenty, as a standard normal has it); a person tiring by 30-40 % gives 20 sds or more."""
 
 
-def fading(fade, trimmed: bool) -> bool:
-    """Whether the fade is modelled: ``fade`` True, or "auto" on a ``trimmed`` record. An :class:`OptionError`
-    names a value not in :data:`FADE_OPTIONS`."""
+def fading(fade, trimmed: bool, timing: str = "model") -> bool:
+    """Whether the fade is modelled: ``fade`` True, or "auto" on a ``trimmed`` record, with ``timing="model"``
+    (the fade scales the template that the model's own timing estimates; another timing has none, and "auto"
+    leaves the fade out). An :class:`OptionError` names a value not in :data:`FADE_OPTIONS`, or ``fade=True``
+    with another timing."""
     if fade is not True and fade is not False and fade != "auto":
         raise OptionError(f"fade={fade!r} is not one of: 'auto' (where the record was trimmed to a bout), True, False")
+    if fade is True and timing != "model":
+        raise OptionError(f"fade=True needs timing='model' (the default; --timing model): the fade scales the force "
+                          f"template that timing estimates, and timing={timing!r} has none")
     return fade is True or (fade == "auto" and trimmed)
 
 

@@ -236,15 +236,12 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     regressors = [replace(r, values=v) for r, v in zip(regressors, prepared.extra)]
     if prepared.trimmed:
         regressors += zero_drift(record.time)
-    faded = fading(fade, prepared.trimmed)
+    faded = fading(fade, prepared.trimmed, timing)
     y, floor_notes = raise_to_floor(record.force / record.mass - G, observed, record.fs, noise_floor,  # Eq. 3
                                     seed_from=measured_force)
     notes = list(prepared.notes) + floor_notes
     if timing not in ("model",) + TIMING_METHODS:
         raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
-    if fade is True and timing != "model":  # the fade scales the template the model's own timing estimates
-        raise OptionError(f"fade=True needs timing='model' (the default; --timing model): the fade scales the force "
-                          f"template that timing estimates, and timing={timing!r} has none")
     first = "template" if timing == "model" else timing
     cycle_timing = estimate_timing(record.time, record.force, n_harmonics, first, source=record.source)
     inside = np.sum((cycle_timing.boundaries > record.time[0]) & (cycle_timing.boundaries < record.time[-1]))
