@@ -328,3 +328,29 @@ def test_the_person_and_the_per_cycle_check_draw_the_same_four_innovation_panels
     boundaries = long_fit.model.timing.boundaries
     inside = (boundaries >= long_fit.model.time[0]) & (boundaries <= long_fit.model.time[-1])
     assert len(series.get_lines()) == 4 + int(inside.sum())  # the series, the +-2 and 0 lines, the marks
+
+
+def test_the_person_and_the_per_cycle_check_answer_by_the_same_names(harmonics, long_fit):
+    """One answer's vocabulary for every estimator (smd_statespace.answers): parameters with intervals and whether
+    determined, the log-likelihood, innovations, residual tests, the free run and its fit."""
+    from smd_statespace.answers import RecordAnswer
+    from smd_statespace.identify.pooled import pool_cycles
+
+    assert isinstance(long_fit, RecordAnswer) and isinstance(harmonics, RecordAnswer)
+    person = long_fit.parameters()
+    assert person.loc["f_h", "value"] == long_fit.f_h and person.loc["xi_h", "sd"] == long_fit.sd("xi_h")
+    assert tuple(person.loc["f_h", ["low", "high"]]) == tuple(long_fit.intervals["f_h"])
+    assert person.loc["f_h", "determined"] == long_fit.determined("f_h")
+    assert list(person.columns) == list(harmonics.parameters().columns) == ["value", "sd", "low", "high", "determined"]
+    cycles = harmonics.parameters()
+    assert cycles.loc["f_h", "value"] == pool_cycles(harmonics.table).loc["f_h", "value"]
+    assert not cycles["determined"].any()  # the per-cycle method determines no parameter of the person
+    assert set(long_fit.test_pvalues()) == set(harmonics.test_pvalues())
+    assert harmonics.test_pvalues()["ljung_box_p"] == harmonics.whiteness_pvalue()
+    # the free run as GRF / M - g, and its fit %, the same quantity for both
+    assert np.allclose(harmonics.free_run() * harmonics.preprocessed.mass, harmonics.simulated)
+    observed = long_fit.model.observed
+    assert long_fit.fit_percent == fit_percent(long_fit.model.y[observed], long_fit.free_run()[observed])
+    # the person's run repeats one template in every cycle, the check's each cycle's own force: both follow the record
+    assert 50 < long_fit.fit_percent <= 100 and 50 < harmonics.fit_percent <= 100
+    assert np.isfinite(long_fit.loglike) and np.isfinite(harmonics.loglike)

@@ -40,8 +40,7 @@ from ..measures import fit_percent, rms
 from .free_simulation import path_sensitivity
 from .phase import phase_locked, phase_profile
 from .report import summary_text
-from .residual_tests import (cycle_numbers, default_lags, jarque_bera_test, ljung_box_table, pooled_acf, split_cycles,
-                             variance_change_test)
+from .residual_tests import CycleResidualTests
 from .spectra import HARMONIC_TOLERANCE, PEAK_FALSE_ALARM, SEGMENT_CYCLES  # noqa: F401 (importable from here too)
 from .spectra import residual_spectrum as spectrum_with_peaks, welch_spectrum
 from .subspace import remove_projections
@@ -91,7 +90,7 @@ def check_model(preprocessed=None, model=None, estimator="ekf", runner=None, ini
     return ModelCheck(runner.table_, runner.model, runner.preprocessed_, runner.results_, initial_state)
 
 
-class ModelCheck:
+class ModelCheck(CycleResidualTests):
     """The identified model against the measurement: fit, residual tests, spectra, correlations.
 
     Built by :func:`check_model`. Every identified cycle (table ``status`` "ok")
@@ -191,6 +190,27 @@ class ModelCheck:
     # -- derived numbers ----------------------------------------------------
 
     @property
+    def loglike(self) -> float:
+        """The cycles' log-likelihoods summed, each at its own identified parameters (:attr:`log_likelihood`): a
+        likelihood of the per-cycle fits, not of one person for the record, so not comparable with the
+        record-level person's ``loglike``."""
+        return self.log_likelihood
+
+    def parameters(self, level: float = 0.9) -> pd.DataFrame:
+        """The answer by parameter, as every estimator's answer gives it
+        (:class:`~smd_statespace.answers.RecordAnswer`):
+        the cycles' median and central ``level`` range, never determined
+        (:func:`~smd_statespace.identify.pooled.pool_cycles`, whose docstring says why)."""
+        from ..identify.pooled import pool_cycles
+
+        return pool_cycles(self.table, level)[["value", "sd", "low", "high", "determined"]]
+
+    def free_run(self) -> np.ndarray:
+        """The free simulation as the COM acceleration ``GRF / M_h - g`` (m/s^2, :attr:`simulated` over the mass),
+        cycle after cycle, each from its own identified parameters and starting state."""
+        return self.simulated / float(self.preprocessed.mass)
+
+    @property
     def n_cycles(self) -> int:
         """Number of identified cycles checked."""
         return len(self.cycles)
@@ -214,62 +234,6 @@ class ModelCheck:
         """
         return float(np.mean(self.innovations**2))
 
-    def _per_cycle(self, values):
-        """Split a (T,) array into the cycles' pieces."""
-        return split_cycles(values, self.cycle_index)
-
-    # -- tests on the standardised innovations ------------------------------
-
-    def default_lags(self) -> int:
-        """Default Ljung-Box lag within a cycle: a quarter of the median cycle length, at most 20 (samples)."""
-        return default_lags(self._per_cycle(self.innovations))
-
-    def test_serial_correlation(self, lags=None, series="innovations") -> pd.DataFrame:
-        """Ljung-Box test of the standardised innovations (or of the residual), per cycle and combined.
-
-        The filter starts afresh in every cycle, so each cycle is tested
-        separately and the statistics add (:func:`residual_tests.ljung_box_table`).
-
-        Parameters
-        ----------
-        lags : int, optional
-            Largest lag in samples within a cycle; default :meth:`default_lags`
-            (:func:`residual_tests.default_lags`). Cycles shorter than ``2 lags`` use ``n // 2``.
-        series : {"innovations", "residual"}
-            The filter's standardised innovations (default, as statsmodels) or the
-            free-simulation :attr:`residual`. The article filter's innovations are
-            serially correlated even when the model is right (its ``u``, ``u_dot``
-            channels integrate the measured acceleration; its observation noise is
-            10 % of the RMS), so a missing effect is judged on the residual:
-            ``lb_stat / lags`` about 1.2-1.9 without a missing effect, 7-10 with one
-            (measured, see :mod:`smd_statespace.diagnostics.missing`).
-
-        Returns
-        -------
-        pandas.DataFrame
-            One row per cycle (index ``cycle``): ``nobs``, ``lags``, ``lb_stat``,
-            ``lb_pvalue``; a last row ``"combined"`` (summed statistic and degrees of freedom, chi-square p-value).
-        """
-        lags = self.default_lags() if lags is None else int(lags)
-        if lags < 1:
-            raise OptionError(f"lags must be a whole number >= 1, got {lags!r}")
-        if series not in ("innovations", "residual"):
-            raise OptionError(f"series must be 'innovations' or 'residual', got {series!r}")
-        values = self.innovations if series == "innovations" else self.residual
-        return ljung_box_table(self._per_cycle(values), self._cycle_numbers(), lags)
-
-    def whiteness_pvalue(self, lags=None, series="innovations") -> float:
-        """Combined Ljung-Box p-value of :meth:`test_serial_correlation`."""
-        return float(self.test_serial_correlation(lags, series).loc["combined", "lb_pvalue"])
-
-    def serial_correlation_ratio(self, lags=None, series="residual") -> float:
-        """Combined Ljung-Box statistic per degree of freedom: about 1 for a white series (default: the residual).
-
-        Unlike the p-value it does not grow with the record length, so it compares records and models.
-        """
-        combined = self.test_serial_correlation(lags, series).loc["combined"]
-        return float(combined["lb_stat"] / combined["lags"]) if combined["lags"] > 0 else float("nan")
-
     @property
     def n_absorbable(self) -> int:
         """Dimensions of the output changes re-identifying the cycles could make (:meth:`remove_absorbable`).
@@ -278,24 +242,6 @@ class ModelCheck:
         freedom are ``residual.size - n_absorbable``.
         """
         return int(sum(basis.shape[1] for basis in self._absorbable_bases))
-
-    def _cycle_numbers(self):
-        return cycle_numbers(self.cycle_index)
-
-    def test_normality(self) -> dict:
-        """Jarque-Bera test of the standardised innovations, all cycles pooled: a dict of ``statistic``, ``pvalue``,
-        ``skew`` and ``kurtosis`` (3 for a normal distribution)."""
-        return jarque_bera_test(self.innovations)
-
-    def test_heteroskedasticity(self, subset_length=1.0 / 3.0) -> dict:
-        """Does the residual variance change over the record? (:func:`residual_tests.variance_change_test`).
-
-        ``subset_length`` is the fraction of the record in each of the two compared
-        parts. Returns a dict of ``statistic``, ``pvalue`` (statsmodels' breakvar test
-        of the standardised innovations) and ``residual_ratio`` (the free-simulation
-        residual's mean square, last part over first).
-        """
-        return variance_change_test(self.innovations, self.residual, subset_length)
 
     # -- spectra (diagnostics.spectra) ------------------------------------------
 
@@ -585,11 +531,6 @@ class ModelCheck:
         from ..plotting.check import plot_fit
 
         return plot_fit(self, path, cycles)
-
-    def pooled_acf(self, nlags=None) -> np.ndarray:
-        """Autocorrelation of the standardised innovations, pooled within cycles (lags 0..nlags)."""
-        nlags = self.default_lags() if nlags is None else int(nlags)
-        return pooled_acf(self._per_cycle(self.innovations), nlags)
 
     def plot_diagnostics(self, path=None, lags=None):
         """One figure to read at a glance where and how the model fails

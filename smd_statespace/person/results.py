@@ -29,12 +29,13 @@ from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIO
                         plausible_variations, stands_in_for_force, variation_disagreement)
 from .model import RecordModel
 from .report import person_warnings, result_dict, summary_text, table_row
+from .statespace import RecordChecks
 
 __all__ = ["PersonResult", "DETERMINED_FRACTION", "MISFIT_SHARE", "PRIOR_SD"]
 
 
 @dataclass
-class PersonResult:
+class PersonResult(RecordChecks):
     """One person identified from one record.
 
     Attributes
@@ -479,15 +480,6 @@ class PersonResult:
         gc = np.array([c / f_h, c / xi_h])
         return {"k_h": k, "k_h_sd": float(np.sqrt(gk @ cov @ gk)), "c_h": c, "c_h_sd": float(np.sqrt(gc @ cov @ gc))}
 
-    # ------------------------------------------------------------------ statsmodels view
-    @cached_property
-    def statespace_results(self):
-        """statsmodels' ``MLEResults`` at the estimate (smoother, tests)."""
-        from .statespace import RecordStateSpace
-
-        ssm = RecordStateSpace(self.model, self.filtered["delta"])
-        return ssm.smooth(self.params, cov_type="none")
-
     @cached_property
     def cycles(self) -> pd.DataFrame:
         """One row per force cycle: times, ``f_b``, smoothed coefficients and load factors with sds."""
@@ -515,42 +507,16 @@ class PersonResult:
             table[f"blf_{i}_sd"] = np.sqrt(np.einsum("ci,cij,cj->c", grad, sub, grad))
         return table
 
-    def standardized_innovations(self) -> np.ndarray:
-        """One-step innovations divided by their predicted sd (white N(0, 1) if the model fits)."""
-        return self.model.innovations(self.params, self.filtered)[0]
-
-    def test_serial_correlation(self, lags=None):
-        """Ljung-Box test of the standardised innovations (statsmodels ``test_serial_correlation``)."""
-        lags = lags if lags is not None else self.default_lags()
-        return self.statespace_results.test_serial_correlation("ljungbox", lags=lags)
-
-    def default_lags(self) -> int:
-        """Lags of the residual tests: one bouncing cycle's samples, at least 10."""
-        return int(max(10, round(self.record.fs / np.median(self.model.timing.f_b))))
-
-    def test_normality(self):
-        """Jarque-Bera test of the standardised innovations."""
-        return self.statespace_results.test_normality("jarquebera")
-
-    def test_heteroskedasticity(self):
-        """Test of a change of innovation variance between the first and last third."""
-        return self.statespace_results.test_heteroskedasticity("breakvar")
-
-    def test_pvalues(self) -> dict:
-        """``ljung_box_p`` (and its statistic ``ljung_box_q``), ``jarque_bera_p``, ``heteroskedasticity_p`` and the
-        innovations' kurtosis."""
-        lb = self.test_serial_correlation()
-        lags = self.default_lags()
-        innov = self.standardized_innovations()[self.model.observed]  # a missing sample has no innovation
-        centred = innov - innov.mean()
-        return {
-            "ljung_box_p": float(lb[0, 1, lags - 1]),
-            "ljung_box_q": float(lb[0, 0, lags - 1]),
-            "ljung_box_lags": lags,
-            "jarque_bera_p": float(self.test_normality()[0, 1]),
-            "heteroskedasticity_p": float(self.test_heteroskedasticity()[0, 1]),
-            "kurtosis": float(np.mean(centred**4) / np.mean(centred**2) ** 2),
-        }
+    def parameters(self) -> pd.DataFrame:
+        """The answer by parameter, as every estimator's answer gives it
+        (:class:`~smd_statespace.answers.RecordAnswer`):
+        ``value``, ``sd``, ``low``, ``high`` (the 90 % interval) and ``determined``, for ``f_h`` (Hz), ``xi_h`` and the
+        template's ``blf_i`` (g)."""
+        flat = self.to_dict()
+        names = ["f_h", "xi_h"] + [f"blf_{i}" for i in range(1, self.model.n_harmonics + 1) if f"blf_{i}" in flat]
+        rows = {name: {"value": flat[name], "sd": flat[f"{name}_sd"], "low": flat[f"{name}_low"],
+                       "high": flat[f"{name}_high"], "determined": bool(flat[f"{name}_determined"])} for name in names}
+        return pd.DataFrame.from_dict(rows, orient="index").rename_axis("parameter")
 
     # ------------------------------------------------------------------ words
     @property

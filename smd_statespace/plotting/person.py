@@ -31,7 +31,7 @@ from ..person.noise_floor import measured_label
 from .innovations import Innovations, plot_innovation_panels
 from .save import save
 
-__all__ = ["free_run", "plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
+__all__ = ["plot_person_fit", "plot_person_diagnostics", "plot_spectrum", "plot_compare",
            "plot_held_out", "plot_floor_correlation", "plot_candidates", "plot_step_scan"]
 
 COLORS = {"without": "tab:red", "with": "tab:blue"}
@@ -56,16 +56,6 @@ def _pairs(result) -> list:
     if result.before is None:
         return [("model", result)]
     return [("without", result.before), ("with", result)]
-
-
-def free_run(result) -> np.ndarray:
-    """The COM acceleration ``GRF / M_h - g`` (m/s^2) the model gives when simulated freely over the record.
-
-    :meth:`~smd_statespace.person.model.RecordModel.free_run` at the fit: the record's template in every cycle
-    (the cycles' own variation is what the model leaves to chance; a smoothed per-cycle force would absorb the
-    model's misfit too), from the estimated initial state, without any correction by the measurement.
-    """
-    return result.model.free_run(result.params, result.filtered["delta"])
 
 
 def plot_spectrum(result, path=None) -> Figure:
@@ -144,14 +134,14 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None, meas
 def plot_compare(result, path=None, seconds: float = 3.0) -> Figure:
     """Measured against free-run simulated ``GRF / M_h - g``, with the fit % (MATLAB ``compare``).
 
-    The simulation is :func:`free_run` (the template force in every cycle), so
+    The simulation is ``PersonResult.free_run`` (the template force in every cycle), so
     the fit % counts the cycles' own variation as misfit for every model alike;
     what an effect changes is the part of the response the template cannot
     make. Top: the whole record's residual (measured - simulated) without and
     with the effects. Below: the window of ``seconds`` where the model without
     the effects misses most, and the middle of the record.
     """
-    runs = [(key, _label(fitted), free_run(fitted)) for key, fitted in _pairs(result)]
+    runs = [(key, _label(fitted), fitted.free_run()) for key, fitted in _pairs(result)]
     title = f"{_name(result)}: free-run simulation against the measurement"
     return save(_compare_figure(result.model.time, result.model.y, runs, title, seconds,
                                 measured=measured_label(result.notes)), path, DPI)
