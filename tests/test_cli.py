@@ -229,6 +229,9 @@ def test_identify_writes_results_sidecar_and_figures(short_record, tmp_path, cap
     pooled = pd.read_csv(out / "pooled.csv", index_col=0)
     assert list(pooled.columns[:5]) == ["value", "sd", "low", "high", "determined"]
     assert "the record's answer from its cycles" in printed and "pooled.csv" in printed
+    # and how the cycles meet the record: the tests and free run every estimator's answer carries, and the figure
+    assert "the cycles against the record: free-run fit" in printed and "Ljung-Box p" in printed
+    assert (out / "diagnostics.png").stat().st_size > 10_000
 
 
 def test_progress_bars_stay_out_of_logs(short_record, tmp_path, capsys):
