@@ -29,7 +29,7 @@ from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIO
                         plausible_variations, stands_in_for_force, variation_disagreement)
 from .model import RecordModel
 from .report import person_warnings, result_dict, summary_text, table_row
-from .statespace import RecordChecks
+from .checks import RecordChecks
 
 __all__ = ["PersonResult", "DETERMINED_FRACTION", "MISFIT_SHARE", "PRIOR_SD"]
 
