@@ -161,16 +161,15 @@ def run_compare(args) -> int:
         if name == "record":
             import time
 
-            from ..person import identify_person
-
             from ..io import read_record
+            from ..person import identify_person
 
             started = time.perf_counter()
             # the record as read, as identify fits it: the front end needs the measured rate (the mains hum is
             # found and subtracted there, and the fitting rate chosen off its multiples); the per-cycle rows
             # take the record decimated to --rate
             person = identify_person(read_record(args.record, args.mass), n_harmonics=args.harmonics,
-                                     check=not getattr(args, "ignore_checks", False), rate=rate_of(args),
+                                     check=not args.ignore_checks, rate=rate_of(args),
                                      progress=not args.quiet)
             person_seconds = time.perf_counter() - started
             continue

@@ -12,7 +12,7 @@ import pandas as pd
 
 from .. import __version__
 from ..estimators import ESTIMATORS
-from ..errors import OptionError
+from ..errors import OptionError, SMDInputError
 from ..identify.plausibility import plausible_cycles
 from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_fade_argument,
                      add_model_arguments, add_noise_floor_argument, add_rate_argument,
@@ -326,7 +326,6 @@ def print_check(runner, directory) -> list:
     and the free run every estimator's answer carries, :mod:`smd_statespace.answers`) and draw its diagnostics as
     ``DIR/diagnostics.png``; returns the paths written (none where the check cannot be made, which is said)."""
     from ..diagnostics import check_model
-    from ..errors import SMDInputError
 
     try:
         check = check_model(runner=runner)
@@ -342,4 +341,3 @@ def print_check(runner, directory) -> list:
     path = Path(directory) / "diagnostics.png"
     check.plot_diagnostics(path)
     return [path]
-
