@@ -188,10 +188,8 @@ def effect_model(result, effects, path=None) -> RecordModel:
     dynamics = PersonDynamics(smd, base.time, record_signals(result.record, smd))
     nominal = None
     if not dynamics.linear:
-        from .statespace import nominal_path  # statsmodels: imported when an effect is linearised
-
         nominal = np.zeros((base.time.size, dynamics.n_dynamic))
-        nominal[:, :path.model.n_dynamic] = nominal_path(path.model, path.params)
+        nominal[:, :path.model.n_dynamic] = path.predicted_path()
     template = base.phase_template
     if template is not None and n_harmonics > base.n_harmonics:
         template = np.r_[template, np.zeros(2 * (n_harmonics - base.n_harmonics))]
