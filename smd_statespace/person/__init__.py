@@ -10,11 +10,33 @@ likelihood. Modules: :mod:`.timing` (force-cycle boundaries), :mod:`.dynamics`
 :mod:`.diagnose` (which effect is missing), :mod:`.results` (:class:`PersonResult`).
 """
 
-from .fit import identify_person
-from .search import FitError
-from .model import RecordModel, Regressor
-from .results import PersonResult
-from .timing import CycleTiming, estimate_timing
+from importlib import import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the names as tools that read the source see them (the reference, type checkers)
+    from .fit import identify_person
+    from .model import RecordModel, Regressor
+    from .results import PersonResult
+    from .search import FitError
+    from .timing import CycleTiming, estimate_timing
 
 __all__ = ["identify_person", "PersonResult", "RecordModel", "Regressor", "CycleTiming", "estimate_timing",
            "FitError"]
+
+_HOMES = {"identify_person": ".fit", "FitError": ".search", "RecordModel": ".model", "Regressor": ".model",
+          "PersonResult": ".results", "CycleTiming": ".timing", "estimate_timing": ".timing"}
+"""The module each public name comes from. They are imported when first asked for (PEP 562), so that importing
+one light module of the package (the command line's parser reads :mod:`.noise_floor`'s defaults) does not load
+the fit, scipy.stats and numba's compiled passes (about 1.7 s)."""
+
+
+def __getattr__(name):
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_HOMES[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
