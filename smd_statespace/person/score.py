@@ -103,8 +103,8 @@ A path-linearised system carries the rounding of its own differenced Jacobian (a
 the central differences at :data:`DYNAMICS_STEP` are rounding-bound, not truncation-bound: on a fitted person
 with a ``v|v|`` term (hidden-harmonics record, 30 s at 100 Hz), against a Richardson extrapolation of central
 differences at 1e-3 and 5e-4, the largest error of an array relative to its size was 3-9e-6 for central
-differences at 1e-6 and 2-6e-6 for forward differences at 3e-6 to 1e-5 (1-2e-5 at 1e-6), in ``f_h``,
-``xi_h`` and the term's coefficient. So half the systems, the same accuracy."""
+differences at 1e-6 and 2-6e-6 for forward differences at 3e-6 to 1e-5 (2-3e-6 at this step; 1-2e-5 at
+1e-6), in ``f_h``, ``xi_h`` and the term's coefficient. So half the systems, the same accuracy."""
 
 
 # ------------------------------------------------------------------------------------ system derivatives
