@@ -89,7 +89,8 @@ from .model import RecordModel
 from .sensitivity import sensitivity_pass
 from .system import contiguous
 
-__all__ = ["DYNAMICS_STEP", "FORWARD_STEP", "cycle_sums", "profile_out", "score", "system_derivatives", "sensitivity_pass"]
+__all__ = ["DYNAMICS_STEP", "FORWARD_STEP", "cycle_sums", "profile_out", "score", "system_derivatives",
+           "sensitivity_pass"]
 
 DYNAMICS_STEP = 1e-6
 """Relative step of the central differences of :meth:`RecordModel.system` in ``f_h``, ``xi_h`` and the effects'
