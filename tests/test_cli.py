@@ -180,9 +180,9 @@ def test_starting_the_cli_loads_no_heavy_module():
     # the parser itself is built and used: until 2026-11-29 --noise-floor's default, read from
     # smd_statespace.person.noise_floor, imported the whole person package (scipy.stats, numba: 1.8 s for --version)
     for argv in (None, ["--version"], ["--help"], ["identify", "--rate", "fast"]):
-        run = "" if argv is None else (f"import contextlib, io; from smd_statespace.cli import main\n"
-                                       f"with contextlib.redirect_stdout(io.StringIO()), "
-                                       f"contextlib.redirect_stderr(io.StringIO()):\n"
+        run = "" if argv is None else ("import contextlib, io; from smd_statespace.cli import main\n"
+                                       "with contextlib.redirect_stdout(io.StringIO()), "
+                                       "contextlib.redirect_stderr(io.StringIO()):\n"
                                        f"    try:\n        main({argv!r})\n    except SystemExit:\n        pass\n")
         code = (f"import sys; import smd_statespace.cli.main\n{run}"
                 f"print(','.join(name for name in {heavy!r} if name in sys.modules))")
