@@ -30,6 +30,11 @@ def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
     words = next(w for w in person.warnings if w.startswith("the person changes during the record"))
     assert f"score test of {best['term']}" in words and "term:f_step, term:f_drift" in words
     assert f"a change in time: smallest p {best['p_holm']:.2g} ({best['term']}" in person.summary()
+    # each parameter's warning gives that reason, not its sd against a yardstick (its sd is below the yardstick's
+    # share here, which "sd 0.18 against a yardstick 0.87" left the reader to puzzle over)
+    for name in ("f_h", "xi_h"):
+        said = [w for w in person.warnings if w.startswith(f"{name} is not determined")]
+        assert len(said) == 1 and "the person changes during the record" in said[0] and "yardstick" not in said[0]
     # the robust statistic is the cycles' t-test, centred: the uncentred sum of squares counts the change itself as
     # noise, and is smaller (on a 16 % step 1 cycle from a tested one it had scored 13 against 105 centred)
     step = next(term for term in generic_library(person, ["f_step"]) if term.at == 0.5)

@@ -63,6 +63,9 @@ def person_warnings(result) -> list:
                        "not determined (on simulated records ending here the median error was 16 %)")
         elif result.misfit:
             continue  # said once, with the whiteness test below
+        elif result.change and name in result.change["changed"]:  # not its sd: a yardstick beside it misled
+            out.append(f"{name} is not determined: the person changes during the record (above), so no one value "
+                       "describes it; read its interval, which spans the parts'")
         elif not result.determined(name):
             out.append(f"{name} is not determined by this record (sd {result.sd(name):.3g} against a yardstick "
                        f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
