@@ -258,7 +258,27 @@ def test_a_model_that_misfits_the_record_does_not_determine_the_person(long_sim,
     assert low <= bent.f_h - half + 1e-12 and high >= bent.f_h + half - 1e-12
     words = " ".join(bent.warnings)
     assert "not determined (their intervals are as wide as the yardstick)" in words and "diagnose" in words
-    assert "is not determined by this record (sd" not in words  # said once, with the reason
+    assert "is not determined by this record" not in words  # said once, with the reason
+
+
+def test_a_person_not_determined_by_its_sd_is_told_against_what(long_fit):
+    """An sd over a quarter of the article's starting range's sd: the warning gives both numbers with their unit and
+    where the yardstick comes from (it said "sd 0.285 against a yardstick 0.866", for a rule the reader had to
+    guess)."""
+    import dataclasses
+
+    from smd_statespace.person.results import PRIOR_SD
+
+    cov = long_fit.cov.copy()
+    j = long_fit.model.position("f_h")
+    cov[j, :] *= 0.3 * PRIOR_SD["f_h"] / long_fit.sd("f_h")
+    cov[:, j] *= 0.3 * PRIOR_SD["f_h"] / long_fit.sd("f_h")
+    wide = dataclasses.replace(long_fit, cov=cov)
+    assert not wide.determined("f_h") and wide.determined("xi_h")
+    said = [w for w in wide.warnings if "is not determined" in w]
+    assert said == [f"f_h is not determined by this record: its sd {0.3 * PRIOR_SD['f_h']:.3g} Hz is more than 0.25 "
+                    f"of {PRIOR_SD['f_h']:.3g} Hz, the sd of the article's starting range (1-4 Hz), which a record "
+                    "that determines it narrows fourfold; read its interval, not its value"]
 
 
 def test_the_misfit_share_measures_what_the_innovations_own_past_predicts(long_fit):

@@ -16,12 +16,16 @@ import numpy as np
 
 from ..determined import DETERMINED_FRACTION
 
-__all__ = ["DETERMINED_FRACTION", "F_B_COINCIDENCE", "MISFIT_SHARE", "PRIOR_SD", "VARIATION_AIC_CLOSE",
-           "VARIATION_DISAGREEMENT", "WHITENESS_ALPHA", "XI_H_RESONANCE_MIMIC", "mimicked_harmonic",
-           "plausible_variations", "stands_in_for_force", "variation_disagreement"]
+__all__ = ["DETERMINED_FRACTION", "F_B_COINCIDENCE", "MISFIT_SHARE", "PRIOR_SD", "STARTING_RANGE",
+           "VARIATION_AIC_CLOSE", "VARIATION_DISAGREEMENT", "WHITENESS_ALPHA", "XI_H_RESONANCE_MIMIC",
+           "mimicked_harmonic", "plausible_variations", "stands_in_for_force", "variation_disagreement"]
+
+STARTING_RANGE = {"f_h": "1-4 Hz", "xi_h": "0-1"}
+"""The article's uniform initial ranges of ``f_h`` and ``xi_h`` (its estimation settings, Sections 3.2 and 4), in
+words."""
 
 PRIOR_SD = {"f_h": 3.0 / np.sqrt(12.0), "xi_h": 1.0 / np.sqrt(12.0)}
-"""Yardstick widths: the sd of the article's uniform initial ranges (``f_h`` 1-4 Hz, ``xi_h`` 0-1)."""
+"""Yardstick widths: the sd of the article's uniform initial ranges (:data:`STARTING_RANGE`)."""
 
 
 WHITENESS_ALPHA = 0.01

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..io import G
 from .fade import fade_table
-from .judgement import F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, WHITENESS_ALPHA
+from .judgement import DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, STARTING_RANGE, WHITENESS_ALPHA
 from .phone_report import phone_words
 
 __all__ = ["CONFOUNDED", "change_words", "one_person_line", "person_warnings", "ratio_words", "result_dict",
@@ -67,8 +67,11 @@ def person_warnings(result) -> list:
             out.append(f"{name} is not determined: the person changes during the record (above), so no one value "
                        "describes it; read its interval, which spans the parts'")
         elif not result.determined(name):
-            out.append(f"{name} is not determined by this record (sd {result.sd(name):.3g} against a yardstick "
-                       f"{PRIOR_SD[name]:.3g}); read its interval, not its value")
+            sd, unit = result.sd(name), " Hz" if name == "f_h" else ""
+            why = (f": its sd {sd:.3g}{unit} is more than {DETERMINED_FRACTION:g} of {PRIOR_SD[name]:.3g}{unit}, the "
+                   f"sd of the article's starting range ({STARTING_RANGE[name]}), which a record that determines it "
+                   "narrows fourfold" if np.isfinite(sd) and sd >= DETERMINED_FRACTION * PRIOR_SD[name] else "")
+            out.append(f"{name} is not determined by this record{why}; read its interval, not its value")
     blf = result.template_blf()
     undetermined = [f"BLF{i}" for i in blf.index[~blf["determined"].astype(bool)]]
     if undetermined:
