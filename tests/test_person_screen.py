@@ -120,3 +120,19 @@ def test_u3_is_the_cubic_spring_in_another_unit(clean):
         likelihoods.append(model.loglike(params))
     assert likelihoods[0] == pytest.approx(likelihoods[1], abs=1e-6 * abs(likelihoods[0]))
     assert likelihoods[0] != pytest.approx(clean.loglike, abs=1.0)  # the term is not nothing at this size
+
+
+def test_the_screened_terms_header_says_how_many_are_fitted():
+    """The line above the screened terms counts those fitted above: it said "the 2 largest ... are fitted above"
+    on a phone record where none was significant (Holm p 0.19 for all)."""
+    import pandas as pd
+
+    from smd_statespace.cli.diagnose import screened_header
+
+    none = screened_header(pd.DataFrame({"p_quick_holm": [0.19, 0.19, 1.0]}), 0.01)
+    assert none.endswith("none is significant over the library (Holm), so none is fitted above")
+    one = screened_header(pd.DataFrame({"p_quick_holm": [1e-5, 0.2]}), 0.01)
+    assert "the 1 largest quick likelihood ratio (" in one and ") is fitted above" in one
+    many = screened_header(pd.DataFrame({"p_quick_holm": [1e-9, 1e-7, 1e-5]}), 0.01)
+    assert "the 2 largest quick likelihood ratios (" in many and "at most 2) are fitted above" in many
+    assert screened_header(pd.DataFrame({"lm_robust": [3.0]}), 0.01).endswith("so none is fitted above")

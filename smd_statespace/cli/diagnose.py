@@ -137,10 +137,25 @@ def _write_json(args, result, written: list) -> None:
         written.append(args.json)
 
 
+def screened_header(screened, alpha: float) -> str:
+    """The line above the screened generic terms: how they were tested and how many of them are fitted above (those
+    whose quick likelihood ratio is significant over the library at ``alpha``, at most
+    :data:`~smd_statespace.person.diagnose.SCREENED`)."""
+    from ..person.diagnose import SCREENED  # the fit's modules: imported when a person is diagnosed
+
+    held = screened["p_quick_holm"] if "p_quick_holm" in screened else pd.Series(dtype=float)
+    fitted = min(int((held < alpha).sum()), SCREENED)
+    which = ("none is significant over the library (Holm), so none is fitted above" if fitted == 0 else
+             f"the {fitted} largest quick likelihood ratio{'s' if fitted > 1 else ''} (over their misspecification "
+             f"scale) significant over the library (Holm; at most {SCREENED}) {'are' if fitted > 1 else 'is'} "
+             "fitted above")
+    return f"generic terms, each score-tested at the fitted person, those not ruled out fitted quickly; {which}"
+
+
 def run_person_diagnose(args) -> int:
     """``diagnose`` with the record-level model: identify with each candidate effect, test, print the command."""
     from ..person import identify_person
-    from ..person.diagnose import SCREENED, diagnose_person
+    from ..person.diagnose import diagnose_person
     from ..plotting.person import plot_candidates, plot_compare, plot_held_out, plot_spectrum, plot_step_scan
     from ..person.extend import check_effects
 
@@ -167,9 +182,7 @@ def run_person_diagnose(args) -> int:
                                "display.max_colwidth", 60):
             print(table[columns].to_string())
     if len(result.screened):
-        print(f"\ngeneric terms, each score-tested at the fitted person, those not ruled out fitted quickly; the "
-              f"{SCREENED} largest quick likelihood ratios (over their misspecification scale) significant over the "
-              "library (Holm) are fitted above:")
+        print(f"\n{screened_header(result.screened, args.alpha)}:")
         for _, row in result.screened.head(5).iterrows():
             quick = (f"quick LR {row['lr_quick']:7.1f} / {row['lr_scale']:<4.2g} (Holm p {row['p_quick_holm']:<7.2g})"
                      if np.isfinite(row.get("lr_quick", np.nan)) else "not fitted" + " " * 28)
