@@ -44,6 +44,10 @@ MASS_RANGE = (20.0, 250.0)
 SAMPLING_TOLERANCE = 0.01
 """Largest relative deviation of a time step from the median step."""
 
+MIN_SAMPLING_RATE = 10.0
+"""Lowest sampling rate (Hz) a record may have: below it even the slowest bouncing the model takes (1.2 Hz) has its
+four harmonics folded onto each other. A time column in milliseconds reads as a rate 1000 times too low."""
+
 REQUIRED_COLUMNS = ("time", "force")
 OPTIONAL_COLUMNS = ("floor_acc",)
 
@@ -152,7 +156,7 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
     ----------
     time : array_like, shape (T,)
         Sample times (s), strictly increasing and uniformly spaced
-        (within :data:`SAMPLING_TOLERANCE`).
+        (within :data:`SAMPLING_TOLERANCE`), at :data:`MIN_SAMPLING_RATE` or faster.
     force : array_like, shape (T,)
         GRF (N). Its mean must be near ``mass * g``: a record in body weights
         or kilonewtons is rejected.
@@ -187,6 +191,12 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
             f"{source}: non-uniform sampling at row {row} (step {steps[row - 2]:.6g} s, median {median:.6g} s); "
             f"resample to a uniform rate (tolerance {SAMPLING_TOLERANCE:.0%})"
         )
+    rate = 1.0 / median
+    if rate < MIN_SAMPLING_RATE:
+        hint = ("; is 'time' in milliseconds? divide it by 1000 to get s" if rate * 1000.0 >= MIN_SAMPLING_RATE
+                else "")
+        raise RecordError(f"{source}: column 'time' has samples {median:.6g} s apart ({rate:.3g} Hz); a record "
+                          f"needs at least {MIN_SAMPLING_RATE:g} Hz (time in s){hint}")
     weight = mass * G
     # the whole record's mean is M g for any movement that ends as it starts (jumping included); a lab's export
     # that reads 0 before stepping on and after stepping off has that mean while someone is on the plate (the

@@ -151,3 +151,27 @@ def test_a_record_with_the_empty_plate_before_and_after_is_read():
         make_record(t, force / 1000.0, 70.0)
     with pytest.raises(RecordError, match="check the units"):
         make_record(t, force, 140.0)  # a wrong mass is still refused
+
+
+def test_a_time_column_in_milliseconds_is_refused_in_one_line_that_says_so(tmp_path, capsys):
+    """A plate's export in ms read as s samples at 0.1 Hz: it was taken, and the front end's filter then failed with
+    a traceback (scipy: 'Wn[0] must be less than Wn[1]'). A rate under MIN_SAMPLING_RATE is refused, with the hint
+    where the rate in ms would be one; a slow but readable rate is kept."""
+    import pandas as pd
+
+    from smd_statespace.cli import main
+    from smd_statespace.io import G, MIN_SAMPLING_RATE, make_record
+
+    t = np.arange(0.0, 12.0, 0.01)
+    force = 70 * G * (1 + 0.3 * np.sin(2 * np.pi * 2 * t))
+    with pytest.raises(RecordError, match=r"samples 10 s apart \(0.1 Hz\).*is 'time' in milliseconds"):
+        make_record(t * 1000.0, force, 70.0)
+    with pytest.raises(RecordError, match=r"at least 10 Hz \(time in s\)$"):
+        make_record(t[::200] * 1000.0, force[::200], 70.0)  # 0.0005 Hz: not a rate in ms either
+    step = 1.0 / MIN_SAMPLING_RATE
+    assert make_record(np.arange(0.0, 12.0, step), np.full(round(12.0 / step), 70 * G), 70.0).mass == 70.0
+    path = tmp_path / "ms.csv"
+    pd.DataFrame({"time": t * 1000.0, "force": force}).to_csv(path, index=False)
+    assert main(["identify", str(path), "--mass", "70", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "divide it by 1000" in err and "Traceback" not in err
