@@ -209,6 +209,8 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
             hint = "it looks like body weights; multiply by mass*g to get N"
         elif any(abs(value * 1000.0 / weight - 1.0) < 0.3 for value in means):
             hint = "it looks like kN; multiply by 1000 to get N"
+        elif 0.7 <= -mean / weight <= 1.3:  # a plate whose vertical axis points down (Fz negative under a load)
+            hint = "it looks like the plate's vertical axis points down; multiply by -1 to get the upward force"
         else:
             hint = "check the units (N) and the --mass value"
         raise RecordError(

@@ -151,6 +151,9 @@ def test_a_record_with_the_empty_plate_before_and_after_is_read():
         make_record(t, force / 1000.0, 70.0)
     with pytest.raises(RecordError, match="check the units"):
         make_record(t, force, 140.0)  # a wrong mass is still refused
+    on = (t > 2.0) & (t < 7.0)  # a plate whose z axis points down: the force is negative under a load
+    with pytest.raises(RecordError, match="vertical axis points down; multiply by -1"):
+        make_record(t[on], -force[on], 70.0)
 
 
 def test_a_time_column_in_milliseconds_is_refused_in_one_line_that_says_so(tmp_path, capsys):
