@@ -229,6 +229,8 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:
         raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
+    if timing not in ("model",) + TIMING_METHODS:
+        raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
     noise_floor, threads = check_noise_floor(noise_floor), search_threads(threads)
     prepared, observed = _prepared(record, rate, span, regressors, check)
     record_warnings = _applicable(record, prepared, check)
@@ -240,8 +242,6 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     y, floor_notes = raise_to_floor(record.force / record.mass - G, observed, record.fs, noise_floor,  # Eq. 3
                                     seed_from=measured_force)
     notes = list(prepared.notes) + floor_notes
-    if timing not in ("model",) + TIMING_METHODS:
-        raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
     first = "template" if timing == "model" else timing
     cycle_timing = estimate_timing(record.time, record.force, n_harmonics, first, source=record.source)
     inside = np.sum((cycle_timing.boundaries > record.time[0]) & (cycle_timing.boundaries < record.time[-1]))

@@ -164,4 +164,3 @@ def nominal_path(model: RecordModel, params) -> np.ndarray:
     delta = model.filter(params)["delta"]
     filtered = RecordStateSpace(model, delta).filter(params, cov_type="none")
     return filtered.predicted_state[:model.n_dynamic, :-1].T
-
