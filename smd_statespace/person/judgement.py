@@ -20,11 +20,11 @@ __all__ = ["DETERMINED_FRACTION", "F_B_COINCIDENCE", "MISFIT_SHARE", "PRIOR_SD",
            "VARIATION_AIC_CLOSE", "VARIATION_DISAGREEMENT", "WHITENESS_ALPHA", "XI_H_RESONANCE_MIMIC",
            "mimicked_harmonic", "plausible_variations", "stands_in_for_force", "variation_disagreement"]
 
-STARTING_RANGE = {"f_h": "1-4 Hz", "xi_h": "0-1"}
-"""The article's uniform initial ranges of ``f_h`` and ``xi_h`` (its estimation settings, Sections 3.2 and 4), in
-words."""
+STARTING_RANGE = {"f_h": (1.0, 4.0), "xi_h": (0.0, 1.0)}
+"""The article's uniform initial ranges of ``f_h`` (Hz) and ``xi_h`` (its estimation settings, Sections 3.2 and 4;
+:class:`~smd_statespace.model.SMDModel`'s default ``f_h_range`` and ``xi_h_range``)."""
 
-PRIOR_SD = {"f_h": 3.0 / np.sqrt(12.0), "xi_h": 1.0 / np.sqrt(12.0)}
+PRIOR_SD = {name: (high - low) / np.sqrt(12.0) for name, (low, high) in STARTING_RANGE.items()}
 """Yardstick widths: the sd of the article's uniform initial ranges (:data:`STARTING_RANGE`)."""
 
 

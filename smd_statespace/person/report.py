@@ -67,9 +67,9 @@ def person_warnings(result) -> list:
             out.append(f"{name} is not determined: the person changes during the record (above), so no one value "
                        "describes it; read its interval, which spans the parts'")
         elif not result.determined(name):
-            sd, unit = result.sd(name), " Hz" if name == "f_h" else ""
+            sd, unit, (low, high) = result.sd(name), " Hz" if name == "f_h" else "", STARTING_RANGE[name]
             why = (f": its sd {sd:.3g}{unit} is more than {DETERMINED_FRACTION:g} of {PRIOR_SD[name]:.3g}{unit}, the "
-                   f"sd of the article's starting range ({STARTING_RANGE[name]}), which a record that determines it "
+                   f"sd of the article's starting range ({low:g}-{high:g}{unit}), which a record that determines it "
                    "narrows fourfold" if np.isfinite(sd) and sd >= DETERMINED_FRACTION * PRIOR_SD[name] else "")
             out.append(f"{name} is not determined by this record{why}; read its interval, not its value")
     blf = result.template_blf()
