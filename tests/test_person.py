@@ -104,6 +104,33 @@ def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options
     assert RecordStateSpace(model, shifted).loglike(params) < reference
 
 
+@pytest.mark.parametrize("gaps", [False, True])
+def test_residual_tests_are_statsmodels_own_at_the_estimate(short_sim, gaps):
+    """The person's Ljung-Box, Jarque-Bera and breakvar tests, taken on the compiled pass's innovations, are the tests
+    of statsmodels' results object at the same point (its own filter; with a phone's gaps, its missing samples)."""
+    from smd_statespace.person.checks import RecordChecks
+
+    y = acceleration(short_sim)
+    observed = np.ones(y.size, dtype=bool)
+    if gaps:
+        observed[100:130] = observed[300:303] = False
+    model = RecordModel(short_sim.record.time, np.where(observed, y, 1e3),
+                        estimate_timing(short_sim.record.time, short_sim.record.force),
+                        regressors=(Regressor("offset", np.ones_like(y), dynamic=False),), observed=observed)
+    checked = RecordChecks()
+    checked.record, checked.model, checked.params = short_sim.record, model, model.start_params(2.3, 0.25, -2.0)
+    checked.filtered = model.filter(checked.params)
+    theirs = checked.statespace_results
+    assert np.all(checked.standardized_innovations()[~observed] == 0.0)  # a gap's innovation, in both
+    lags = checked.default_lags()
+    ours = checked.test_serial_correlation()
+    assert ours.shape == (1, 2, lags)
+    np.testing.assert_allclose(ours, theirs.test_serial_correlation("ljungbox", lags=lags), rtol=1e-7)
+    np.testing.assert_allclose(checked.test_normality(), theirs.test_normality("jarquebera"), rtol=1e-7)
+    np.testing.assert_allclose(checked.test_heteroskedasticity(), theirs.test_heteroskedasticity("breakvar"),
+                               rtol=1e-7)
+
+
 @pytest.mark.parametrize("variation", ["independent", "random_walk", "both", "smooth"])
 def test_state_only_smoother_gives_statsmodels_smoothed_states(short_sim, variation):
     """``RecordStateSpace.smoothed_state`` (the re-placement of the cycle starts uses it) is the full smoother's

@@ -133,19 +133,24 @@ def candidate_row(base, fitted, level: float) -> dict:
 def indistinguishable_from_zero(base, fitted, estimates, z: float = ZERO_Z) -> bool:
     """True when every parameter the candidate estimates, and every harmonic it adds, is within ``z`` sds of 0."""
     values = [(row["value"], row["sd"]) for _, row in estimates.iterrows()]
-    blf = fitted.template_blf()
-    values += [(blf.loc[i, "blf"], blf.loc[i, "sd"]) for i in range(base.model.n_harmonics + 1,
-                                                                     fitted.model.n_harmonics + 1)]
+    values += [(blf["blf"], blf["sd"]) for _, blf in _added_harmonics(base, fitted).iterrows()]
     return bool(values) and all(np.isfinite(sd) and abs(value) < z * sd for value, sd in values)
 
 
 def _parameters_text(base, fitted, estimates) -> str:
     """The effect's estimates in words: its parameters, the load factors of added harmonics, or 'known input'."""
     parts = [f"{name} {r['value']:.4g} ± {r['sd']:.2g} {r['unit']}".rstrip() for name, r in estimates.iterrows()]
-    blf = fitted.template_blf()
-    parts += [f"BLF{i} {blf.loc[i, 'blf']:.3g} ± {blf.loc[i, 'sd']:.2g} g"
-              for i in range(base.model.n_harmonics + 1, fitted.model.n_harmonics + 1)]
+    parts += [f"BLF{i} {blf['blf']:.3g} ± {blf['sd']:.2g} g" for i, blf in _added_harmonics(base, fitted).iterrows()]
     return "; ".join(parts) or "none (a known input)"
+
+
+def _added_harmonics(base, fitted) -> pd.DataFrame:
+    """The rows of ``fitted``'s load factors (:meth:`~smd_statespace.person.results.PersonResult.template_blf`) of
+    the harmonics it adds to ``base``. A candidate that adds none does not read them: they cost a concentrated
+    template per parameter, and one per point of a grid across the person's interval where it is not determined."""
+    if fitted.model.n_harmonics <= base.model.n_harmonics:
+        return pd.DataFrame(columns=["blf", "sd"])
+    return fitted.template_blf().loc[base.model.n_harmonics + 1:]
 
 
 @dataclass
