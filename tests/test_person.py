@@ -104,6 +104,23 @@ def test_compiled_likelihood_equals_statsmodels_kalman_filter(short_sim, options
     assert RecordStateSpace(model, shifted).loglike(params) < reference
 
 
+@pytest.mark.parametrize("variation", ["independent", "smooth"])
+def test_the_nominal_path_is_statsmodels_predicted_state(short_sim, variation):
+    """``nominal_path`` (the path an effect is linearised about), kept without the filter's covariances, is the
+    one-step predicted dynamic state of statsmodels' filter at the same point."""
+    from smd_statespace.person.statespace import nominal_path
+
+    y = acceleration(short_sim)
+    model = RecordModel(short_sim.record.time, y, estimate_timing(short_sim.record.time, short_sim.record.force),
+                        variation=variation, regressors=(Regressor("offset", np.ones_like(y), dynamic=False),))
+    params = model.start_params(2.3, 0.25, -2.0)
+    view = RecordStateSpace(model, model.filter(params)["delta"])
+    full = view.filter(params, cov_type="none")
+    path = nominal_path(model, params)
+    assert path.shape == (y.size, model.n_dynamic)
+    np.testing.assert_allclose(path, full.predicted_state[:model.n_dynamic, :-1].T, rtol=1e-12, atol=1e-15)
+
+
 @pytest.mark.parametrize("gaps", [False, True])
 def test_residual_tests_are_statsmodels_own_at_the_estimate(short_sim, gaps):
     """The person's Ljung-Box, Jarque-Bera and breakvar tests, taken on the compiled pass's innovations, are the tests
