@@ -74,3 +74,50 @@ def test_screen_in_two_threads_equals_one(record):
     result = identify_person(record, check_change=False, threads=2)
     terms = generic_library(result)[:6]
     pd.testing.assert_frame_equal(screen(result, terms, threads=1), screen(result, terms, threads=2))
+
+
+def test_the_person_runs_with_one_blas_thread_and_gives_the_callers_setting_back():
+    """The person's entry points limit the BLAS libraries to one thread while they run (their matrices are small and
+    their searches run threads of their own) and leave the caller's setting as it was, also when they raise."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from smd_statespace.person.diagnose import diagnose_person
+    from smd_statespace.person.extend import fit_effects
+    from smd_statespace.person.threads import one_blas_thread
+
+    def blas_threads():
+        return {library["num_threads"] for library in threadpool_info() if library["user_api"] == "blas"}
+
+    @one_blas_thread
+    def inside(fail=False):
+        if fail:
+            raise ValueError("fails inside")
+        return blas_threads()
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert blas_threads() == {2}
+        assert inside() == {1}
+        assert blas_threads() == {2}
+        with pytest.raises(ValueError, match="fails inside"):
+            inside(fail=True)
+        assert blas_threads() == {2}
+
+    class Seen(Exception):
+        pass
+
+    def seen(*args, **kwargs):  # the first call of each entry point: what BLAS runs on inside it
+        raise Seen(blas_threads())
+
+    from types import SimpleNamespace
+
+    from smd_statespace.person import diagnose, extend
+
+    calls = [(extend, "record_effects", lambda: identify_person(None)),
+             (extend, "configured_for_record", lambda: fit_effects(SimpleNamespace(effects=()), ["cubic_stiffness"])),
+             (diagnose, "label", lambda: diagnose_person(SimpleNamespace(effects=["cubic_stiffness"])))]
+    for module, first, call in calls:
+        with threadpool_limits(limits=2, user_api="blas"), pytest.MonkeyPatch.context() as patch:
+            patch.setattr(module, first, seen)
+            with pytest.raises(Seen) as inside_entry:
+                call()
+            assert inside_entry.value.args == ({1},) and blas_threads() == {2}, module.__name__

@@ -66,7 +66,7 @@ from .extend import configured_for_record, fit_effects
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
-from .threads import search_threads, thread_map
+from .threads import one_blas_thread, search_threads, thread_map
 from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white,
                       needed_z, verdict, without_key)
 
@@ -433,6 +433,7 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     return out
 
 
+@one_blas_thread
 def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library=None,
                     threads=None) -> PersonDiagnosis:
     """Identify the person with each candidate effect and test it by likelihood ratio.

@@ -50,6 +50,7 @@ from ..model.fitted import propose
 from .effect_adapter import fitted_record, record_harmonics, record_starts
 from .model import RecordModel
 from .search import WIDER_SANDWICH
+from .threads import one_blas_thread
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects",
            "configured_for_record", "split_effects", "record_signals", "effect_model", "at_zero", "fit_effects"]
@@ -242,6 +243,7 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     return out
 
 
+@one_blas_thread
 def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDWICH, progress=False, timing=True,
                 threads=1):
     """Identify the person of ``result`` again with ``effects`` added to its model.
