@@ -68,8 +68,8 @@ class RecordChecks:
         from statsmodels.tsa.stattools import breakvar_heteroskedasticity_test
 
         innovations = self.standardized_innovations()
-        statistic, pvalue = breakvar_heteroskedasticity_test(innovations, subset_length=int(np.round(innovations.size
-                                                                                                   / 3)))
+        third = int(np.round(innovations.size / 3))
+        statistic, pvalue = breakvar_heteroskedasticity_test(innovations, subset_length=third)
         return np.array([[statistic, pvalue]])
 
     def test_pvalues(self) -> dict:

@@ -19,7 +19,7 @@ samples), where a BLAS library's own threads only compete with these searches an
 cores: :func:`one_blas_thread` runs the person's entry points with BLAS limited to one thread (threadpoolctl,
 as scikit-learn limits it inside estimators that run threads of their own). Measured on a 30 s record
 (``identify`` then ``diagnose`` in one process): 15.1 -> 12.4 s of CPU for the same answers and about the same
-wall time; the person's tests on two test processes, 118 -> 96 s.
+wall time; the person's tests on two test processes, 118 -> 101 s.
 """
 
 from __future__ import annotations
