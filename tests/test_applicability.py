@@ -107,6 +107,21 @@ def test_a_wrong_mass_and_quiet_standing_are_warnings_not_refusals(bouncing):
     assert abs(partly.active_seconds - 18.0) < 1.0
 
 
+def test_standing_at_both_ends_is_not_called_bouncing_there(bouncing):
+    """A trial as labs export it, standing before and after: the warning names the bouncing part alone (the moving
+    windows at the record's ends held zeros that made the standing look active: "0.00-0.25 s, 8.00-24.00 s,
+    29.75-30.00 s")."""
+    force = bouncing.record.force.copy()
+    standing = (bouncing.record.time < 8.0) | (bouncing.record.time >= 24.0)
+    force[standing] = noisy(np.full(standing.sum(), WEIGHT))
+    partly = check_bouncing(make_record(bouncing.record.time, force, MASS))
+    (finding,) = partly.findings
+    spans = finding.message.split("(")[1].split(")")[0].split(", ")
+    assert len(spans) == 1, finding.message
+    start, end = (float(value) for value in spans[0].removesuffix(" s").split("-"))
+    assert abs(start - 8.0) < 0.5 and abs(end - 24.0) < 0.5 and abs(partly.active_seconds - 16.0) < 1.0
+
+
 @pytest.mark.parametrize("variation", ["jumps", "smooth"])
 def test_clean_bouncing_at_the_corners_of_the_articles_range_raises_nothing(variation):
     """No refusal and no warning at the corners of the article's range (f_b 1.5-3.5 Hz, f_h 1.8-4.2 Hz, xi_h
