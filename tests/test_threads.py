@@ -122,3 +122,42 @@ def test_the_person_runs_with_one_blas_thread_and_gives_the_callers_setting_back
             with pytest.raises(Seen) as inside_entry:
                 call()
             assert inside_entry.value.args == ({1},) and blas_threads() == {2}, module.__name__
+
+
+def test_the_blas_limit_of_calls_in_threads_gives_the_callers_setting_back_whichever_leaves_first():
+    """Two calls in threads, the first to enter leaving first (as diagnose's candidates can): both run on one BLAS
+    thread to their end, and the caller has its own setting after both."""
+    from threadpoolctl import threadpool_info
+
+    from smd_statespace.person.threads import one_blas_thread
+
+    def blas_threads():
+        return {library["num_threads"] for library in threadpool_info() if library["user_api"] == "blas"}
+
+    caller = blas_threads()  # the process's own setting (one set in this thread would hold in the others: OpenBLAS)
+    if caller in (set(), {1}):
+        pytest.skip("needs a BLAS that threadpoolctl controls, running more than one thread")
+    first_in, second_in, first_out = threading.Event(), threading.Event(), threading.Event()
+    seen = {}
+
+    @one_blas_thread
+    def first():
+        first_in.set()
+        second_in.wait(10)
+        seen["first"] = blas_threads()
+
+    @one_blas_thread
+    def second():
+        second_in.set()
+        first_out.wait(10)
+        seen["second"] = blas_threads()  # the first has left: still one thread
+
+    other = threading.Thread(target=second)
+    worker = threading.Thread(target=lambda: (first(), first_out.set()))
+    worker.start()
+    first_in.wait(10)
+    other.start()
+    worker.join(10)
+    other.join(10)
+    assert seen == {"first": {1}, "second": {1}}
+    assert blas_threads() == caller

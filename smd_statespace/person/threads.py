@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import functools
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 from ..errors import OptionError
@@ -90,16 +91,32 @@ def one_blas_thread(function):
     """``function`` run with the BLAS libraries that numpy and scipy call limited to one thread.
 
     A decorator of the person's entry points (:func:`~smd_statespace.person.fit.identify_person`,
-    :func:`~smd_statespace.person.extend.fit_effects`, :func:`~smd_statespace.person.diagnose.diagnose_person`);
-    nested calls keep the limit, and the caller's setting is restored on return (threadpoolctl's
-    ``threadpool_limits``).
+    :func:`~smd_statespace.person.extend.fit_effects`, :func:`~smd_statespace.person.diagnose.diagnose_person`).
+    The limit is the process's (BLAS has one setting), so it is counted: the first call to enter sets it
+    (threadpoolctl's ``threadpool_limits``), calls nested in it or running at the same time in other threads
+    (``diagnose`` fits its candidates in threads) keep it, and the last to leave gives the caller's setting back,
+    also after an error. (Each call setting and restoring on its own gave, for two calls in threads where the first
+    to enter left first, the second call the caller's threads back while it ran, and the caller one thread after.)
     """
 
     @functools.wraps(function)
     def limited(*args, **kwargs):
-        from threadpoolctl import threadpool_limits  # imported when a fit runs: the CLI starts without it
+        with _BLAS_LIMIT["lock"]:
+            if _BLAS_LIMIT["calls"] == 0:
+                from threadpoolctl import threadpool_limits  # imported when a fit runs: the CLI starts without it
 
-        with threadpool_limits(limits=1, user_api="blas"):
+                _BLAS_LIMIT["limiter"] = threadpool_limits(limits=1, user_api="blas")
+            _BLAS_LIMIT["calls"] += 1
+        try:
             return function(*args, **kwargs)
+        finally:
+            with _BLAS_LIMIT["lock"]:
+                _BLAS_LIMIT["calls"] -= 1
+                if _BLAS_LIMIT["calls"] == 0:
+                    _BLAS_LIMIT.pop("limiter").restore_original_limits()
 
     return limited
+
+
+_BLAS_LIMIT = {"lock": threading.Lock(), "calls": 0}
+"""The limit of :func:`one_blas_thread`: the calls inside it now, and the limiter that set it."""
