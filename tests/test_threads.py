@@ -127,8 +127,9 @@ def test_the_person_runs_with_one_blas_thread_and_gives_the_callers_setting_back
 def test_the_blas_limit_of_calls_in_threads_gives_the_callers_setting_back_whichever_leaves_first(monkeypatch):
     """Two calls in threads, the first to enter leaving first (as a user's threads can): both run on one BLAS thread
     to their end, and the caller has its own setting after both. The process's setting is a stand-in here (a limiter
-    with threadpoolctl's calls): OpenBLAS 0.3.31 ignores a limit set from a thread other than the main one while the
-    main thread holds one, which made the real setting depend on the tests run before in the same process."""
+    with threadpoolctl's calls): OpenBLAS 0.3.31 does not reliably take a limit set from a thread other than the main
+    one (seen: ignored once the main thread had set and restored one twice), which made the real setting depend on
+    the tests run before in the same process."""
     import threadpoolctl
 
     from smd_statespace.person.threads import one_blas_thread
