@@ -140,11 +140,10 @@ def _write_json(args, result, written: list) -> None:
 def screened_header(screened, alpha: float) -> str:
     """The line above the screened generic terms: how they were tested and how many of them are fitted above (those
     whose quick likelihood ratio is significant over the library at ``alpha``, at most
-    :data:`~smd_statespace.person.diagnose.SCREENED`)."""
-    from ..person.diagnose import SCREENED  # the fit's modules: imported when a person is diagnosed
+    :data:`~smd_statespace.person.diagnose.SCREENED`: :func:`~smd_statespace.person.diagnose.fitted_terms`)."""
+    from ..person.diagnose import SCREENED, fitted_terms  # the fit's modules: imported when a person is diagnosed
 
-    held = screened["p_quick_holm"] if "p_quick_holm" in screened else pd.Series(dtype=float)
-    fitted = min(int((held < alpha).sum()), SCREENED)
+    fitted = len(fitted_terms(screened, alpha))
     which = ("none is significant over the library (Holm), so none is fitted above" if fitted == 0 else
              f"the {fitted} largest quick likelihood ratio{'s' if fitted > 1 else ''} (over their misspecification "
              f"scale) significant over the library (Holm; at most {SCREENED}) {'are' if fitted > 1 else 'is'} "

@@ -72,7 +72,7 @@ from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_chec
 
 __all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "held_out_z", "PersonDiagnosis",
            "diagnose_person", "candidate_row", "held_out", "verdict", "less_white", "HELD_OUT", "label",
-           "indistinguishable_from_zero", "without_key"]
+           "indistinguishable_from_zero", "without_key", "fitted_terms"]
 
 FREE_RUN_POINTS = 0.05
 """A held-out free run's fit lower by more than this many points with a candidate is told in a note."""
@@ -142,6 +142,15 @@ def _parameters_text(base, fitted, estimates) -> str:
     parts = [f"{name} {r['value']:.4g} ± {r['sd']:.2g} {r['unit']}".rstrip() for name, r in estimates.iterrows()]
     parts += [f"BLF{i} {blf['blf']:.3g} ± {blf['sd']:.2g} g" for i, blf in _added_harmonics(base, fitted).iterrows()]
     return "; ".join(parts) or "none (a known input)"
+
+
+def fitted_terms(screened: pd.DataFrame, alpha: float) -> list:
+    """The specs of the screened generic terms fitted as candidates: those whose quick likelihood ratio is significant
+    over the library (``p_quick_holm`` below ``alpha``), at most :data:`SCREENED`, in the table's order (largest
+    first); none where no quick fit was made."""
+    if "p_quick_holm" not in screened:
+        return []
+    return list(screened.index[screened["p_quick_holm"] < alpha][:SCREENED])
 
 
 def _added_harmonics(base, fitted) -> pd.DataFrame:
@@ -493,7 +502,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed["generic terms (score tests)"] = " ".join(str(exc).split())
         else:
-            flagged = set(screened.index[screened["p_quick_holm"] < alpha][:SCREENED])
+            flagged = set(fitted_terms(screened, alpha))
             effects += [effect for effect in terms if effect.spec in flagged]
     level = alpha / max(tests, 1)
     fits, rows = _fit_candidates(result, effects, level, failed, threads, progress)

@@ -18,7 +18,7 @@ from ..determined import DETERMINED_FRACTION
 
 __all__ = ["DETERMINED_FRACTION", "F_B_COINCIDENCE", "MISFIT_SHARE", "PRIOR_SD", "STARTING_RANGE",
            "VARIATION_AIC_CLOSE", "VARIATION_DISAGREEMENT", "WHITENESS_ALPHA", "XI_H_RESONANCE_MIMIC",
-           "mimicked_harmonic", "plausible_variations", "stands_in_for_force", "variation_disagreement"]
+           "mimicked_harmonic", "narrowed", "plausible_variations", "stands_in_for_force", "variation_disagreement"]
 
 STARTING_RANGE = {"f_h": (1.0, 4.0), "xi_h": (0.0, 1.0)}
 """The article's uniform initial ranges of ``f_h`` (Hz) and ``xi_h`` (its estimation settings, Sections 3.2 and 4;
@@ -26,6 +26,12 @@ STARTING_RANGE = {"f_h": (1.0, 4.0), "xi_h": (0.0, 1.0)}
 
 PRIOR_SD = {name: (high - low) / np.sqrt(12.0) for name, (low, high) in STARTING_RANGE.items()}
 """Yardstick widths: the sd of the article's uniform initial ranges (:data:`STARTING_RANGE`)."""
+
+
+def narrowed(sd: float, name: str) -> bool:
+    """True when the sd of ``f_h`` or ``xi_h`` is below :data:`DETERMINED_FRACTION` of its yardstick
+    (:data:`PRIOR_SD`): the record narrowed what was known before it fourfold (:mod:`smd_statespace.determined`)."""
+    return bool(np.isfinite(sd) and sd < DETERMINED_FRACTION * PRIOR_SD[name])
 
 
 WHITENESS_ALPHA = 0.01

@@ -10,7 +10,8 @@ import numpy as np
 
 from ..io import G
 from .fade import fade_table
-from .judgement import DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, STARTING_RANGE, WHITENESS_ALPHA
+from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, STARTING_RANGE, WHITENESS_ALPHA,
+                        narrowed)
 from .phone_report import phone_words
 
 __all__ = ["CONFOUNDED", "change_words", "one_person_line", "person_warnings", "ratio_words", "result_dict",
@@ -70,7 +71,7 @@ def person_warnings(result) -> list:
             sd, unit, (low, high) = result.sd(name), " Hz" if name == "f_h" else "", STARTING_RANGE[name]
             why = (f": its sd {sd:.3g}{unit} is more than {DETERMINED_FRACTION:g} of {PRIOR_SD[name]:.3g}{unit}, the "
                    f"sd of the article's starting range ({low:g}-{high:g}{unit}), which a record that determines it "
-                   "narrows fourfold" if np.isfinite(sd) and sd >= DETERMINED_FRACTION * PRIOR_SD[name] else "")
+                   "narrows fourfold" if np.isfinite(sd) and not narrowed(sd, name) else "")
             out.append(f"{name} is not determined by this record{why}; read its interval, not its value")
     blf = result.template_blf()
     undetermined = [f"BLF{i}" for i in blf.index[~blf["determined"].astype(bool)]]

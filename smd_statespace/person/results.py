@@ -25,7 +25,7 @@ from scipy import stats
 from .calibration import model_error_floor
 from .fade import fade_shift
 from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, VARIATION_AIC_CLOSE,  # noqa: F401
-                        VARIATION_DISAGREEMENT, WHITENESS_ALPHA, XI_H_RESONANCE_MIMIC, mimicked_harmonic,
+                        VARIATION_DISAGREEMENT, WHITENESS_ALPHA, XI_H_RESONANCE_MIMIC, mimicked_harmonic, narrowed,
                         plausible_variations, stands_in_for_force, variation_disagreement)
 from .model import RecordModel
 from .report import person_warnings, result_dict, summary_text, table_row
@@ -393,9 +393,7 @@ class PersonResult(RecordChecks):
             return False
         if self.xi_h > 1.0:  # over-damped: no resonance to determine, outside what bouncing people show
             return False
-        sd = self.sd(name)
-        return bool(np.isfinite(sd) and sd < DETERMINED_FRACTION * PRIOR_SD[name]
-                    and not self.model.at_bound(self.params, name))
+        return narrowed(self.sd(name), name) and not bool(self.model.at_bound(self.params, name))
 
     @cached_property
     def misfit_share(self) -> float:
