@@ -138,6 +138,17 @@ class GenericTerm(Effect):
         """Where a step is (s, ``start + at T``); none for the other kinds."""
         return (self.start + self.at * self.scale,) if self.kind.endswith("step") else ()
 
+    def moment(self, t):
+        """``m(t)`` of a time term (s): ``(t - t_0) / T`` for a drift, ``H(t - t_s) - 1/2`` for a step; from -1/2 at
+        the record's start (before the step) to +1/2 at its end (after it). The changed parameter's ``w_h^2`` (or
+        ``xi_h w_h``) is its fitted value times ``1 + c m(t)``."""
+        if self.family != "time":
+            raise AttributeError(f"term:{self.kind} does not change in time")
+        since = np.asarray(t, dtype=float) - self.start
+        if self.kind.endswith("step"):
+            return (since >= self.at * self.scale) - 0.5
+        return (since - self.scale / 2.0) / self.scale
+
     def slots(self, model):
         low, high = COEFFICIENT_RANGE
         return (Slot(self.coefficient, "parameter", "-", low, high, nominal=0.1,
@@ -152,9 +163,7 @@ class GenericTerm(Effect):
         damper = -equations.smd_acceleration(0.0, 1.0, x[..., F_H], x[..., XI_H], 0.0)
         kind, s = self.kind, self.scale
         if self.family == "time":
-            since = np.asarray(t, dtype=float) - self.start
-            moment = (since >= self.at * s) - 0.5 if kind.endswith("step") else (since - s / 2.0) / s
-            return -c * moment * (spring * r if kind.startswith("f_") else damper * rate)
+            return -c * self.moment(t) * (spring * r if kind.startswith("f_") else damper * rate)
         terms = {"abs_u": lambda: spring * np.abs(r), "u2": lambda: spring * r**2 / s,
                  "u_abs_u": lambda: spring * r * np.abs(r) / s, "u3": lambda: spring * r**3 / s**2,
                  "v2": lambda: damper * rate**2 / s, "v_abs_v": lambda: damper * rate * np.abs(rate) / s,

@@ -63,6 +63,7 @@ from ..model.fitted import propose
 from .effect_adapter import fitted_record, record_search_size
 from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
+from .in_time import in_time_words
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
@@ -265,9 +266,11 @@ class PersonDiagnosis:
         best = self.table().loc[name]
         physics = f" = {best['physics']}" if best.get("physics") else ""
         scaled = f" / {best['lr_scale']:.2g}" if best["lr_scale"] > 1 else ""
+        in_time = [line.strip() for line in in_time_words(self.fits[name])] if name in self.fits else []
         return (f"missing effect '{name}'{physics} (LR {best['lr']:.1f}{scaled} on {int(best['df'])} parameter(s), "
                 f"p {best['p_value']:.2g}); with it f_h {best['f_h_before']:.3f} -> {best['f_h']:.3f} Hz, xi_h "
-                f"{best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}")
+                f"{best['xi_h_before']:.3f} -> {best['xi_h']:.3f}, {best['parameters']}"
+                + "".join(f"; {line}" for line in in_time))
 
     def held_out_pair(self, name: str) -> tuple | None:
         """``(without, with)``: the held-out validation of the person without and with candidate ``name``, on the

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..io import G
 from .fade import fade_table
+from .in_time import in_time_words
 from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, STARTING_RANGE, WHITENESS_ALPHA,
                         narrowed)
 from .phone_report import phone_words
@@ -172,6 +173,9 @@ def result_dict(result) -> dict:
             out[f"{name}_low"], out[f"{name}_high"] = row["low"], row["high"]
             out[f"{name}_on_bound"] = bool(row["on_bound"])
         out.update(result.effect_test())
+        in_time = result.in_time()
+        if not in_time.empty:  # f_h, xi_h at the span's ends and either side of a step
+            out["in_time"] = in_time.to_dict("records")
         out["likelihood"] = "exact" if result.model.exact else "approximate"
         out["linearisations"] = result.linearisations
         out["settled"] = result.settled
@@ -240,6 +244,7 @@ def summary_text(result, verbose=False) -> str:
         for name, row in result.effect_estimates().iterrows():
             lines.append(f"  {name} = {row['value']:.4g}{_unit(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
                          f"interval {row['low']:.4g} to {row['high']:.4g})")
+        lines += in_time_words(result)
         before = d["before"]
         lines.append(f"  without the effect(s): f_h {before['f_h']:.3f} Hz, xi_h {before['xi_h']:.3f}, "
                      f"log-likelihood {before['log_likelihood']:.1f}, Ljung-Box p {before['ljung_box_p']:.2g}")

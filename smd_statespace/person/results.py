@@ -24,6 +24,7 @@ from scipy import stats
 
 from .calibration import model_error_floor
 from .fade import fade_shift
+from .in_time import person_in_time
 from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, VARIATION_AIC_CLOSE,  # noqa: F401
                         VARIATION_DISAGREEMENT, WHITENESS_ALPHA, XI_H_RESONANCE_MIMIC, mimicked_harmonic, narrowed,
                         plausible_variations, stands_in_for_force, variation_disagreement)
@@ -318,6 +319,12 @@ class PersonResult(RecordChecks):
                          "on_bound": self.model.at_bound(self.params, name)})
         columns = ["parameter", "unit", "value", "sd", "low", "high", "range_low", "range_high", "on_bound"]
         return pd.DataFrame(rows, columns=columns).set_index("parameter")
+
+    def in_time(self) -> pd.DataFrame:
+        """``f_h`` and ``xi_h`` at the fitted span's ends and either side of a step, with intervals, where a time
+        term among :attr:`effects` lets them change (:func:`~smd_statespace.person.in_time.person_in_time`; empty
+        without one): the fitted ``f_h`` and ``xi_h`` are then the record's middle values."""
+        return person_in_time(self)
 
     def added_unknowns(self, other) -> int:
         """How many more unknowns this fit estimates than ``other``: searched parameters and concentrated ones."""
