@@ -136,3 +136,30 @@ def test_the_screened_terms_header_says_how_many_are_fitted():
     many = screened_header(pd.DataFrame({"p_quick_holm": [1e-9, 1e-7, 1e-5]}), 0.01)
     assert "the 2 largest quick likelihood ratios (" in many and "at most 2) are fitted above" in many
     assert screened_header(pd.DataFrame({"lm_robust": [3.0]}), 0.01).endswith("so none is fitted above")
+
+
+def test_the_candidates_figure_marks_fitted_only_the_screened_terms_diagnose_fits(tmp_path):
+    """Three generic terms pass their quick fits; diagnose fits SCREENED (two) of them: the figure colours those
+    two, not the third (until 2026-11-29 it coloured every term that passed); of the candidates, the proposal alone
+    is blue (it coloured every one that passed, all called "proposed")."""
+    import pandas as pd
+    from types import SimpleNamespace
+    from matplotlib.colors import to_hex
+    from smd_statespace.person.diagnose import SCREENED, fitted_terms
+    from smd_statespace.plotting.person import plot_candidates
+
+    screened = pd.DataFrame({"label": ["term:u2", "term:abs_u", "term:v2", "term:u_v"],
+                             "lm_robust": [40.0, 30.0, 20.0, 1.0], "p_quick_holm": [1e-8, 1e-6, 1e-4, 1.0],
+                             "scan_trim": np.nan}, index=["term:kind=u2", "term:kind=abs_u", "term:kind=v2",
+                                                          "term:kind=u_v"])
+    assert SCREENED == 2 and fitted_terms(screened, 0.01) == ["term:kind=u2", "term:kind=abs_u"]
+    candidates = pd.DataFrame({"lr_robust": [200.0, 120.0, 3.0], "significant": [True, True, False], "df": 1,
+                               "trials": 1.0, "scan_trim": np.nan}, index=["term:u2", "term:abs_u", "harmonics"])
+    diagnosis = SimpleNamespace(screened=screened, alpha=0.01, table=lambda: candidates, level=0.001,
+                                base=SimpleNamespace(record=SimpleNamespace(source="rec.csv")))
+    figure = plot_candidates(diagnosis, tmp_path / "candidates.png")
+    blue, light, grey = to_hex("tab:blue"), to_hex("lightsteelblue"), to_hex("0.6")
+    colours = [[to_hex(bar.get_facecolor()) for bar in axes.patches[::-1]] for axes in figure.axes[:2]]  # top first
+    assert colours[0] == [blue, blue, light, grey]  # the screened terms: two fitted, one passed, one not
+    assert colours[1] == [blue, light, grey]  # the candidates: the proposal, one that also passes, one that fails
+    assert (tmp_path / "candidates.png").stat().st_size > 10_000

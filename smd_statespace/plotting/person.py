@@ -26,6 +26,7 @@ from matplotlib.figure import Figure
 from scipy import signal
 
 from ..measures import fit_percent
+from ..person.diagnose import fitted_terms
 from ..person.supremum import critical_value
 from ..person.noise_floor import measured_label
 from .innovations import Innovations, plot_innovation_panels
@@ -281,10 +282,12 @@ def plot_candidates(diagnosis, path=None) -> Figure:
 
     Left: every generic term's robust score statistic (chi-square(1) under "absent"; a step a scan placed, the
     largest of the scan's: its own level as a tick), with Holm's first level over the library (``alpha / terms``),
-    in blue the terms whose quick fit passed over the library (the largest of them are fitted:
-    :func:`~smd_statespace.person.screen.screen`); right: each fitted candidate's likelihood
+    in blue the terms fitted as candidates (those whose quick fit passed over the library, at most
+    :data:`~smd_statespace.person.diagnose.SCREENED`: :func:`~smd_statespace.person.diagnose.fitted_terms`), in light
+    blue any others that passed; right: each fitted candidate's likelihood
     ratio over its misspecification scale (:func:`~smd_statespace.person.robust.robust_scale`) against the level
-    of its own test (Bonferroni over every test, and over a floor mode's frequency grid), proposed ones in blue.
+    of its own test (Bonferroni over every test, and over a floor mode's frequency grid): the proposal in blue (the
+    first of :meth:`~smd_statespace.person.diagnose.PersonDiagnosis.table`), the others that pass in light blue.
     """
     fig = Figure(figsize=(11, 4.4), layout="constrained")
     left, right = fig.subplots(1, 2, width_ratios=(1.15, 1))
@@ -293,8 +296,12 @@ def plot_candidates(diagnosis, path=None) -> Figure:
         names = [name.replace("term:", "") for name in screened["label"]][::-1]
         values = screened["lm_robust"].to_numpy()[::-1]
         gate = "p_quick_holm" if "p_quick_holm" in screened else "p_holm"  # what decided the fit (screen's stages)
-        flagged = (screened[gate] < diagnosis.alpha).to_numpy()[::-1]
-        left.barh(names, values, color=np.where(flagged, "tab:blue", "0.6"))
+        passed = (screened[gate] < diagnosis.alpha).to_numpy()
+        # the terms diagnose fitted: those passed, at most SCREENED (a third that passed is not fitted)
+        fitted = (screened.index.isin(fitted_terms(screened, diagnosis.alpha)) if gate == "p_quick_holm"
+                  else passed)
+        colours = np.where(fitted, "tab:blue", np.where(passed, "lightsteelblue", "0.6"))[::-1]
+        left.barh(names, values, color=colours)
         first_level = diagnosis.alpha / len(screened)
         left.axvline(critical_value(first_level), color="k", ls="--", lw=0.8,
                      label=f"Holm's first level (alpha {diagnosis.alpha:g} over {len(screened)})")
@@ -305,14 +312,16 @@ def plot_candidates(diagnosis, path=None) -> Figure:
         left.set_xscale("symlog", linthresh=10.0)
         left.legend(fontsize=8, loc="lower right")
     left.set(xlabel="robust score statistic (no fit)",
-             title="generic terms at the fitted person (blue: passed by a quick fit)")
+             title="generic terms at the fitted person\n(blue: fitted; light blue: passed by a quick fit, not fitted)")
     table = diagnosis.table()
     if not table.empty:
         level = diagnosis.level
         names = list(table.index)[::-1]
         ratios = np.maximum(table["lr_robust"].to_numpy(dtype=float), 0.0)[::-1]
-        proposed = table["significant"].to_numpy(dtype=bool)[::-1]
-        right.barh(names, ratios, color=np.where(proposed, "tab:blue", "0.6"))
+        passes = table["significant"].to_numpy(dtype=bool)
+        proposed = np.arange(len(table)) == 0  # the table's order: the proposal first, when any passes
+        colours = np.where(passes & proposed, "tab:blue", np.where(passes, "lightsteelblue", "0.6"))[::-1]
+        right.barh(names, ratios, color=colours)
         degrees = table["df"].to_numpy(dtype=int)[::-1]
         trials = table["trials"].to_numpy(dtype=float)[::-1]  # a floor mode's frequency grid: tested as that many
         trims = table["scan_trim"].to_numpy(dtype=float)[::-1]  # a step a scan placed: the largest of the scan's
@@ -320,8 +329,8 @@ def plot_candidates(diagnosis, path=None) -> Figure:
             right.plot([critical_value(level / tried, df, trim)] * 2, [y - 0.4, y + 0.4], color="k", lw=1.2)
         right.set_xscale("symlog", linthresh=10.0)
     right.set(xlabel="likelihood ratio / its scale (black: its test's level)",
-              title="candidates fitted with the person")
-    fig.suptitle(f"{_name(diagnosis.base)}: is an effect missing? blue: proposed", fontsize=10)
+              title="candidates fitted with the person\n(blue: proposed; light blue: also passes its test)")
+    fig.suptitle(f"{_name(diagnosis.base)}: is an effect missing?", fontsize=10)
     return save(fig, path, DPI)
 
 
