@@ -8,8 +8,8 @@ from smd_statespace.person.diagnose import held_out, verdict
 from smd_statespace.person.extend import fit_effects
 from smd_statespace.person.search import fit_model
 from smd_statespace.measures import fit_percent
-from smd_statespace.person.validation import (BREAK_MARGIN, cross_validated_loglike, halves, held_out_free_run, held_out_loglike,
-                                              part)
+from smd_statespace.person.validation import (BREAK_MARGIN, break_folds, cross_validated_loglike, halves,
+                                              held_out_free_run, held_out_loglike, part)
 from smd_statespace.simulation import simulate_bouncing
 
 PERSON = dict(mass=70.0, f_b=2.2, f_h=2.9, xi_h=0.3, duration=30.0, fs=100.0, noise=0.01, seed=5)
@@ -105,11 +105,28 @@ def test_a_change_in_time_moves_the_cut_away_from_it(clean):
     assert halves(clean.model, [time[0] + f * length for f in (0.2, 0.5, 0.8)]) is None
 
 
+def test_a_change_in_time_is_judged_by_folds_fitted_across_it(clean):
+    """A step at the middle: two folds, each fitted on a part that holds it (cut a sixth of the record after it,
+    and as far before it), each holding out the rest; a step near the record's end leaves one; none beyond both."""
+    time = clean.model.time
+    length = time[-1] - time[0]
+    at = time[0] + 0.5 * length
+    folds = break_folds(clean.model, [at])
+    assert len(folds) == 2
+    for (fit, _), (held, _) in folds:
+        assert np.all(fit ^ held) and time[fit][0] < at < time[fit][-1]  # every sample once; fitted across it
+        assert min(abs(time[held][0] - at), abs(time[held][-1] - at)) >= BREAK_MARGIN * length
+    assert time[folds[0][1][0]][0] > at and time[folds[1][1][0]][-1] < at  # the end held out, then the start
+    assert len(break_folds(clean.model, [time[0] + 0.75 * length])) == 1  # only the start can be held out
+    assert break_folds(clean.model, [time[0] + f * length for f in (0.2, 0.8)]) == []
+
+
 @pytest.mark.slow
-def test_a_step_is_judged_by_the_fold_fitted_across_it():
-    """f_h 30 % higher (w_h^2) after the middle: the fold fitted across the step predicts the part before it better
-    with the step than without. (On the middle cut each half sees one side of the step only, where the step's term is
-    a constant confounded with f_h: what it says depends on where each half's search stops along that ridge.)"""
+def test_a_step_is_judged_by_the_folds_fitted_across_it():
+    """f_h 30 % higher (w_h^2) after the middle: the folds fitted across the step predict the rest of the record
+    better with the step than without. (On the middle cut each half sees one side of the step only, where the step's
+    term is a constant confounded with f_h: what it says depends on where each half's search stops along that
+    ridge.)"""
     from smd_statespace.effects.generic import GenericTerm
 
     step = GenericTerm("f_step", scale=PERSON["duration"], at=0.5)
@@ -118,18 +135,18 @@ def test_a_step_is_judged_by_the_fold_fitted_across_it():
     fitted = fit_effects(base, [step], timing=False)
     before = cross_validated_loglike(base.model, base.params, step.breaks)
     after = cross_validated_loglike(fitted.model, fitted.params, step.breaks)
-    assert len(after["folds"]) == 1 and after["cut"] == before["cut"]
-    assert abs(after["cut"] - step.breaks[0]) >= BREAK_MARGIN * PERSON["duration"] - 1.0
-    fold = after["folds"][0]
-    assert fold["start"] < step.breaks[0] < fold["end"]  # fitted across the step
+    assert len(after["folds"]) == 2 and after["cuts"] == before["cuts"]
+    for fold, cut in zip(after["folds"], after["cuts"][::-1]):  # the end held out first, then the start
+        assert fold["start"] < step.breaks[0] < fold["end"]  # fitted across the step
+        assert abs(cut - step.breaks[0]) >= BREAK_MARGIN * PERSON["duration"] - 1.0
     assert after["loglike"] > before["loglike"] + 10.0
-    assert np.isnan(after["free_run"][fitted.model.time >= after["cut"]] if fold["start"] >= after["cut"]
-                    else after["free_run"][fitted.model.time < after["cut"]]).all()
+    middle = (fitted.model.time >= after["cuts"][0]) & (fitted.model.time < after["cuts"][1])
+    assert np.isnan(after["free_run"][middle]).all() and np.isfinite(after["free_run"][~middle]).all()
 
 
 def test_candidates_are_ranked_by_their_held_out_gain_per_held_out_sample():
-    """A step is judged on one fold (a third of the samples), harmonics on both halves: +40 on 1000 samples predicts
-    better than +72 on 3000, and is ranked first; a candidate that failed its test comes last whatever its gain."""
+    """Judged on the same folds, +40 on 1000 held-out samples predicts better than +72 on 3000, and is ranked
+    first; a candidate that failed its test comes last whatever its gain."""
     from smd_statespace.person.diagnose import PersonDiagnosis
 
     def row(name, gain, samples, significant=True, log_p=-50.0):
@@ -141,6 +158,25 @@ def test_candidates_are_ranked_by_their_held_out_gain_per_held_out_sample():
     assert list(diagnosis.table().index) == ["term:f_step@0.5", "harmonics", "cubic"]
     rows[1]["held_out_samples"] = 3000  # the same gain on as many samples as the harmonics': they come first
     assert list(PersonDiagnosis(base=None, fits={}, rows=rows, failed={}, alpha=0.01).table().index)[0] == "harmonics"
+
+
+def test_candidates_judged_on_different_folds_are_ranked_by_their_tests():
+    """A step judged on its own folds and a drift on the halves: their held-out gains are on different samples and do
+    not compare, so the stronger test (the drift's, p e^-40 against e^-30) comes first though the step gained more
+    per held-out sample; on the same folds the gain decides."""
+    from smd_statespace.person.diagnose import PersonDiagnosis
+
+    rows = [{"effect": "term:f_step@0.5", "significant": True, "held_out_before": 1000.0, "held_out": 1100.0,
+             "held_out_samples": 2000, "log_p": -30.0},
+            {"effect": "term:f_drift", "significant": True, "held_out_before": 1000.0, "held_out": 1010.0,
+             "held_out_samples": 3000, "log_p": -40.0}]
+    halves_folds = {"folds": [{"start": 0.0, "end": 15.0}, {"start": 15.0, "end": 30.0}]}
+    step_folds = {"folds": [{"start": 0.0, "end": 20.0}, {"start": 10.0, "end": 30.0}]}
+    validation = {"term:f_step@0.5": step_folds, "term:f_drift": halves_folds}
+    diagnosis = PersonDiagnosis(base=None, fits={}, rows=rows, failed={}, alpha=0.01, validation=validation)
+    assert list(diagnosis.table().index) == ["term:f_drift", "term:f_step@0.5"]
+    validation["term:f_step@0.5"] = halves_folds
+    assert list(diagnosis.table().index) == ["term:f_step@0.5", "term:f_drift"]
 
 
 @pytest.mark.parametrize("kurtosis, scale, noted", [(15.9, 3.2, True), (3.1, 1.0, False)])

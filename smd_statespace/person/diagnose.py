@@ -212,21 +212,21 @@ class PersonDiagnosis:
 
     def table(self) -> pd.DataFrame:
         """The candidates: those that pass first, by their held-out log-likelihood gain per held-out sample (by
-        their tests' p-values where they were judged on different folds: a change in time on one), the joint
+        their tests' p-values where they were judged on different folds: a change in time on its own), the joint
         fit's choice first when it separated two; then the others by the log p-value of their likelihood ratio."""
         if not self.rows:
             return pd.DataFrame()
         table = pd.DataFrame(self.rows).set_index("effect")
         # the significant ones by how well they predict the held-out halves, per held-out sample, the others by
-        # their test. A change in time is judged on one fold (fitted across it), the others on two: gains on
-        # different data do not compare, so where the significant ones were judged on different folds they are
-        # ranked by their tests too, whose p-values count their searches (a step's scan, a floor's grid). On
-        # jumps records whose f_h drifts, a step placed by the scan gained +20.9 on 1437 held-out samples where the
-        # drift gained +18.4 on 3001, though the drift's test was the stronger (p 9e-11 against 1e-7) and the
-        # joint fit kept the drift on top of the step (p 0.008) but not the step on top of the drift (p 0.57)
+        # their test. A change in time is judged on folds fitted across it (validation.break_folds), the others on
+        # the halves: gains on different data do not compare, so where the significant ones were judged on different
+        # folds they are ranked by their tests too, whose p-values count their searches (a step's scan, a floor's
+        # grid). On jumps records whose f_h drifts, a step placed by the scan gained +20.9 on 1437 held-out samples
+        # where the drift gained +18.4 on 3001, though the drift's test was the stronger (p 9e-11 against 1e-7) and
+        # the joint fit kept the drift on top of the step (p 0.008) but not the step on top of the drift (p 0.57)
         gain = np.where(table["significant"], (table["held_out"] - table["held_out_before"])
                         / table["held_out_samples"], np.nan)
-        folds = {len((self.validation.get(name) or {}).get("folds", ()))
+        folds = {tuple((fold["start"], fold["end"]) for fold in (self.validation.get(name) or {}).get("folds", ()))
                  for name in table.index[table["significant"]]}
         if len(folds) > 1:
             gain = np.where(table["significant"], 0.0, np.nan)
@@ -367,7 +367,7 @@ class PersonDiagnosis:
 
     def _held_out_notes(self, table) -> list:
         """Notes on the held-out validation: the person with each candidate that passed, a worse free run, and a
-        change in time judged on one fold."""
+        change in time judged on the folds fitted across it."""
         if table.empty:
             return []
         out = []
@@ -378,11 +378,11 @@ class PersonDiagnosis:
             if checked is None:
                 out.append(f"{name}: a change in time, and no cut of the record leaves it a sixth of the record "
                            "away in one half: not judged on held-out data")
-            elif len(checked["folds"]) == 1:
-                fold = checked["folds"][0]
+            else:
+                fitted = " and ".join(f"{fold['start']:.1f}-{fold['end']:.1f} s" for fold in checked["folds"])
                 out.append(f"{name}: a fit that has not seen a change in time cannot predict it, so it is judged "
-                           f"on one fold: the person fitted on {fold['start']:.1f}-{fold['end']:.1f} s (which "
-                           f"holds the change; the cut moved to {checked['cut']:.1f} s) predicting the rest")
+                           f"on {'one fold' if len(checked['folds']) == 1 else 'two folds'} that hold the change: "
+                           f"the person fitted on {fitted}, each predicting the rest of the record")
         significant = table[table["significant"].astype(bool)]
         if len(significant) >= 2:
             out.append("candidates that pass, by how well they predict the held-out halves (held-out "

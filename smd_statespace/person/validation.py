@@ -20,9 +20,14 @@ effect keeps the whole fit's linearisation path, cut likewise).
 
 A change in time (a step, an effect's :attr:`~smd_statespace.model.effect.Effect.breaks`) cannot be
 predicted by a fit that has not seen it: on one side of a step its term is a constant, confounded with
-``f_h``. For such a model the cut is moved at least :data:`BREAK_MARGIN` of the record away from every
-break (all breaks on one side), and only the fold fitted on the part that holds them is scored: the
-person fitted across the step predicts the part before (or after) it.
+``f_h``. For such a model every fold is fitted on a part that holds the breaks (:func:`break_folds`): cut
+at least :data:`BREAK_MARGIN` of the record after the last break, the part before the cut predicts the rest;
+cut as far before the first, the part after it predicts the start. Both folds are scored where both cuts
+leave :data:`MIN_HALF_CYCLES` cycles held out, so the record's either side of the change is predicted by a
+person who has seen it. Until 2026-11-29 only one such fold was scored (the third of the record beyond one
+cut): on a lab export whose ``f_h`` steps 16 % at the middle (``person_effects.py``, seed 92, step record 4;
+likelihood ratio 29, p 3e-6) the step fitted on 4.6-25.3 s, with 5 s of it after the step, predicted
+25.3-35.4 s worse than the person without it (z -0.83), and the step was not proposed.
 """
 
 from __future__ import annotations
@@ -36,8 +41,8 @@ from .dynamics import PersonDynamics
 from .search import fit_model
 from .timing import CycleTiming
 
-__all__ = ["MIN_HALF_CYCLES", "BREAK_MARGIN", "halves", "part", "held_out_prediction", "held_out_loglike",
-           "held_out_free_run", "cross_validated_loglike", "held_out_gain"]
+__all__ = ["MIN_HALF_CYCLES", "BREAK_MARGIN", "halves", "break_folds", "part", "held_out_prediction",
+           "held_out_loglike", "held_out_free_run", "cross_validated_loglike", "held_out_gain"]
 
 MIN_HALF_CYCLES = 8
 """Fewest whole force cycles in each half (the record-level model needs as many to estimate the variation)."""
@@ -55,23 +60,54 @@ def halves(model, breaks=()) -> list | None:
     every time in ``breaks`` (s, on the record's time axis), with all of them on one side. None when no
     boundary does.
     """
+    time, boundaries, inside, index = _cuts(model)
+    if len(breaks):
+        index = index[_apart(inside[index], breaks, time) | _apart(inside[index], breaks, time, before=True)]
+    return _split(time, boundaries, _middle(inside, index)) if index.size else None
+
+
+def break_folds(model, breaks) -> list:
+    """The folds that judge a model with changes at ``breaks`` (s): each fitted on a part that holds them all.
+
+    ``[(fitted, held), ...]``, each ``(keep, kept)`` as :func:`halves` gives them: cut at the boundary nearest the
+    middle among those at least :data:`BREAK_MARGIN` of the record after the last break, the part before the cut
+    is fitted and the rest held out; cut likewise before the first break, the part after it is fitted and the
+    start held out. Each cut leaves :data:`MIN_HALF_CYCLES` cycles on both sides. Empty when neither side has one.
+    """
+    time, boundaries, inside, index = _cuts(model)
+    folds = []
+    for before in (False, True):
+        valid = index[_apart(inside[index], breaks, time, before)]
+        if valid.size:
+            first, second = _split(time, boundaries, _middle(inside, valid))
+            folds.append((second, first) if before else (first, second))
+    return folds
+
+
+def _cuts(model) -> tuple:
+    """``(time, boundaries, inside, index)``: the cycle boundaries inside the record and the indices (into
+    ``inside``) of those that leave :data:`MIN_HALF_CYCLES` cycles on both sides (none on a short record)."""
     boundaries = np.asarray(model.timing.boundaries, dtype=float)
     time = model.time
     inside = boundaries[(boundaries > time[0]) & (boundaries < time[-1])]
-    if inside.size < 2 * MIN_HALF_CYCLES + 1:
-        return None
-    index = np.arange(MIN_HALF_CYCLES, inside.size - MIN_HALF_CYCLES)
-    breaks = np.asarray(breaks, dtype=float)
-    if breaks.size:
-        margin = BREAK_MARGIN * (time[-1] - time[0])
-        distance = inside[index, None] - breaks[None, :]
-        apart = np.all(np.abs(distance) >= margin, axis=1)
-        one_side = np.all(distance > 0, axis=1) | np.all(distance < 0, axis=1)
-        index = index[apart & one_side]
-        if index.size == 0:
-            return None
-    cut = inside[index[np.argmin(np.abs(index - inside.size // 2))]]
+    return time, boundaries, inside, np.arange(MIN_HALF_CYCLES, max(inside.size - MIN_HALF_CYCLES, MIN_HALF_CYCLES))
+
+
+def _middle(inside, index) -> float:
+    """The boundary of ``inside[index]`` nearest the middle of the boundaries."""
+    return float(inside[index[np.argmin(np.abs(index - inside.size // 2))]])
+
+
+def _split(time, boundaries, cut) -> list:
+    """``[(keep, kept), (keep, kept)]``: the samples and cycle boundaries before and after ``cut``."""
     return [(time < cut, boundaries <= cut), (time >= cut, boundaries >= cut)]
+
+
+def _apart(cuts, breaks, time, before: bool = False) -> np.ndarray:
+    """Which ``cuts`` lie at least :data:`BREAK_MARGIN` of the record after every break (``before``: before)."""
+    margin = BREAK_MARGIN * (time[-1] - time[0])
+    distance = np.asarray(cuts)[:, None] - np.asarray(breaks, dtype=float)[None, :]
+    return np.all(-distance >= margin if before else distance >= margin, axis=1)
 
 
 def part(model, keep, kept):
@@ -174,9 +210,9 @@ def cross_validated_loglike(model, params, breaks=()) -> dict | None:
         Its estimate (each half's search starts there).
     breaks : sequence of float
         Times (s) where a candidate's term changes abruptly (its effects'
-        :attr:`~smd_statespace.model.effect.Effect.breaks`): the cut is moved away from them (:func:`halves`)
-        and only the fold fitted on the part that holds them is scored. Give the same ``breaks`` for the
-        model without the candidate, so both are judged on the same samples.
+        :attr:`~smd_statespace.model.effect.Effect.breaks`): every fold is fitted on a part that holds them
+        (:func:`break_folds`: one or two folds). Give the same ``breaks`` for the model without the candidate,
+        so both are judged on the same samples.
 
     Returns
     -------
@@ -187,18 +223,21 @@ def cross_validated_loglike(model, params, breaks=()) -> dict | None:
         ``free_run``: those over the record, each half as predicted from the other (arrays, s and
         m/s^2; NaN on a half no fold predicts); ``sample_loglike``: each held-out sample's log-density
         (NaN elsewhere); ``cycle``: each sample's force cycle (the clusters of :func:`held_out_gain`);
-        ``cut``: where the second half begins (s); ``folds``: per
-        fold scored the fitted half's ``start``, ``end`` (s), its parameters and the held-out log-likelihood
-        of the other half. None when the record is too short to halve (:func:`halves`) or a half's fit does
-        not converge.
+        ``cuts``: where the fitted and held-out parts meet (s; one for the halves); ``folds``: per
+        fold scored the fitted part's ``start``, ``end`` (s), its parameters and the held-out log-likelihood
+        of the rest. None when the record is too short to cut (:func:`halves`, :func:`break_folds`) or a fold's
+        fit does not converge.
     """
-    cut = halves(model, breaks)
-    if cut is None:
-        return None
-    parts = [part(model, keep, kept) for keep, kept in cut]
-    order = list(zip((parts, parts[::-1]), cut[::-1]))
-    if len(breaks):  # only the half that holds the breaks can determine the change
-        order = order[:1] if float(np.min(breaks)) < float(parts[1].time[0]) else order[1:]
+    if len(breaks):  # only a part that holds the breaks can determine the change: folds fitted on such parts
+        order = [((part(model, *fit), part(model, *held)), held) for fit, held in break_folds(model, breaks)]
+        if not order:
+            return None
+    else:
+        cut = halves(model)
+        if cut is None:
+            return None
+        parts = [part(model, keep, kept) for keep, kept in cut]
+        order = list(zip((parts, parts[::-1]), cut[::-1]))
     folds, one_step, free = [], np.full(model.y.size, np.nan), np.full(model.y.size, np.nan)
     sample = np.full(model.y.size, np.nan)
     for (fitted_part, held_part), (held, _) in order:
@@ -212,12 +251,13 @@ def cross_validated_loglike(model, params, breaks=()) -> dict | None:
         free[held] = held_out_free_run(held_part, fitted["params"], filtered["delta"])
         folds.append({"start": float(fitted_part.time[0]), "end": float(fitted_part.time[-1]),
                       "params": fitted["params"], "held_out_loglike": predicted["loglike"]})
+    cuts = sorted({float(max(fitted_part.time[0], held_part.time[0])) for (fitted_part, held_part), _ in order})
     scored = model.observed & np.isfinite(free)
     return {"loglike": float(sum(f["held_out_loglike"] for f in folds)), "folds": folds,
             "one_step_fit": fit_percent(model.y[scored], one_step[scored]),
             "free_run_fit": fit_percent(model.y[scored], free[scored]),
             "time": model.time, "measured": model.y, "one_step": one_step, "free_run": free,
-            "sample_loglike": sample, "cycle": model._phase[0], "cut": float(model.time[cut[1][0]][0])}
+            "sample_loglike": sample, "cycle": model._phase[0], "cuts": cuts}
 
 
 def held_out_gain(before: dict, after: dict) -> dict:

@@ -40,9 +40,10 @@ def held_out_z(level: float) -> float:
     ``f_h`` gained +0.8 in log-likelihood over 887 held-out samples, 77 % of it from 10 of them, and a drift of
     ``f_h`` +60 at 2.2 sds; both were proposed while the gain only had to be positive. True effects measured:
     4.6 sds for a drift of ``f_h`` on the same generator (the harmonics proposed with it: 2.1),
-    6.4 for a spring stiffer on one side and 32 for extra harmonics on the jumps generator. But a step of ``f_h`` is
-    judged on one fold (a third of the record), and on the jumps generator (kurtosis near 3) true steps reached
-    only 2.4: asked for everywhere, it lost 3 steps of 4 that a positive gain had found.
+    6.4 for a spring stiffer on one side and 32 for extra harmonics on the jumps generator. But a step of ``f_h`` was
+    then judged on one fold (a third of the record; two thirds since 2026-11-29,
+    :func:`~smd_statespace.person.validation.break_folds`), and on the jumps generator (kurtosis near 3) true steps
+    reached only 2.4: asked for everywhere, it lost 3 steps of 4 that a positive gain had found.
     """
     return float(stats.norm.isf(level))
 
@@ -52,8 +53,8 @@ CLEAR_GAIN = 1.0
 innovations are not heavy-tailed (over :data:`HEAVY_TAILS` it is :func:`held_out_z`): a gain smaller than the
 spread of the cycles' gains is not an improvement the held-out halves show. Not asked of a change in time (a drift
 or a step of ``f_h`` or ``xi_h``): a half predicts the other by extrapolating its course, and a true change
-predicts weakly (on lab exports a drift of ``f_h`` gained 0.80 sds, a step 0.007 on its one fold), so a positive
-gain is enough there, as before.
+predicts weakly (on lab exports a drift of ``f_h`` gained 0.80 sds, a step 0.007 on the one fold it was then
+judged on), so a positive gain is enough there, as before.
 
 Chosen on the clean records of ``benchmarks/person_effects.py`` (seed 92, jumps and smooth generators), where
 three of 31 had a candidate proposed, with held-out gains of 0.26, 1.63 and 1.65 sds, and true small effects

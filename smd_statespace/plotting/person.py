@@ -94,7 +94,16 @@ def _worst_window(time, residual, seconds) -> float:
     return float(time[int(np.argmax(energy))])
 
 
-def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None, measured="measured") -> Figure:
+def _longest_run(time, mask) -> np.ndarray:
+    """The times of the longest run of consecutive samples where ``mask`` holds (the held-out parts a run predicts:
+    the middle of the record is not one where two folds hold out its ends)."""
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(int), 0]))
+    starts, ends = edges[::2], edges[1::2]
+    longest = int(np.argmax(ends - starts))
+    return time[starts[longest]:ends[longest]]
+
+
+def _compare_figure(time, y, runs, title, seconds, cuts=(), one_step=None, measured="measured") -> Figure:
     """Measured against simulated runs ``[(color key, label, run)]``: the residuals, the worst window, the middle.
 
     ``measured``: the legend label of ``y`` (:func:`~smd_statespace.person.noise_floor.measured_label`).
@@ -103,7 +112,8 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None, meas
     Samples a run does not predict (NaN) are left out of its fit % and of the middle window.
     """
     fig = Figure(figsize=(10.0, 7.5 if one_step is None else 9.6))
-    fig.subplots_adjust(left=0.08, right=0.985, bottom=0.07, top=0.955, hspace=0.42)  # fixed: no layout engine
+    top = 0.955 if "\n" not in title else 0.94
+    fig.subplots_adjust(left=0.08, right=0.985, bottom=0.07, top=top, hspace=0.42)  # fixed: no layout engine
     axes = list(fig.subplots(3 if one_step is None else 4, 1))
     panels = [(axes.pop(0), one_step, "one-step prediction error (m/s$^2$)")] if one_step is not None else []
     panels.append((axes[0], runs, "measured - simulated (m/s$^2$)"))
@@ -112,13 +122,13 @@ def _compare_figure(time, y, runs, title, seconds, cut=None, one_step=None, meas
             known = np.isfinite(predicted)
             ax.plot(time, y - predicted, color=COLORS.get(key, "tab:blue"), lw=0.6, alpha=0.85,
                     label=f"{label}: fit {fit_percent(y[known], predicted[known]):.1f} %")
-        if cut is not None:
-            ax.axvline(cut, color="k", lw=1.0, ls="--", label="halves' boundary")
+        for number, cut in enumerate(cuts):  # where the fitted and held-out parts meet
+            ax.axvline(cut, color="k", lw=1.0, ls="--", label="fitted | held out" if number == 0 else None)
         ax.set(xlabel="time (s)", ylabel=ylabel)
         ax.legend(fontsize=8, loc="upper right")
     panels[0][0].set_title(title, fontsize=10)
     worst, middle = axes[1:]
-    covered = time[np.isfinite(runs[0][2])]  # the samples the runs predict
+    covered = _longest_run(time, np.isfinite(runs[0][2]))  # the longest stretch the runs predict
     starts = (_worst_window(time, y - runs[0][2], seconds), covered[0] + 0.5 * (covered[-1] - covered[0]) - seconds / 2)
     for ax, start, what in ((worst, starts[0], "free run, where the model without misses most"),
                             (middle, starts[1], "free run, middle")):
@@ -163,10 +173,13 @@ def plot_held_out(diagnosis, name, path=None, seconds: float = 3.0) -> Figure:
     one_step = [(key, f"{label} (held-out log-likelihood {check['loglike']:.1f})", check["one_step"])
                 for key, label, check in pairs]
     title = f"{_name(diagnosis.base)}: each half predicted by the person fitted on the other half"
-    if len(after["folds"]) == 1:  # a change in time: only the half that holds it was fitted (validation.halves)
-        title = (f"{_name(diagnosis.base)}: the part outside {after['folds'][0]['start']:.1f}-"
-                 f"{after['folds'][0]['end']:.1f} s predicted by the person fitted there (which holds the change)")
-    return save(_compare_figure(before["time"], before["measured"], runs, title, seconds, cut=before["cut"],
+    if len(after["cuts"]) != 1 or len(after["folds"]) == 1:  # a change in time: parts that hold it were fitted
+        first, last = float(after["time"][0]), float(after["time"][-1])
+        held = [(fold["end"], last) if fold["start"] <= first else (first, fold["start"]) for fold in after["folds"]]
+        title = (f"{_name(diagnosis.base)}: each part held out predicted by the person fitted across the change\n"
+                 + "; ".join(f"{low:.1f}-{high:.1f} s by the fit on {fold['start']:.1f}-{fold['end']:.1f} s"
+                             for (low, high), fold in zip(held, after["folds"])))
+    return save(_compare_figure(before["time"], before["measured"], runs, title, seconds, cuts=before["cuts"],
                                 one_step=one_step, measured=measured_label(diagnosis.base.notes)), path, DPI)
 
 
