@@ -6,7 +6,7 @@ import pytest
 
 from smd_statespace.effects import GenericTerm
 from smd_statespace.person import identify_person
-from smd_statespace.person.breaks import located_step, step_scan
+from smd_statespace.person.breaks import located_step, short_fraction, step_scan
 from smd_statespace.person.supremum import critical_value, log_p_value, sup_p_value
 from smd_statespace.person.screen import score_test
 from smd_statespace.simulation import simulate_bouncing
@@ -63,3 +63,15 @@ def test_a_step_of_f_h_is_placed_where_it_is_and_a_clean_record_has_none(clean):
     found = located_step(person, "f_step")
     assert found.scan["time_s"] == pytest.approx(at * 20.0, abs=2.5 * float(np.diff(time).mean()))
     assert found.scan["p"] < 1e-6
+    # the spec diagnose prints is short, and the step sits in the second half of the interval before its sample
+    options = dict(part.split("=") for part in found.spec.split(":", 1)[1].split(","))
+    assert len(options["at"]) <= 8 and len(options["scale"]) <= 8, found.spec
+    sample = int(np.searchsorted(person.model.time, found.scan["time_s"]))
+    before, after = person.model.time[sample - 1: sample + 1]
+    assert 0.5 * (before + after) < found.breaks[0] < after
+
+
+def test_a_short_fraction_stays_between_its_bounds():
+    assert short_fraction(9.995, 10.0, 0.0, 20.0) == 0.4999  # 9.998 s
+    assert short_fraction(9.9950001, 9.9950002, 0.0, 20.0) * 20.0 == pytest.approx(9.99500015, abs=5e-8)
+    assert 4.81 + short_fraction(19.925, 19.93, 4.81, 30.4) * 30.4 < 19.93

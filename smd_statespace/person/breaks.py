@@ -36,7 +36,7 @@ from .extend import at_zero
 from .score import cycle_sums, profile_out, score, system_derivatives
 from .supremum import sup_p_value
 
-__all__ = ["TRIM", "CHUNK", "STRIDE", "PEAKS", "step_scan", "located_step"]
+__all__ = ["TRIM", "CHUNK", "STRIDE", "PEAKS", "step_scan", "located_step", "fitted_span", "short_fraction"]
 
 TRIM = 0.15
 """A step is looked for from this fraction of the fitted record to one minus it (Andrews' trimming, ``pi_0``):
@@ -158,6 +158,23 @@ def step_scan(result, kind: str = "f_step", trim: float = TRIM, stride: int = ST
     return scan.sort_values("time_s").drop(columns="sample").reset_index(drop=True)
 
 
+def fitted_span(time) -> tuple:
+    """``(start, length)`` of a fitted span (s), to the nanosecond: what a time term's ``start`` and ``scale`` are, so
+    that the ``--effect`` spec diagnose prints reads ``scale=30.404``, not ``scale=30.403999999999996``."""
+    return round(float(time[0]), 9), round(float(time[-1] - time[0]), 9)
+
+
+def short_fraction(low: float, high: float, start: float, length: float) -> float:
+    """The fraction ``at`` of the fewest decimals whose time ``start + at * length`` lies strictly between ``low``
+    and ``high`` (s): a step's place in a spec a user can read (``at=0.49747``), on the same side of every sample."""
+    middle = (0.5 * (low + high) - start) / length
+    for digits in range(2, 16):
+        at = round(middle, digits)
+        if low < start + at * length < high and 0.0 < at < 1.0:
+            return at
+    return middle
+
+
 def located_step(result, kind: str = "f_step", trim: float = TRIM) -> GenericTerm:
     """The ``kind`` step at the time :func:`step_scan`'s LM statistic is largest (the step's least-squares time;
     the sample it names is the first after it), with the scan on it: ``scan`` = ``{"trim": trim, "lm_robust":``
@@ -167,9 +184,12 @@ def located_step(result, kind: str = "f_step", trim: float = TRIM) -> GenericTer
     scan = step_scan(result, kind, trim)
     best = scan.loc[scan["lm"].idxmax()]
     time = result.model.time
-    start, length = float(time[0]), float(time[-1] - time[0])
-    at = (float(best["time_s"]) - start) / length - 1e-9  # just before the sample: it is on the side after
-    term = GenericTerm(kind, scale=length, start=start, at=at)
+    start, length = fitted_span(time)
+    sample = int(np.searchsorted(time, float(best["time_s"])))
+    # in the second half of the interval before the sample, so that the sample is on the side after the step, and
+    # the rates' evaluations inside the interval (at its middle) on the side before, as the scan's statistic has them
+    low = float(time[sample]) - 0.5 * (float(time[sample]) - float(time[sample - 1]))
+    term = GenericTerm(kind, scale=length, start=start, at=short_fraction(low, float(time[sample]), start, length))
     sup = float(scan["lm_robust"].max())
     term.scan = {"trim": trim, "lm_robust": sup, "p": sup_p_value(sup, trim), "time_s": float(best["time_s"]),
                  "table": scan}

@@ -42,7 +42,7 @@ from scipy import stats
 
 from ..effects.generic import TERMS, GenericTerm, label
 from ..errors import SMDInputError
-from .breaks import located_step
+from .breaks import fitted_span, located_step
 from .extend import at_zero
 from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
@@ -92,7 +92,7 @@ def generic_library(result, kinds=None, scan: bool = False) -> list:
         rms = np.sqrt(np.mean(result.predicted_path()[:, :2] ** 2, axis=0))
         scales = {"restoring": float(rms[0]), "damping": float(rms[1])}
     time = result.model.time
-    length, start = float(time[-1] - time[0]), float(time[0])
+    start, length = fitted_span(time)
     out = []
     for kind in kinds:
         family = TERMS[kind][0]
