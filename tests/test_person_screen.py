@@ -153,6 +153,7 @@ def test_the_candidates_figure_marks_fitted_only_the_screened_terms_diagnose_fit
                              "scan_trim": np.nan}, index=["term:kind=u2", "term:kind=abs_u", "term:kind=v2",
                                                           "term:kind=u_v"])
     assert SCREENED == 2 and fitted_terms(screened, 0.01) == ["term:kind=u2", "term:kind=abs_u"]
+    screened["fitted"] = screened.index.isin(fitted_terms(screened, 0.01))  # as diagnose_person marks them
     candidates = pd.DataFrame({"lr_robust": [200.0, 120.0, 3.0], "significant": [True, True, False], "df": 1,
                                "trials": 1.0, "scan_trim": np.nan}, index=["term:u2", "term:abs_u", "harmonics"])
     diagnosis = SimpleNamespace(screened=screened, alpha=0.01, table=lambda: candidates, level=0.001,

@@ -183,8 +183,8 @@ class PersonDiagnosis:
         When two candidates were significant: ``effects`` (the two names), ``loglike`` of the joint
         fit and, per name, ``lr`` and ``p_value`` of that effect on top of the other.
     screened : pandas.DataFrame
-        The generic terms' score tests (:func:`~smd_statespace.person.screen.screen`), empty when candidates
-        were given.
+        The generic terms' score tests (:func:`~smd_statespace.person.screen.screen`), with ``fitted`` (the
+        terms fitted as candidates: :func:`fitted_terms`); empty when candidates were given.
     tests : int
         How many tests the Bonferroni level counts: the candidates fitted and every generic term screened.
     scans : dict
@@ -506,6 +506,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
             failed["generic terms (score tests)"] = " ".join(str(exc).split())
         else:
             flagged = set(fitted_terms(screened, alpha))
+            screened = screened.assign(fitted=screened.index.isin(flagged))  # what the figure colours as fitted
             effects += [effect for effect in terms if effect.spec in flagged]
     level = alpha / max(tests, 1)
     fits, rows = _fit_candidates(result, effects, level, failed, threads, progress)

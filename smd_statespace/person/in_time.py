@@ -66,15 +66,15 @@ def person_in_time(result) -> pd.DataFrame:
     scale = np.ones(len(names))
     scale[:2] = np.where(raw > 0, honest / np.where(raw > 0, raw, 1.0), 1.0)
     cov = cov * np.outer(scale, scale)
+    coefficients = np.array([named[term.coefficient] for term in terms])
     rows = []
     for at, side in _times(result, terms):
         row = {"time_s": at, "side": {0: "start" if at == float(model.time[0]) else "end", -1: "before",
                                       +1: "after"}[side]}
         # a step is evaluated just before (side -1) or at (side +1) its time, as the model's H(t - t_s)
         t = np.nextafter(at, -np.inf) if side < 0 else at
-        for position, parameter in enumerate(("f_h", "xi_h")):
+        for parameter in ("f_h", "xi_h"):
             moments = np.array([float(term.moment(t)) if term.changes == parameter else 0.0 for term in terms])
-            coefficients = np.array([named[term.coefficient] for term in terms])
             relative = 1.0 + float(moments @ coefficients)
             gradient = np.zeros(len(names))
             if parameter == "f_h":  # f_h sqrt(1 + sum c m)

@@ -26,7 +26,6 @@ from matplotlib.figure import Figure
 from scipy import signal
 
 from ..measures import fit_percent
-from ..person.diagnose import fitted_terms
 from ..person.supremum import critical_value
 from ..person.noise_floor import measured_label
 from .innovations import Innovations, plot_innovation_panels
@@ -296,7 +295,7 @@ def plot_candidates(diagnosis, path=None) -> Figure:
     Left: every generic term's robust score statistic (chi-square(1) under "absent"; a step a scan placed, the
     largest of the scan's: its own level as a tick), with Holm's first level over the library (``alpha / terms``),
     in blue the terms fitted as candidates (those whose quick fit passed over the library, at most
-    :data:`~smd_statespace.person.diagnose.SCREENED`: :func:`~smd_statespace.person.diagnose.fitted_terms`), in light
+    :data:`~smd_statespace.person.diagnose.SCREENED`: the screened table's ``fitted``), in light
     blue any others that passed; right: each fitted candidate's likelihood
     ratio over its misspecification scale (:func:`~smd_statespace.person.robust.robust_scale`) against the level
     of its own test (Bonferroni over every test, and over a floor mode's frequency grid): the proposal in blue (the
@@ -311,8 +310,7 @@ def plot_candidates(diagnosis, path=None) -> Figure:
         gate = "p_quick_holm" if "p_quick_holm" in screened else "p_holm"  # what decided the fit (screen's stages)
         passed = (screened[gate] < diagnosis.alpha).to_numpy()
         # the terms diagnose fitted: those passed, at most SCREENED (a third that passed is not fitted)
-        fitted = (screened.index.isin(fitted_terms(screened, diagnosis.alpha)) if gate == "p_quick_holm"
-                  else passed)
+        fitted = screened["fitted"].to_numpy(dtype=bool) if "fitted" in screened else passed
         colours = np.where(fitted, "tab:blue", np.where(passed, "lightsteelblue", "0.6"))[::-1]
         left.barh(names, values, color=colours)
         first_level = diagnosis.alpha / len(screened)
