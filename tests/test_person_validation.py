@@ -200,6 +200,30 @@ def test_heavy_tailed_innovations_are_said_to_overstate_the_ratios(kurtosis, sca
                for note in notes) == noted
 
 
+def test_a_candidate_the_record_cannot_judge_on_held_out_data_is_not_proposed_and_said_so():
+    """A floor mode that passed its test (LR 41) on a bout too short to halve: not significant, and the note says
+    why; the same row judged and gaining clearly on the held-out halves is proposed."""
+    from types import SimpleNamespace
+
+    from smd_statespace.person.diagnose import PersonDiagnosis
+
+    base = SimpleNamespace(test_pvalues=lambda: {"kurtosis": 3.0, "ljung_box_p": 0.5})
+    row = {"effect": "floor_mode", "passed": True, "held_out_before": np.nan, "held_out": np.nan,
+           "held_out_samples": np.nan, "log_p": -10.9, "lr": 41.3, "on_bound": False, "zero": False,
+           "less_white": False, "held_out_worse": False, "held_out_weak": False, "settled": True, "likelihood": "exact",
+           "f_h": 2.96, "xi_h": 0.14, "held_out_free_run_fit": np.nan, "held_out_free_run_fit_before": np.nan,
+           "lr_scale": 1.0}
+    assert verdict(row)["significant"]  # before the held-out check: its test and whiteness
+    unjudged = verdict({**row, "held_out_unjudged": True})
+    assert not unjudged["significant"]
+    diagnosis = PersonDiagnosis(base=base, fits={}, rows=[unjudged], failed={}, alpha=0.01)
+    assert diagnosis.adequate and any(note.startswith("floor_mode: it passes its test (LR 41.3), but it could not be "
+                                                      "judged on held-out data (the record is too short to halve")
+                                      for note in diagnosis.notes())
+    judged = verdict({**row, "held_out_before": 300.0, "held_out": 330.0, "held_out_samples": 400})
+    assert judged["significant"]
+
+
 @pytest.mark.parametrize("q_before, q_after, lags, less", [(62.0, 80.0, 39, True), (62.0, 70.0, 39, False),
                                                           (377.0, 388.0, 39, False), (377.0, 420.0, 39, True)])
 def test_less_white_is_a_rise_of_q_beyond_its_own_spread(q_before, q_after, lags, less):

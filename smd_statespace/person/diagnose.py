@@ -65,6 +65,7 @@ from ..effects.generic import SAME_AS, label
 from .extend import configured_for_record, fit_effects
 from .in_time import in_time_words
 from .robust import MIN_SCALE, added_unknowns, robust_scale
+from .validation import MIN_HALF_CYCLES
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
 from .threads import one_blas_thread, search_threads, thread_map
@@ -127,7 +128,8 @@ def candidate_row(base, fitted, level: float) -> dict:
     row["less_white"] = less_white(before_tests, after_tests)
     row["passed"] = (bool(log_p < math.log(level)) and not row["on_bound"] and row["settled"] and lr > 0
                      and not row["zero"])
-    row.update({key: math.nan for key in HELD_OUT}, held_out_worse=False, held_out_weak=False)
+    row.update({key: math.nan for key in HELD_OUT}, held_out_worse=False, held_out_weak=False,
+               held_out_unjudged=False)
     return verdict(row)
 
 
@@ -347,6 +349,13 @@ class PersonDiagnosis:
                            f"person without it by only {row['held_out'] - row['held_out_before']:+.1f} in "
                            f"log-likelihood, {row['held_out_z']:.1f} sd of that gain's noise from cycle to cycle "
                            f"({asked}): the held-out halves do not show it, so it is not proposed")
+            for name in table.index[table.get("held_out_unjudged", pd.Series(False, table.index)).astype(bool)]:
+                why = ("no cut of the record leaves the change a sixth of the record away with "
+                       f"{MIN_HALF_CYCLES} cycles held out" if without_key(name) in self.validation else
+                       f"the record is too short to halve into two parts of {MIN_HALF_CYCLES} cycles")
+                out.append(f"{name}: it passes its test (LR {table.loc[name, 'lr']:.1f}), but it could not be judged "
+                           f"on held-out data ({why}, or a part's fit did not converge): a term the record cannot "
+                           "check on data it was not fitted to is not proposed")
             for name in table.index[~table["settled"].astype(bool)]:
                 out.append(f"{name}: its linearised path had not settled after the last linearisation (the "
                            f"approximate likelihood kept rising, LR {table.loc[name, 'lr']:.1f}, as the path "
@@ -375,10 +384,7 @@ class PersonDiagnosis:
             if without_key(name) not in self.validation:  # not a change in time
                 continue
             checked = self.validation.get(name)
-            if checked is None:
-                out.append(f"{name}: a change in time, and no cut of the record leaves it a sixth of the record "
-                           "away in one half: not judged on held-out data")
-            else:
+            if checked is not None:  # one that could not be judged is said so (and not proposed) above
                 fitted = " and ".join(f"{fold['start']:.1f}-{fold['end']:.1f} s" for fold in checked["folds"])
                 out.append(f"{name}: a fit that has not seen a change in time cannot predict it, so it is judged "
                            f"on {'one fold' if len(checked['folds']) == 1 else 'two folds'} that hold the change: "
@@ -530,7 +536,8 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
         else:
             index = next(i for i, row in enumerate(rows) if row["effect"] == name)
             fits[name] = fitted
-            screened = {key: rows[index][key] for key in HELD_OUT + ("held_out_worse", "held_out_weak")}
+            screened = {key: rows[index][key] for key in HELD_OUT + ("held_out_worse", "held_out_weak",
+                                                                      "held_out_unjudged")}
             rows[index] = verdict({**candidate_row(result, fitted, level), **screened,
                                    "seconds": rows[index]["seconds"] + time.perf_counter() - started})
     return diagnosis

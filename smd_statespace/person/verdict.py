@@ -80,8 +80,15 @@ rejected a true drift of ``f_h`` (LR 45.9 on 1)."""
 
 def verdict(row: dict) -> dict:
     """``row`` with ``significant``: it ``passed`` its test and checks, and it predicts the held-out halves better
-    than the person without it, clearly (not ``held_out_worse`` nor ``held_out_weak``: :func:`held_out`); where it
-    was not judged on held-out data, its innovations must not be less white.
+    than the person without it, clearly (not ``held_out_worse`` nor ``held_out_weak``: :func:`held_out`); one that
+    passed but could not be judged on held-out data (``held_out_unjudged``: :func:`held_out_checks`) is not
+    significant; before the held-out check, its innovations must not be less white.
+
+    Until 2026-11-29 a candidate that could not be judged was proposed on its test and whiteness alone: on a clean
+    record whose longest bout of bouncing was 4.3 s (13 cycles, too few to halve into two of
+    :data:`~smd_statespace.person.validation.MIN_HALF_CYCLES`), a floor mode of five parameters (LR 41, p 2e-5) was
+    proposed. Every true floor mode proposed on the floor records of ``benchmarks/person_effects.py`` (seed 92,
+    jumps; 13 of 31 records) had been judged on two folds.
 
     Where held-out data judged it, whiteness does not veto it: on a record the model misses much elsewhere (a quiet
     plate, Ljung-Box Q far above its lags) the statistic of heavy-tailed innovations is no measure of what a
@@ -90,7 +97,7 @@ def verdict(row: dict) -> dict:
     """
     validated = bool(np.isfinite(row["held_out"]))
     ok = (row["passed"] and not row["held_out_worse"] and not row["held_out_weak"]
-          and (validated or not row["less_white"]))
+          and not row.get("held_out_unjudged", False) and (validated or not row["less_white"]))
     return {**row, "significant": bool(ok)}
 
 
@@ -141,8 +148,9 @@ def without_key(name: str) -> str:
 
 
 def held_out_checks(result, fits: dict, rows: list, level: float, threads: int) -> dict:
-    """The held-out check of every candidate whose test passed (its row updated in place); returns the
-    cross-validations by name (``"without"``, or :func:`without_key` where a change in time moves the cut)."""
+    """The held-out check of every candidate whose test passed (its row updated in place; ``held_out_unjudged``
+    where the record cannot be cut for it or a part's fit did not converge); returns the cross-validations by name
+    (``"without"``, or :func:`without_key` where a change in time moves the cut; None where not made)."""
     heavy_tailed = bool(result.test_pvalues()["kurtosis"] > HEAVY_TAILS)  # a few samples can make a held-out gain
     pairs, judged = [], {}  # (row, its name, the key of the person without it on the same cut); what to validate
     for i in [i for i, row in enumerate(rows) if row["passed"]]:
@@ -155,5 +163,8 @@ def held_out_checks(result, fits: dict, rows: list, level: float, threads: int) 
         pairs.append((i, name, key, in_time))
     validation = dict(zip(judged, thread_map(lambda key: cross_validated_loglike(*judged[key]), judged, threads)))
     for i, name, key, in_time in pairs:
-        rows[i] = held_out(rows[i], validation[key], validation[name], level, heavy_tailed, in_time)
+        if validation[key] is None or validation[name] is None:  # too short to cut, or a part's fit failed
+            rows[i] = verdict({**rows[i], "held_out_unjudged": True})
+        else:
+            rows[i] = held_out(rows[i], validation[key], validation[name], level, heavy_tailed, in_time)
     return validation
