@@ -349,7 +349,7 @@ class PersonDiagnosis:
                            f"person without it by only {row['held_out'] - row['held_out_before']:+.1f} in "
                            f"log-likelihood, {row['held_out_z']:.1f} sd of that gain's noise from cycle to cycle "
                            f"({asked}): the held-out halves do not show it, so it is not proposed")
-            for name in table.index[table.get("held_out_unjudged", pd.Series(False, table.index)).astype(bool)]:
+            for name in table.index[table.get("held_out_unjudged", pd.Series(False, table.index)).eq(True)]:
                 why = ("no cut of the record leaves the change a sixth of the record away with "
                        f"{MIN_HALF_CYCLES} cycles held out" if without_key(name) in self.validation else
                        f"the record is too short to halve into two parts of {MIN_HALF_CYCLES} cycles")
