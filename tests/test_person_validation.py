@@ -87,38 +87,32 @@ def test_the_free_run_of_a_held_out_half_reproduces_a_record_without_variation()
     assert np.allclose(runs[:, 0], result.model.free_run(result.params, delta))
 
 
-def test_a_change_in_time_moves_the_cut_away_from_it(clean):
-    """A step at the middle: the cut moves a sixth of the record away, every break on one side; breaks that leave no
-    such cut with enough cycles in each half give None; without breaks the cut stays at the middle."""
-    time = clean.model.time
-    length = time[-1] - time[0]
-    middle = halves(clean.model)
-    at_middle = time[middle[1][0]][0]
-    moved = halves(clean.model, breaks=[at_middle])
-    cut = time[moved[1][0]][0]
-    assert abs(cut - at_middle) >= BREAK_MARGIN * length and abs(cut - at_middle) < BREAK_MARGIN * length + 1.0
-    assert np.all(moved[0][0] ^ moved[1][0])
-    for breaks in ([time[0] + 0.3 * length, time[0] + 0.6 * length], [time[0] + 0.55 * length]):
-        cut = time[halves(clean.model, breaks)[1][0]][0]
-        assert np.all(np.abs(cut - np.array(breaks)) >= BREAK_MARGIN * length)
-        assert np.all(np.array(breaks) > cut) or np.all(np.array(breaks) < cut)
-    assert halves(clean.model, [time[0] + f * length for f in (0.2, 0.5, 0.8)]) is None
-
-
 def test_a_change_in_time_is_judged_by_folds_fitted_across_it(clean):
-    """A step at the middle: two folds, each fitted on a part that holds it (cut a sixth of the record after it,
-    and as far before it), each holding out the rest; a step near the record's end leaves one; none beyond both."""
+    """A step at the middle: two folds, each fitted on a part that holds it, cut a sixth of the record after it (and
+    as far before it) at the nearest cycle start, each holding out the rest; several breaks all on the fitted side;
+    a step near the record's end leaves one fold; breaks that leave no such cut with enough cycles held out, none."""
     time = clean.model.time
     length = time[-1] - time[0]
+
+    def cut(fold):  # where the fitted and the held-out parts meet
+        (fit, _), (held, _) = fold
+        return time[held][0] if time[held][0] > time[fit][0] else time[fit][0]
+
     at = time[0] + 0.5 * length
     folds = break_folds(clean.model, [at])
     assert len(folds) == 2
-    for (fit, _), (held, _) in folds:
+    for fold in folds:
+        (fit, _), (held, _) = fold
         assert np.all(fit ^ held) and time[fit][0] < at < time[fit][-1]  # every sample once; fitted across it
-        assert min(abs(time[held][0] - at), abs(time[held][-1] - at)) >= BREAK_MARGIN * length
+        assert BREAK_MARGIN * length <= abs(cut(fold) - at) < BREAK_MARGIN * length + 1.0  # the nearest cycle start
     assert time[folds[0][1][0]][0] > at and time[folds[1][1][0]][-1] < at  # the end held out, then the start
+    for breaks in ([time[0] + 0.3 * length, time[0] + 0.6 * length], [time[0] + 0.55 * length]):
+        for fold in break_folds(clean.model, breaks):
+            assert np.all(np.abs(cut(fold) - np.array(breaks)) >= BREAK_MARGIN * length)
+            assert np.all(np.array(breaks) > cut(fold)) or np.all(np.array(breaks) < cut(fold))
     assert len(break_folds(clean.model, [time[0] + 0.75 * length])) == 1  # only the start can be held out
     assert break_folds(clean.model, [time[0] + f * length for f in (0.2, 0.8)]) == []
+    assert break_folds(clean.model, [time[0] + f * length for f in (0.2, 0.5, 0.8)]) == []
 
 
 @pytest.mark.slow

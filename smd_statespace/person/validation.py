@@ -52,17 +52,14 @@ BREAK_MARGIN = 1.0 / 6.0
 at a third (or two thirds), so the part that holds it has at least a quarter of its length on each side."""
 
 
-def halves(model, breaks=()) -> list | None:
+def halves(model) -> list | None:
     """``[(keep, kept), (keep, kept)]``: the samples and cycle boundaries of the record's two halves.
 
     The cut is the cycle boundary nearest the middle of the boundaries inside the record, among those that
-    leave :data:`MIN_HALF_CYCLES` cycles in each half and lie at least :data:`BREAK_MARGIN` of the record from
-    every time in ``breaks`` (s, on the record's time axis), with all of them on one side. None when no
-    boundary does.
+    leave :data:`MIN_HALF_CYCLES` cycles in each half. None when no boundary does. (A model with changes in time
+    is judged on :func:`break_folds` instead.)
     """
     time, boundaries, inside, index = _cuts(model)
-    if len(breaks):
-        index = index[_apart(inside[index], breaks, time) | _apart(inside[index], breaks, time, before=True)]
     return _split(time, boundaries, _middle(inside, index)) if index.size else None
 
 
