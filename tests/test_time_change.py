@@ -4,6 +4,7 @@ import pytest
 from scipy import stats
 
 from smd_statespace.person import identify_person
+from smd_statespace.person.detection import DETECTION_FACTOR
 from smd_statespace.person.extend import fit_effects
 from smd_statespace.person.screen import CHANGE_ALPHA, TIME_KINDS, generic_library, score_test
 from smd_statespace.simulation import simulate_bouncing
@@ -56,6 +57,20 @@ def test_a_person_who_does_not_change_is_not_said_to():
     assert not any(w.startswith("the person changes") for w in person.warnings)
     assert "  one person? halves f_h" in person.summary()  # the tests were made, and said so
     assert person.to_dict()["change"]["time"]["alpha"] == pytest.approx(CHANGE_ALPHA)
+    # what the tests would have found: the drift's limit is its coefficient's sd times the power's shift, and that sd
+    # (from the score at c = 0) is the one the drift's own fit gives it (the model is the simulator's here)
+    limits = tests["limits"]
+    assert set(limits) == {"f_drift", "f_step"}
+    drift = generic_library(person, ["f_drift"])[0]
+    fitted = fit_effects(person, [drift]).effect_estimates().loc["c_f_drift"]
+    assert limits["f_drift"]["sd"] == pytest.approx(fitted["sd"], rel=0.3)
+    k = stats.chi2.isf(CHANGE_ALPHA / len(tests["terms"]), 1)
+    information_limit = limits["f_drift"]["c"] / DETECTION_FACTOR
+    assert stats.ncx2.sf(k, 1, (information_limit / limits["f_drift"]["sd"]) ** 2) == pytest.approx(0.8, abs=0.01)
+    assert person.determined("f_h")
+    assert (f"no change found: f_h drifting by {limits['f_drift']['percent']:.0f} % over the record or stepping by "
+            f"{limits['f_step']['percent']:.0f} % in mid-record would be found 80% of the time or more"
+            ) in person.summary()
 
 
 def test_words_say_the_person_or_the_force_where_only_a_term_of_xi_h_was_found():
@@ -79,3 +94,29 @@ def test_words_say_the_person_or_the_force_where_only_a_term_of_xi_h_was_found()
     term = {**term, "parameter": "f_h", "term": "term:f_step@0.5"}
     assert change_words({**found, "time": {"changed": ["f_h"], "terms": [term]}}).startswith(
         "the person changes during the record")
+
+
+def test_detection_limits_take_the_most_sensitive_step_and_a_scan_s_larger_critical_value():
+    """The limit of each kind: Holm's first step over the family, the smallest of a kind's steps, a step placed by a
+    scan tested against the largest of the scan's statistics; an undetermined parameter gets no number."""
+    import numpy as np
+    import pandas as pd
+
+    from smd_statespace.person.detection import change_percent, detection_limits, limits_words
+    from smd_statespace.person.supremum import critical_value
+
+    table = pd.DataFrame({"label": ["term:f_drift", "term:f_step@0.33", "term:f_step@0.5", "term:xi_drift", "term:u3"],
+                          "sd_robust": [0.05, 0.04, 0.03, 0.2, 0.01], "scan_trim": [np.nan] * 5})
+    limits = detection_limits(table, 0.01, factor=1.0)
+    shift = np.sqrt(stats.chi2.isf(0.01 / 5, 1)) + stats.norm.ppf(0.8)
+    assert set(limits) == {"f_drift", "f_step"}  # u3 is not a change in time, xi_h's limits were not measured
+    assert limits["f_step"]["c"] == pytest.approx(shift * 0.03) and limits["f_drift"]["c"] == pytest.approx(shift * 0.05)
+    assert limits["f_drift"]["percent"] == pytest.approx(change_percent("f_drift", shift * 0.05))
+    # c changes w_h^2 from 1 - c/2 to 1 + c/2 of its middle value
+    assert change_percent("f_step", 0.1) == pytest.approx(100 * (np.sqrt(1.05 / 0.95) - 1))
+    assert detection_limits(table, 0.01)["f_drift"]["c"] == pytest.approx(DETECTION_FACTOR * shift * 0.05)
+    scanned = detection_limits(table.assign(scan_trim=[np.nan, np.nan, 0.15, np.nan, np.nan]), 0.01, factor=1.0)
+    as_largest = (np.sqrt(critical_value(0.01 / 5, trim=0.15)) + stats.norm.ppf(0.8)) * 0.03
+    assert scanned["f_step"]["c"] == pytest.approx(as_largest) and as_largest > limits["f_step"]["c"]
+    assert limits_words(limits, {"f_h": False}) == "f_h is not determined, so neither is a change of it during the record"
+    assert limits_words({}, {"f_h": True}) == ""

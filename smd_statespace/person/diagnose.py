@@ -68,6 +68,7 @@ from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .validation import MIN_HALF_CYCLES
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
+from .detection import unseen_change
 from .threads import one_blas_thread, search_threads, thread_map
 from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white,
                       needed_z, verdict, without_key)
@@ -367,6 +368,9 @@ class PersonDiagnosis:
         out += self._held_out_notes(table)
         for name, why in self.failed.items():
             out.append(f"{name}: not fitted ({why})")
+        unseen = unseen_change(self.base) if self.base is not None and self.adequate else ""
+        if unseen:  # nothing found: what a change of the person in time would have had to be to show
+            out.append(f"no change of the person in time found by identify's score tests: {unseen}")
         if self.joint:
             first, second = self.joint["effects"]
             out.append(f"{first} and {second} both explain the residual; fitted together, {first} adds "

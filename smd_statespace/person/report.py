@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io import G
+from .detection import unseen_change
 from .fade import fade_table
 from .in_time import in_time_words
 from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, STARTING_RANGE, WHITENESS_ALPHA,
@@ -234,7 +235,7 @@ def summary_text(result, verbose=False) -> str:
         f"  innovations: Ljung-Box p {d['ljung_box_p']:.2g} ({d['ljung_box_lags']} lags), Jarque-Bera p "
         f"{d['jarque_bera_p']:.2g}, kurtosis {d['kurtosis']:.2f}",
     ]
-    one = one_person_line(result.change)
+    one = one_person_line(result.change, unseen_change(result))
     lines += [one] if one else []
     if verbose:
         lines.insert(3, f"  intervals: {result.interval_method}; BLF sds with the person's uncertainty "
@@ -282,9 +283,10 @@ def _unit(unit: str) -> str:
     return "" if unit in ("-", "") else f" {unit}"
 
 
-def one_person_line(change) -> str:
+def one_person_line(change, unseen: str = "") -> str:
     """The summary's line of the tests of one unchanging person: the halves' z and the smallest score-test p-value of
-    a change in time (Holm over the terms); "" when they were not made."""
+    a change in time (Holm over the terms), and ``unseen`` (what the tests would have found, where none changed:
+    :func:`~smd_statespace.person.detection.unseen_change`); "" when they were not made."""
     if not change:
         return ""
     parts = [f"halves {', '.join(f'{name} {abs(z):.1f} sd apart' for name, z in change['z'].items())}"]
@@ -293,7 +295,7 @@ def one_person_line(change) -> str:
         best = tests["terms"][0]
         parts.append(f"a change in time: smallest p {best['p_holm']:.2g} ({best['term']}, Holm over "
                      f"{len(tests['terms'])} score tests; a change below {tests['alpha']:g})")
-    return "  one person? " + "; ".join(parts)
+    return "  one person? " + "; ".join(parts) + (f"\n    no change found: {unseen}" if unseen else "")
 
 
 def change_words(change) -> str:

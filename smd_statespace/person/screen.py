@@ -34,6 +34,7 @@ decide which are fitted.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -43,6 +44,7 @@ from scipy import stats
 from ..effects.generic import TERMS, GenericTerm, label
 from ..errors import SMDInputError
 from .breaks import fitted_span, located_step
+from .detection import detection_limits
 from .extend import at_zero
 from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
@@ -117,7 +119,8 @@ def score_test(result, effect) -> dict:
     -------
     dict
         ``gradient`` (d loglike / d c at 0), ``lm`` and ``p`` (chi-square(1), from the profile information),
-        ``lm_robust`` and ``p_robust`` (cycle-clustered), ``loglike`` (the model with ``c = 0``: the fitted
+        ``lm_robust`` and ``p_robust`` (cycle-clustered), ``sd_robust`` (the coefficient's cycle-clustered sd at
+        ``c = 0``: :mod:`~smd_statespace.person.detection`), ``loglike`` (the model with ``c = 0``: the fitted
         person's, a check), ``parameter`` (the coefficient's name), ``cycle_scores`` (the efficient score summed
         per bouncing cycle, shape (J,): ``lm_robust`` is the squared one-sample t statistic of their mean).
     """
@@ -136,9 +139,11 @@ def score_test(result, effect) -> dict:
     cycles = per_cycle.size
     spread = float(np.sum((per_cycle - per_cycle.mean()) ** 2)) * cycles / max(cycles - 1, 1)
     lm_robust = float(scores.sum()) ** 2 / spread if spread > 0 else float("nan")
+    # the coefficient's sd at c = 0 (its one-step estimate is the score over the information): what a test finds
+    sd_robust = math.sqrt(spread) / efficient_info if spread > 0 and efficient_info > 0 else float("nan")
     return {"parameter": model.param_names[j], "gradient": gradient, "lm": float(lm), "p": float(stats.chi2.sf(lm, 1)),
-            "lm_robust": lm_robust, "p_robust": float(stats.chi2.sf(lm_robust, 1)), "loglike": float(out["loglike"]),
-            "cycle_scores": per_cycle}
+            "lm_robust": lm_robust, "p_robust": float(stats.chi2.sf(lm_robust, 1)), "sd_robust": sd_robust,
+            "loglike": float(out["loglike"]), "cycle_scores": per_cycle}
 
 
 def quick_ratio(result, effect) -> dict:
@@ -201,7 +206,7 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
     pandas.DataFrame
         Indexed by the effect's spec: ``label`` (``term:abs_u``), ``physics`` (its physical name, where it has
         one), ``parameter``,
-        ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust`` (for a step whose time a scan found, the scan's
+        ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust``, ``sd_robust`` (for a step whose time a scan found, the scan's
         largest robust statistic and its p-value as the largest of many; ``scan_trim`` its scan's trimming, NaN
         for the others) and ``p_holm`` (the robust p-values adjusted over the library by :func:`holm`), sorted by
         ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
@@ -252,7 +257,8 @@ def time_change(result, alpha: float = CHANGE_ALPHA, threads: int = 1) -> dict:
     dict
         ``terms``: per term its ``term`` (:func:`~smd_statespace.effects.generic.label`), ``physics``,
         ``parameter`` (``f_h`` or ``xi_h``), ``p`` (robust) and ``p_holm``, smallest first; ``changed``: the
-        parameters that change; ``alpha``.
+        parameters that change; ``alpha``; ``limits``: the smallest change of each kind the tests would find
+        (:func:`~smd_statespace.person.detection.detection_limits`), which a record that shows none is said with.
     """
     library = generic_library(result, TIME_KINDS)
     parameter = {term.spec: term.changes for term in library}
@@ -260,4 +266,5 @@ def time_change(result, alpha: float = CHANGE_ALPHA, threads: int = 1) -> dict:
     terms = [{"term": row["label"], "physics": row["physics"], "parameter": parameter[spec],
               "p": float(row["p_robust"]), "p_holm": float(row["p_holm"])} for spec, row in table.iterrows()]
     flagged = {term["parameter"] for term in terms if term["p_holm"] < alpha}
-    return {"terms": terms, "changed": [name for name in ("f_h", "xi_h") if name in flagged], "alpha": alpha}
+    return {"terms": terms, "changed": [name for name in ("f_h", "xi_h") if name in flagged], "alpha": alpha,
+            "limits": detection_limits(table, alpha)}
