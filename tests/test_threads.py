@@ -74,6 +74,11 @@ def test_screen_in_two_threads_equals_one(record):
     result = identify_person(record, check_change=False, threads=2)
     terms = generic_library(result)[:6]
     pd.testing.assert_frame_equal(screen(result, terms, threads=1), screen(result, terms, threads=2))
+    # the steps' scans, one per kind, side by side
+    one, two = (generic_library(result, ["f_step", "xi_step"], scan=True, threads=n) for n in (1, 2))
+    assert [term.spec for term in one] == [term.spec for term in two] and all(term.scan for term in one)
+    for first, second in zip(one, two):
+        pd.testing.assert_frame_equal(first.scan["table"], second.scan["table"])
 
 
 def test_the_person_runs_with_one_blas_thread_and_gives_the_callers_setting_back():

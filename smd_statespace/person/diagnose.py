@@ -507,7 +507,8 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     library_screened = candidates is None if library is None else library
     if library_screened:
         taken = present | {label(effect) for effect in effects}
-        terms = [term for term in generic_library(result, scan=True)  # a candidate in another unit: once
+        # a candidate in another unit is screened once
+        terms = [term for term in generic_library(result, scan=True, threads=threads)
                  if label(term) not in taken and SAME_AS.get(term.kind) not in taken]
         tests += len(terms)  # Bonferroni counts every term screened, fitted or not
         try:

@@ -82,12 +82,13 @@ stationary people said to change; 4 of the 16 lab exports, whose forces fade by 
 had an ``f_h`` term found, all with ``f_h`` not determined (``benchmarks/results/lab_records_time_change.md``)."""
 
 
-def generic_library(result, kinds=None, scan: bool = False) -> list:
+def generic_library(result, kinds=None, scan: bool = False, threads: int = 1) -> list:
     """Every generic term (:data:`~smd_statespace.effects.generic.TERMS`, or those in ``kinds``) scaled to the
     record of the fitted ``result``: the RMS compression and rate its person predicts, and its fitted span's
     start and length; a step at each of :data:`STEPS`, or with ``scan`` one step of each kind at the time a
     scan of every sample finds (:func:`~smd_statespace.person.breaks.located_step`: a step placed a fraction of
-    a cycle from the truth is found only in part)."""
+    a cycle from the truth is found only in part). The scans (of ``f_step`` and ``xi_step``) run in up to
+    ``threads`` threads, with the same terms."""
     kinds = list(TERMS if kinds is None else kinds)
     scales = {}
     if any(TERMS[kind][0] != "time" for kind in kinds):  # the path scales the terms in u and u'
@@ -95,16 +96,21 @@ def generic_library(result, kinds=None, scan: bool = False) -> list:
         scales = {"restoring": float(rms[0]), "damping": float(rms[1])}
     time = result.model.time
     start, length = fitted_span(time)
+
+    def scanned(kind):
+        try:
+            return located_step(result, kind)
+        except (SMDInputError, ArithmeticError, np.linalg.LinAlgError, ValueError):
+            return None  # a record the scan cannot take: the steps at fixed times
+
+    steps = [kind for kind in kinds if scan and TERMS[kind][0] == "time" and kind.endswith("step")]
+    located = dict(zip(steps, thread_map(scanned, steps, threads)))
     out = []
     for kind in kinds:
         family = TERMS[kind][0]
-        if family == "time" and scan and kind.endswith("step"):
-            try:
-                out.append(located_step(result, kind))
-                continue
-            except (SMDInputError, ArithmeticError, np.linalg.LinAlgError, ValueError):
-                pass  # a record the scan cannot take: the steps at fixed times
-        if family == "time":
+        if located.get(kind) is not None:
+            out.append(located[kind])
+        elif family == "time":
             out += [GenericTerm(kind, scale=length, start=start, at=at)
                     for at in (STEPS if kind.endswith("step") else (0.5,))]
         else:
@@ -205,11 +211,10 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
     -------
     pandas.DataFrame
         Indexed by the effect's spec: ``label`` (``term:abs_u``), ``physics`` (its physical name, where it has
-        one), ``parameter``,
-        ``gradient``, ``lm``, ``p``, ``lm_robust``, ``p_robust``, ``sd_robust`` (for a step whose time a scan found, the scan's
-        largest robust statistic and its p-value as the largest of many; ``scan_trim`` its scan's trimming, NaN
-        for the others) and ``p_holm`` (the robust p-values adjusted over the library by :func:`holm`), sorted by
-        ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
+        one), ``parameter``, ``gradient``, ``lm``, ``p``, ``sd_robust``, ``lm_robust``, ``p_robust`` (for a step
+        whose time a scan found, the scan's largest robust statistic and its p-value as the largest of many;
+        ``scan_trim`` its scan's trimming, NaN for the others) and ``p_holm`` (the robust p-values adjusted over
+        the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
         ``lr_scale`` (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm`` (of ``lr_quick /
         lr_scale``), ordered as above. The tests, and the quick fits, run in up to ``threads`` threads
         (:mod:`~smd_statespace.person.threads`), with the same table.
