@@ -201,7 +201,7 @@ def test_a_candidate_the_record_cannot_judge_on_held_out_data_is_not_proposed_an
 
     from smd_statespace.person.diagnose import PersonDiagnosis
 
-    base = SimpleNamespace(test_pvalues=lambda: {"kurtosis": 3.0, "ljung_box_p": 0.5})
+    base = SimpleNamespace(test_pvalues=lambda: {"kurtosis": 3.0, "ljung_box_p": 0.5}, change=None)  # no change tests
     row = {"effect": "floor_mode", "passed": True, "held_out_before": np.nan, "held_out": np.nan,
            "held_out_samples": np.nan, "log_p": -10.9, "lr": 41.3, "on_bound": False, "zero": False,
            "less_white": False, "held_out_worse": False, "held_out_weak": False, "settled": True, "likelihood": "exact",
