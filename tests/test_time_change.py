@@ -118,5 +118,5 @@ def test_detection_limits_take_the_most_sensitive_step_and_a_scan_s_larger_criti
     scanned = detection_limits(table.assign(scan_trim=[np.nan, np.nan, 0.15, np.nan, np.nan]), 0.01, factor=1.0)
     as_largest = (np.sqrt(critical_value(0.01 / 5, trim=0.15)) + stats.norm.ppf(0.8)) * 0.03
     assert scanned["f_step"]["c"] == pytest.approx(as_largest) and as_largest > limits["f_step"]["c"]
-    assert limits_words(limits, {"f_h": False}) == "f_h is not determined, so neither is a change of it during the record"
-    assert limits_words({}, {"f_h": True}) == ""
+    assert limits_words(limits, False) == "f_h is not determined, so neither is a change of it during the record"
+    assert limits_words({}, True) == ""

@@ -98,8 +98,7 @@ def detection_limits(table, alpha: float, tests: int | None = None, power: float
     dict
         Per kind of :data:`KINDS` present: ``c`` (the smallest ``|c|`` found with probability ``power``, ``factor``
         times the information's; of a kind's several steps the most sensitive), ``percent``
-        (:func:`change_percent` of it), ``parameter`` (``f_h`` or ``xi_h``) and ``sd`` (the coefficient's robust sd
-        at ``c = 0``).
+        (:func:`change_percent` of it, % of ``f_h``) and ``sd`` (the coefficient's robust sd at ``c = 0``).
     """
     tests = max(int(tests if tests is not None else len(table)), 1)
     z_power = float(stats.norm.ppf(power))
@@ -112,25 +111,23 @@ def detection_limits(table, alpha: float, tests: int | None = None, power: float
         k = critical_value(alpha / tests, 1, trim)
         c = factor * (math.sqrt(k) + z_power) * float(row["sd_robust"])
         if kind not in out or c < out[kind]["c"]:
-            out[kind] = {"c": c, "percent": change_percent(kind, c), "parameter": "f_h" if kind.startswith("f_")
-                         else "xi_h", "sd": float(row["sd_robust"])}
+            out[kind] = {"c": c, "percent": change_percent(kind, c), "sd": float(row["sd_robust"])}
     return out
 
 
-def limits_words(limits: dict, determined: dict, power: float = DETECTION_POWER) -> str:
+def limits_words(limits: dict, f_h_determined: bool, power: float = DETECTION_POWER) -> str:
     """What a record that shows no change of ``f_h`` does not rule out, in words ("" when there is nothing to say).
 
-    ``limits`` is :func:`detection_limits`' dict, ``determined`` says per parameter (``f_h``, ``xi_h``) whether
-    the record determines it. A limit is said only where ``f_h`` is determined: where the model does not describe
-    how the force varies the tests see less than the information says, and the record does not determine ``f_h``
-    either (``benchmarks/change_limits.py``: on the ``smooth`` generator's records, ``f_h`` determined on 1 of 12, a
-    drift at the information's limit shifted the test statistic by a third of what it predicts). There the words
-    say that a change of ``f_h`` is out of the record's reach.
+    ``limits`` is :func:`detection_limits`' dict. A limit is said only where the record determines ``f_h``: where
+    the model does not describe how the force varies the tests see less than the information says, and the record
+    does not determine ``f_h`` either (``benchmarks/change_limits.py``, the ``smooth`` generator, ``f_h`` determined
+    on 2 of 22 records: drifts at the information's limit found on 0 of 11, at twice it drifts on 7 of 9 and steps
+    on 2 of 9). There the words say that a change of ``f_h`` is out of the record's reach.
     """
     shapes = [(shape, limits.get(f"f_{shape}")) for shape in ("drift", "step")]
     if not any(limit for _, limit in shapes):
         return ""
-    if not determined.get("f_h", False):
+    if not f_h_determined:
         return "f_h is not determined, so neither is a change of it during the record"
     said = [("drifting by " if shape == "drift" else "stepping by ")
             + (f"{limit['percent']:.0f} %" if limit["percent"] < 100 else "more than double")
@@ -146,4 +143,4 @@ def unseen_change(result) -> str:
     tests = change.get("time")
     if not tests or change.get("changed"):
         return ""
-    return limits_words(tests.get("limits", {}), {name: result.determined(name) for name in ("f_h", "xi_h")})
+    return limits_words(tests.get("limits", {}), result.determined("f_h"))
