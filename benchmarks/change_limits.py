@@ -24,6 +24,7 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import functools  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -31,13 +32,17 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from smd_statespace.accelerometer import accelerometer_record  # noqa: E402
 from smd_statespace.person import identify_person  # noqa: E402
 from smd_statespace.simulation import DEFAULT_BLF, simulate_bouncing, simulate_lab_record  # noqa: E402
+from smd_statespace.simulation.phone import simulate_phone  # noqa: E402
 
-GENERATORS = ("jumps", "smooth", "lab")
-"""The two generators of force variation of ``simulate_bouncing`` and a lab's export of a whole trial
+GENERATORS = ("jumps", "smooth", "lab", "phone")
+"""The two generators of force variation of ``simulate_bouncing``, a lab's export of a whole trial
 (``simulate_lab_record``: standing before and after, 1000 Hz, hum, a drifting zero; its change of ``f_h`` is the
-simulator's own, linear over the bout or a step in its middle)."""
+simulator's own, linear over the bout or a step in its middle) and a phone at the waist (``simulate_phone``, its
+defaults: 200 Hz, tilted 20 degrees, swaying, biased, jittered, 0.5 % of samples dropped; written as a phone app
+writes it and read back without the mass, as a user's file)."""
 DURATION, FS, NOISE = 30.0, 100.0, 0.01
 SHAPES = {"f_drift": "drift", "f_step": "step"}
 
@@ -63,6 +68,12 @@ def _identify(person, sim_seed, generator, kind=None, size=0.0):
                   seed=sim_seed)
     if generator == "lab":
         sim = simulate_lab_record(**common, f_h_change=size, change=SHAPES[kind] if kind else "drift")
+    elif generator == "phone":
+        effects = {"term": {"kind": kind, "scale": DURATION, f"c_{kind}": size}} if kind else {}
+        phone = simulate_phone(duration=DURATION, variation="jumps", effects=effects, **common)
+        with tempfile.TemporaryDirectory() as folder:
+            path, _ = phone.write(Path(folder) / "phone.csv")
+            return identify_person(accelerometer_record(path), threads=1)
     else:
         effects = {"term": {"kind": kind, "scale": DURATION, f"c_{kind}": size}} if kind else {}
         sim = simulate_bouncing(duration=DURATION, fs=FS, variation=generator, noise=NOISE, effects=effects, **common)

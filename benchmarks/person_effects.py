@@ -61,6 +61,7 @@ from tqdm.auto import tqdm
 from smd_statespace.effects import EFFECTS, load_effects_file
 from smd_statespace.io import G
 from smd_statespace.person import identify_person
+from smd_statespace.person.detection import change_percent
 from smd_statespace.person.diagnose import diagnose_person, label
 from smd_statespace.model.fitted import propose
 from smd_statespace.person.effect_adapter import fitted_record
@@ -258,6 +259,12 @@ def one(task) -> dict:
                                         for name, r in table.iterrows()} if not table.empty else {})
         suggested = diagnosis.fits[top] if top else base  # what following diagnose's verdict gives
         row.update(f_h_suggested=suggested.f_h, f_h_sd_suggested=float(suggested.se[0]))
+        limits = ((base.change or {}).get("time") or {}).get("limits", {})  # what "no change found" would say
+        row.update({f"limit_{kind}": limit["percent"] for kind, limit in limits.items()},
+                   change_found="f_h" in (base.change or {}).get("changed", []))
+        if kind in ("term_f_drift", "term_f_step"):  # the true change of f_h, as the limits say it (%)
+            term = effects["term"]
+            row["change_percent"] = change_percent(term["kind"], term[f"c_{term['kind']}"])
         row.update(proposed=top or "", variation=base.model.variation, f_h_before=base.f_h, xi_h_before=base.xi_h,
                    ljung_box_before=base.test_pvalues()["ljung_box_p"], misfit_share_before=base.misfit_share,
                    f_h_determined_before=base.determined("f_h"),
@@ -341,6 +348,32 @@ def summary(frame: pd.DataFrame) -> list:
                      f"{int(ok['correct'].sum())}/{n} ({EXPECTED[kind] or 'nothing'}) | {firsts} | {f_text} | "
                      f"{worse} | {x_text} | {parameter} | {passes} | {determined} | {seconds} | "
                      f"{_suggested(ok)} |")
+    return lines
+
+
+def detectable(frame: pd.DataFrame) -> list:
+    """Markdown: the changes of ``f_h`` in time ranked first where the record can show them, by its own words.
+
+    ``identify`` says a person changes where its tests find it; where they find none it prints the change they would
+    find 80 % of the time or more if ``f_h`` is determined, and that a change of ``f_h`` is out of reach if it is not
+    (:mod:`smd_statespace.person.detection`). Split by what it said: a change found; none found, ``f_h`` determined and
+    the true change at or above the printed limit (the limit's promise); below it; ``f_h`` not determined.
+    """
+    if "change_percent" not in frame:
+        return []
+    lines = ["", "| hidden effect | size | generator | identify found a change: ranked first | none found, f_h "
+             "determined, change >= the printed limit | change below the limit | f_h not determined (\"neither is a "
+             "change of it\") |", "|---|---|---|---|---|---|---|"]
+    for (kind, size, generator), rows in frame.groupby(["kind", "size", "generator"], sort=False):
+        ok = rows[(rows["error"] == "") & rows["change_percent"].notna()]
+        if ok.empty:
+            continue
+        limit = ok["limit_f_step" if kind == "term_f_step" else "limit_f_drift"]
+        found, determined = ok["change_found"].astype(bool), ok["f_h_determined_before"].astype(bool)
+        above = ~found & determined & (ok["change_percent"] >= limit)
+        parts = [ok[mask] for mask in (found, above, ~found & determined & ~above, ~found & ~determined)]
+        lines.append(f"| {kind} | {size} | {generator} | "
+                     + " | ".join(f"{int(part['correct'].sum())}/{len(part)}" for part in parts) + " |")
     return lines
 
 
@@ -432,7 +465,7 @@ def main(argv=None):
     frame = pd.DataFrame(rows)
     if args.csv:
         frame.to_csv(args.csv, index=False)
-    print("\n".join(summary(frame)))
+    print("\n".join(summary(frame) + detectable(frame)))
     failed = frame[frame["error"] != ""]
     for _, row in failed.iterrows():
         print(f"failed: {row['kind']} {row['size']} {row['generator']} #{row['index']}: {row['error']}")
