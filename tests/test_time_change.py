@@ -1,5 +1,7 @@
 """A person who changes during the record, found by score tests of f_h and xi_h changing in time."""
 
+import math
+
 import pytest
 from scipy import stats
 
@@ -25,6 +27,7 @@ def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
     best = tests["terms"][0]
     assert best["parameter"] == "f_h" and best["p_holm"] < CHANGE_ALPHA
     assert not person.determined("f_h") and not person.determined("xi_h")
+    assert math.isnan(person.table_row()["f_h_drift_limit_pct"])  # a change found: no limit of an unseen one
     low, high = person.intervals["f_h"]
     for half in person.change["halves"]:  # the interval spans both halves'
         assert low <= half["f_h_low"] and half["f_h_high"] <= high
@@ -71,6 +74,9 @@ def test_a_person_who_does_not_change_is_not_said_to():
     assert (f"no change found: f_h drifting by {limits['f_drift']['percent']:.0f} % over the record or stepping by "
             f"{limits['f_step']['percent']:.0f} % in mid-record would be found 80% of the time or more"
             ) in person.summary()
+    row = person.table_row()  # a batch's results.csv has them too
+    assert (row["f_h_drift_limit_pct"], row["f_h_step_limit_pct"]) == (limits["f_drift"]["percent"],
+                                                                      limits["f_step"]["percent"])
 
 
 def test_words_say_the_person_or_the_force_where_only_a_term_of_xi_h_was_found():

@@ -36,7 +36,7 @@ from ..effects.generic import TERMS
 from .supremum import critical_value
 
 __all__ = ["DETECTION_POWER", "DETECTION_FACTOR", "KINDS", "change_percent", "detection_limits", "limits_words",
-           "unseen_change"]
+           "unseen_change", "printed_limits"]
 
 DETECTION_POWER = 0.8
 """The chance of finding a change at the detection limit (the usual power of a power analysis)."""
@@ -136,11 +136,24 @@ def limits_words(limits: dict, f_h_determined: bool, power: float = DETECTION_PO
     return f"f_h {' or '.join(said)} would be found {power:.0%} of the time or more, a smaller change may not"
 
 
+def _quiet_tests(result) -> dict | None:
+    """The score tests of a change in time of a fitted person (``result.change["time"]``) where they found none; None
+    where they found one or were not made."""
+    change = result.change or {}
+    return None if change.get("changed") else change.get("time")
+
+
 def unseen_change(result) -> str:
     """:func:`limits_words` of a fitted person whose score tests of a change in time
     (:func:`~smd_statespace.person.screen.time_change`) found none; "" when they found one or were not made."""
-    change = result.change or {}
-    tests = change.get("time")
-    if not tests or change.get("changed"):
-        return ""
-    return limits_words(tests.get("limits", {}), result.determined("f_h"))
+    tests = _quiet_tests(result)
+    return limits_words(tests.get("limits", {}), result.determined("f_h")) if tests else ""
+
+
+def printed_limits(result) -> dict:
+    """``{kind: percent}`` of the limits :func:`unseen_change` prints for a fitted person (no change found, ``f_h``
+    determined); empty where it prints none."""
+    tests = _quiet_tests(result)
+    if not tests or not result.determined("f_h"):
+        return {}
+    return {kind: limit["percent"] for kind, limit in tests.get("limits", {}).items()}

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io import G
-from .detection import unseen_change
+from .detection import printed_limits, unseen_change
 from .fade import fade_table
 from .in_time import in_time_words
 from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIOR_SD, STARTING_RANGE, WHITENESS_ALPHA,
@@ -197,7 +197,11 @@ def table_row(result) -> dict:
     the flags ``stats`` uses: ``implausible`` (``f_h`` or ``xi_h`` on a
     search bound: not an estimate) with ``implausible_reason``, and
     ``model_adequate`` (the innovations pass the Ljung-Box test at
-    :data:`WHITENESS_ALPHA`).
+    :data:`WHITENESS_ALPHA`); ``f_h_drift_limit_pct`` and ``f_h_step_limit_pct``,
+    the change of ``f_h`` (%) over the record or across a step in its middle that
+    the record's tests would have found where they found none and ``f_h`` is
+    determined (:func:`~smd_statespace.person.detection.printed_limits`; blank
+    otherwise).
     """
     row = {key: value for key, value in result.to_dict().items() if np.isscalar(value)}
     row["warnings"] = " | ".join(result.warnings)
@@ -205,6 +209,8 @@ def table_row(result) -> dict:
     row["implausible"] = bool(reasons)
     row["implausible_reason"] = "; ".join(reasons)
     row["model_adequate"] = bool(row["ljung_box_p"] >= WHITENESS_ALPHA)
+    limits = printed_limits(result)  # the change of f_h the record would have shown (blank where it says none)
+    row["f_h_drift_limit_pct"], row["f_h_step_limit_pct"] = (limits.get(k, np.nan) for k in ("f_drift", "f_step"))
     return row
 
 
