@@ -214,6 +214,12 @@ def test_a_candidate_the_record_cannot_judge_on_held_out_data_is_not_proposed_an
     assert diagnosis.adequate and any(note.startswith("floor_mode: it passes its test (LR 41.3), but it could not be "
                                                       "judged on held-out data (the record is too short to halve")
                                       for note in diagnosis.notes())
+    # a person identify found to change, and no candidate here passed: identify's warning is said to stand
+    changing = SimpleNamespace(test_pvalues=base.test_pvalues, change={"changed": ["f_h", "xi_h"]})
+    notes = PersonDiagnosis(base=changing, fits={}, rows=[unjudged], failed={}, alpha=0.01).notes()
+    assert any(note.startswith("identify found that the person changes during the record (f_h, xi_h not determined)")
+               and "--span START:END" in note for note in notes)
+    assert not any(note.startswith("identify found that") for note in diagnosis.notes())
     judged = verdict({**row, "held_out_before": 300.0, "held_out": 330.0, "held_out_samples": 400})
     assert judged["significant"]
 

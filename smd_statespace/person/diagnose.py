@@ -368,15 +368,28 @@ class PersonDiagnosis:
         out += self._held_out_notes(table)
         for name, why in self.failed.items():
             out.append(f"{name}: not fitted ({why})")
-        unseen = unseen_change(self.base) if self.base is not None and self.adequate else ""
-        if unseen:  # nothing found: what a change of the person in time would have had to be to show
-            out.append(f"no change of the person in time found by identify's score tests: {unseen}")
+        out += self._change_notes()
         if self.joint:
             first, second = self.joint["effects"]
             out.append(f"{first} and {second} both explain the residual; fitted together, {first} adds "
                        f"{_ratio_text(self.joint[first])} on top of {second}, and {second} adds "
                        f"{_ratio_text(self.joint[second])} on top of {first}: {self.joint['verdict']}")
         return out
+
+    def _change_notes(self) -> list:
+        """Where nothing is missing, what identify's score tests of a change in time said of the person: the change
+        they would have found (none found), or that its warning of a person who changes stands (one found)."""
+        if self.base is None or not self.adequate:
+            return []
+        unseen = unseen_change(self.base)
+        if unseen:  # nothing found: what a change of the person in time would have had to be to show
+            return [f"no change of the person in time found by identify's score tests: {unseen}"]
+        changed = (self.base.change or {}).get("changed", [])
+        if changed:  # identify warned of a change that no candidate here could take: its warning is not withdrawn
+            return [f"identify found that the person changes during the record ({', '.join(changed)} not "
+                    "determined), and no term of a change in time passed the checks above: that warning stands; "
+                    "read the halves it gives, or identify parts of the record with --span START:END"]
+        return []
 
     def _held_out_notes(self, table) -> list:
         """Notes on the held-out validation: the person with each candidate that passed, a worse free run, and a
