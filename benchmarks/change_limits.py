@@ -66,16 +66,15 @@ def _identify(person, sim_seed, generator, kind=None, size=0.0):
     (``f_drift``, ``f_step``), or for a lab export the simulator's relative change of ``f_h``."""
     common = dict(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], blf=person["blf"],
                   seed=sim_seed)
+    effects = {"term": {"kind": kind, "scale": DURATION, f"c_{kind}": size}} if kind else {}
     if generator == "lab":
         sim = simulate_lab_record(**common, f_h_change=size, change=SHAPES[kind] if kind else "drift")
     elif generator == "phone":
-        effects = {"term": {"kind": kind, "scale": DURATION, f"c_{kind}": size}} if kind else {}
         phone = simulate_phone(duration=DURATION, variation="jumps", effects=effects, **common)
         with tempfile.TemporaryDirectory() as folder:
             path, _ = phone.write(Path(folder) / "phone.csv")
             return identify_person(accelerometer_record(path), threads=1)
     else:
-        effects = {"term": {"kind": kind, "scale": DURATION, f"c_{kind}": size}} if kind else {}
         sim = simulate_bouncing(duration=DURATION, fs=FS, variation=generator, noise=NOISE, effects=effects, **common)
     return identify_person(sim.record, measured_floor=False, threads=1)
 

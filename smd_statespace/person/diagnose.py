@@ -62,14 +62,14 @@ from ..errors import OptionError, SMDInputError
 from ..model.fitted import propose
 from .effect_adapter import fitted_record, record_search_size
 from ..effects.generic import SAME_AS, label
+from .detection import unseen_change
 from .extend import configured_for_record, fit_effects
 from .in_time import in_time_words
 from .robust import MIN_SCALE, added_unknowns, robust_scale
-from .validation import MIN_HALF_CYCLES
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
-from .detection import unseen_change
 from .threads import one_blas_thread, search_threads, thread_map
+from .validation import MIN_HALF_CYCLES
 from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white,
                       needed_z, verdict, without_key)
 
