@@ -49,6 +49,8 @@ def test_a_step_of_f_h_in_a_lab_export_is_named_with_its_score_test():
     # the step added, as diagnose proposes it: the model has the change, the answer no longer warns of it
     stepped = fit_effects(person, [step])
     assert stepped.change["changed"] == [] and person.change["changed"] == ["f_h", "xi_h"]
+    # its tests, made without the step, found it: no limit of a change they did not find
+    assert "no change found" not in stepped.summary() and math.isnan(stepped.table_row()["f_h_step_limit_pct"])
     assert not any(w.startswith("the person changes") for w in stepped.warnings)
 
 

@@ -139,9 +139,11 @@ def limits_words(limits: dict, f_h_determined: bool, power: float = DETECTION_PO
 
 def _quiet_tests(result) -> dict | None:
     """The score tests of a change in time of a fitted person (``result.change["time"]``) where they found none; None
-    where they found one or were not made."""
+    where they found one or were not made. A person fitted with the change they found in its model
+    (``identify --effect``) no longer counts it as changing, and the tests (made without it) still found it."""
     change = result.change or {}
-    return None if change.get("changed") else change.get("time")
+    tests = change.get("time")
+    return None if change.get("changed") or not tests or tests.get("changed") else tests
 
 
 def unseen_change(result) -> str:
