@@ -236,11 +236,11 @@ def time_library(records, progress=print) -> list[dict]:
             started = time.perf_counter()
             result = identify_person(item["record"])
             total = time.perf_counter() - started
-            parts = {key: timers.seconds.get(key, np.nan) for key, _ in TIMED}
+            parts = {key: timers.seconds.get(key, np.nan) for key in dict.fromkeys(key for key, *_ in TIMED)}
             parts["result"] = parts["result"] - parts["information"]  # person_result calls information
             row = {**{k_: item[k_] for k_ in ("person", "generator", "f_b", "f_h_true", "xi_h_true")},
                    "seconds": total, **parts,
-                   "other": total - np.nansum([parts[key] for key, _ in TIMED]),
+                   "other": total - np.nansum([parts[key] for key in dict.fromkeys(key for key, *_ in TIMED)]),
                    "loglike_calls": timers.calls.get("loglike", 0), "loglike_seconds": timers.seconds.get("loglike", np.nan),
                    "score_calls": timers.calls.get("score", 0), "score_seconds": timers.seconds.get("score", np.nan),
                    "searches_calls": timers.calls.get("searches", 0), "variation": result.model.variation,

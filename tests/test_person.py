@@ -148,15 +148,21 @@ def test_residual_tests_are_statsmodels_own_at_the_estimate(short_sim, gaps):
                                rtol=1e-7)
 
 
-@pytest.mark.parametrize("variation", ["independent", "random_walk", "both", "smooth"])
-def test_state_only_smoother_gives_statsmodels_smoothed_states(short_sim, variation):
-    """``RecordStateSpace.smoothed_state`` (the re-placement of the cycle starts uses it) is the full smoother's
-    state mean, with the phase template's timing states too, and leaves the model as it found it."""
+@pytest.mark.parametrize("variation, gaps", [("independent", False), ("random_walk", False), ("both", False),
+                                             ("smooth", False), ("independent", True), ("smooth", True)])
+def test_state_only_smoother_gives_statsmodels_smoothed_states(short_sim, variation, gaps):
+    """``RecordStateSpace.smoothed_state`` (the compiled smoother of ``person/smoother.py``, which the re-placement
+    of the cycle starts uses) is statsmodels' full smoother's state mean, with the phase template's timing states
+    too and with a phone's missing samples, and leaves the model as it found it."""
     sim = short_sim
     y = acceleration(sim)
+    observed = np.ones(y.size, dtype=bool)
+    if gaps:
+        observed[100:130] = observed[300:303] = False
     template = np.array([0.0, -0.2, 0.1, 0.1, 0.05, 0.03, 0.0, 0.01, 0.0])
-    model = RecordModel(sim.record.time, y, estimate_timing(sim.record.time, sim.record.force), variation=variation,
-                        regressors=(Regressor("offset", np.ones_like(y), dynamic=False),), phase_template=template)
+    model = RecordModel(sim.record.time, np.where(observed, y, 1e3), estimate_timing(sim.record.time, sim.record.force),
+                        variation=variation, regressors=(Regressor("offset", np.ones_like(y), dynamic=False),),
+                        phase_template=template, observed=observed)
     params = model.start_params(2.3, 0.25, -2.0)
     params[-2:] = -3.0, 0.0
     ssm = RecordStateSpace(model, model.filter(params)["delta"])

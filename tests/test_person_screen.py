@@ -9,7 +9,7 @@ from smd_statespace.effects.generic import label
 from smd_statespace.errors import OptionError
 from smd_statespace.person import identify_person
 from smd_statespace.person.extend import effect_model
-from smd_statespace.person.screen import generic_library, holm, score_test, screen
+from smd_statespace.person.screen import generic_library, holm, score_test, score_tests, screen
 from smd_statespace.simulation import simulate_bouncing
 
 PERSON = dict(mass=70, f_b=2.2, f_h=2.7, xi_h=0.3, duration=20)
@@ -32,6 +32,19 @@ def test_at_zero_the_candidate_is_the_fitted_person_and_its_gradient_the_likelih
     up[j], down[j] = h, -h
     slope = (model.loglike(up) - model.loglike(down)) / (2 * h)
     assert test["gradient"] == pytest.approx(slope, rel=1e-3, abs=1e-3)
+
+
+def test_the_library_sharing_derivative_passes_gives_each_terms_own_test(clean):
+    """score_tests puts terms with different coefficients in one derivative pass (the three steps of a kind, which
+    share a name, in three; a candidate that adds harmonics alone): every number is the term's own test."""
+    library = generic_library(clean) + [make_effect("harmonics:count=1")]
+    shared = score_tests(clean, library, threads=2)
+    for effect, test in zip(library, shared):
+        alone = score_test(clean, effect)
+        assert test["parameter"] == alone["parameter"]
+        for key in ("gradient", "lm", "lm_robust", "sd_robust", "loglike"):
+            assert test[key] == pytest.approx(alone[key], rel=1e-7, abs=1e-9), (effect.spec, key)
+        np.testing.assert_allclose(test["cycle_scores"], alone["cycle_scores"], rtol=1e-7, atol=1e-9)
 
 
 def test_a_drifting_f_h_is_ranked_first_and_a_clean_record_raises_no_alarm(clean):

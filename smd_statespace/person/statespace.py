@@ -128,26 +128,26 @@ class RecordStateSpace(MLEModel):
     def smoothed_state(self, params) -> np.ndarray:
         """The smoothed state means at ``params``, shape ``(k_states, N)``: the smoother's state pass alone.
 
-        The same means as ``self.smooth(params).smoothed_state`` without the smoothed covariances,
-        disturbances and the results' copies of the matrices: 60-70 % less time on a 30 s record (the cycle starts'
-        re-placement, :func:`~smd_statespace.person.search.corrected_timing`, calls it six times per record).
-        The scale is not concentrated out here: statsmodels' state-only smoother (0.15.0) multiplies the
-        absent smoothed covariance by the concentrated scale and fails; every variance being relative to
-        ``sigma^2``, the means do not depend on it.
+        The same means as ``self.smooth(params).smoothed_state``, from the same matrices, by the compiled
+        filter and state smoothing recursion of :mod:`~smd_statespace.person.smoother` (no smoothed
+        covariances, disturbances or results' copies of the matrices). The re-placement of the cycle starts
+        (:func:`~smd_statespace.person.search.corrected_timing`) calls it six times per record. Every variance
+        being relative to ``sigma^2``, the means do not depend on the concentrated scale.
         """
-        from statsmodels.tsa.statespace.kalman_smoother import SMOOTHER_STATE
+        from .smoother import smoothed_state_means
 
         self.update(params)
-        concentrated, output = self.ssm.filter_concentrated, self.ssm.smoother_output
-        self.ssm.filter_concentrated = False
-        self.ssm.set_smoother_output(SMOOTHER_STATE)
-        try:
-            # without the copies of the time-varying matrices and the filter's output into the results object
-            # (a third of the time on a "smooth" model); the smoothed state does not read them
-            return self.ssm.smooth(update_representation=False, update_filter=False).smoothed_state
-        finally:
-            self.ssm.filter_concentrated = concentrated
-            self.ssm.set_smoother_output(output)
+        ssm, n = self.ssm, self.nobs
+        init = ssm.initialization
+
+        def per_sample(array):  # statsmodels keeps a time-invariant matrix with a last axis of 1
+            return np.broadcast_to(array, array.shape[:-1] + (n,))
+
+        return smoothed_state_means(self.record_model.y, np.broadcast_to(np.asarray(self.record_model.observed, dtype=bool), (n,)),
+                                    per_sample(ssm["design"])[0], per_sample(ssm["obs_intercept"])[0],
+                                    float(np.asarray(ssm["obs_cov"]).ravel()[0]), per_sample(ssm["transition"]),
+                                    per_sample(ssm["state_intercept"]), per_sample(ssm["state_cov"]),
+                                    init.constant, init.stationary_cov)
 
 
 def nominal_path(model: RecordModel, params) -> np.ndarray:
