@@ -9,7 +9,9 @@ import pytest
 from smd_statespace.errors import OptionError
 from smd_statespace.person import identify_person, kalman, sensitivity
 from smd_statespace.person.screen import generic_library, screen
-from smd_statespace.person.threads import THREADS_VARIABLE, available_cores, search_threads, thread_map
+from smd_statespace.person import score as score_module
+from smd_statespace.person.threads import (THREADS_VARIABLE, available_cores, record_cores, search_threads, spare_thread,
+                                          thread_map)
 from smd_statespace.simulation import simulate_bouncing
 
 
@@ -68,6 +70,42 @@ def test_identify_in_two_threads_equals_one(record):
     assert one.change is not None and one.change["z"] == two.change["z"]
     # and the answer is the person's, not merely the same twice
     assert abs(one.f_h - 2.9) < 3 * one.sd("f_h")
+
+
+def test_a_derivative_pass_split_with_an_idle_thread_is_the_whole_pass_to_the_last_bit(record, monkeypatch):
+    """Inside a person's entry point with a thread idle, a derivative pass computes half of its parameters'
+    derivatives in that thread; the numbers are the unsplit pass's exactly. Outside an entry point, or with one
+    thread, it does not split; one idle thread is lent once."""
+    result = identify_person(record, check_change=False, threads=1)
+    model, params = result.model, result.params
+    passes = []
+    original = score_module.sensitivity_pass
+
+    def counted(*args):
+        out = original(*args)
+        passes.append(out[2].shape[1])  # the parameters this pass differentiated
+        return out
+
+    monkeypatch.setattr(score_module, "sensitivity_pass", counted)
+    whole = score_module.score(model, params)
+    assert passes == [params.size]
+
+    @record_cores
+    def entry(threads):
+        with spare_thread() as spare:
+            with spare_thread() as second:
+                lent = (spare, second)
+        return lent, score_module.score(model, params)
+
+    passes.clear()
+    lent, split = entry(threads=2)
+    assert lent == (True, False) and sorted(passes) == [params.size // 2, params.size - params.size // 2]
+    for key in ("loglike", "gradient", "profile_information", "efficient_per_sample", "d_innovations",
+                "d_log_variances", "innovations"):
+        np.testing.assert_array_equal(whole[key], split[key])
+    passes.clear()
+    lent, _ = entry(threads=1)
+    assert lent == (False, False) and passes == [params.size]
 
 
 def test_screen_in_two_threads_equals_one(record):

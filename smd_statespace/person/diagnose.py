@@ -68,7 +68,7 @@ from .in_time import in_time_words
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
-from .threads import one_blas_thread, search_threads, thread_map
+from .threads import one_blas_thread, record_cores, search_threads, thread_map
 from .validation import MIN_HALF_CYCLES
 from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white,
                       needed_z, verdict, without_key)
@@ -469,6 +469,7 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
 
 
 @one_blas_thread
+@record_cores
 def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library=None,
                     threads=None) -> PersonDiagnosis:
     """Identify the person with each candidate effect and test it by likelihood ratio.

@@ -50,7 +50,7 @@ from ..model.fitted import propose
 from .effect_adapter import fitted_record, record_harmonics, record_starts
 from .model import RecordModel
 from .search import WIDER_SANDWICH
-from .threads import one_blas_thread
+from .threads import one_blas_thread, record_cores
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects",
            "configured_for_record", "split_effects", "record_signals", "effect_model", "at_zero", "fit_effects"]
@@ -244,6 +244,7 @@ def _starts(model: RecordModel, result, root, effects) -> list:
 
 
 @one_blas_thread
+@record_cores
 def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDWICH, progress=False, timing=True,
                 threads=1):
     """Identify the person of ``result`` again with ``effects`` added to its model.

@@ -40,7 +40,7 @@ from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .screen import time_change
 from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing,
                      fit_model, profile_interval)
-from .threads import one_blas_thread, search_threads, thread_map
+from .threads import one_blas_thread, record_cores, search_threads, thread_map
 from .timing import TIMING_METHODS, estimate_timing
 
 __all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person",
@@ -78,6 +78,7 @@ INTERVAL_METHODS = ("calibrated", "wald", "profile")
 
 
 @one_blas_thread
+@record_cores
 def identify_person(record: Record, n_harmonics=4, variation="auto", timing="model", process_noise=False,
                     intervals="calibrated", level=0.9, regressors=(), cov_type=WIDER_SANDWICH, drift=False, check=True,
                     rate=RECORD_RATE, progress=False, effects=(), measured_floor=True, span="auto",

@@ -82,15 +82,17 @@ the likelihood took ``2 k^2`` likelihoods, 610 ms).
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
 from .model import RecordModel
 from .sensitivity import sensitivity_pass
 from .system import contiguous
+from .threads import spare_thread
 
-__all__ = ["DYNAMICS_STEP", "FORWARD_STEP", "cycle_sums", "profile_out", "score", "system_derivatives",
-           "sensitivity_pass"]
+__all__ = ["DYNAMICS_STEP", "FORWARD_STEP", "SPLIT_FROM", "cycle_sums", "profile_out", "score", "system_derivatives",
+           "sensitivity_pass", "sensitivities"]
 
 DYNAMICS_STEP = 1e-6
 """Relative step of the central differences of :meth:`RecordModel.system` in ``f_h``, ``xi_h`` and the effects'
@@ -428,10 +430,7 @@ def score(model: RecordModel, params, fitted=None, method="auto", derivatives=No
                 "delta": fitted["delta"], "sigma2": fitted["sigma2"]}
     der = system_derivatives(model, params, sys, method=method) if derivatives is None else derivatives
     delta, sigma2 = np.asarray(fitted["delta"], dtype=float), float(fitted["sigma2"])
-    v, f, dv, df = sensitivity_pass(
-        *sys.pass_arguments(model.y, model.n_coefficients), *contiguous(
-            delta, der["dyn"], der["d_hx"], der["d_Phi"], der["d_Gam"], der["d_offset"], der["d_X_tr"], der["d_y"],
-            der["d_Qx"], der["d_D"], der["d_E"], der["d_drift"], der["d_sphi"], der["d_sq"], der["d_sp0"]))
+    v, f, dv, df = sensitivities(sys.pass_arguments(model.y, model.n_coefficients), delta, der)
     variance = sigma2 * f
     standard2 = v**2 / variance
     observed, n_obs = model.observed, model.n_observed  # a missing sample adds nothing (v, dv, df are 0 there)
@@ -457,6 +456,49 @@ def score(model: RecordModel, params, fitted=None, method="auto", derivatives=No
             "profile_information": 0.5 * (profile + profile.T),
             "innovations": v, "variances": variance, "d_innovations": dv, "d_log_variances": relative,
             "delta": delta, "sigma2": sigma2}
+
+
+SPLIT_FROM = 4
+"""Parameters a derivative pass must have to split them with an idle thread (:func:`sensitivities`): half a pass
+costs about 0.6 of a whole one (the filter itself is in both halves)."""
+
+_PER_PARAMETER = ("dyn", "d_Qx", "d_D", "d_E", "d_drift", "d_sphi", "d_sq", "d_sp0")
+"""The derivative arrays with one entry per parameter (first axis); the others are per dynamic parameter, indexed
+through ``dyn``."""
+
+
+def sensitivities(arguments, delta, der) -> tuple:
+    """``(v, f, dv, df)`` of :func:`~smd_statespace.person.sensitivity.sensitivity_pass` with the system's
+    ``arguments`` (``SystemArrays.pass_arguments``) and derivatives ``der`` (:func:`system_derivatives`).
+
+    Where one of the record's threads is idle (:func:`~smd_statespace.person.threads.spare_thread`) and there are
+    :data:`SPLIT_FROM` parameters or more, the second half of the parameters' derivatives is computed in that
+    thread while this one computes the first: every column is computed as in one pass, so the numbers are the same
+    to the last bit (tested), whichever way it ran.
+    """
+    def run(columns):
+        chosen = der if columns is None else {**der, **{key: der[key][columns] for key in _PER_PARAMETER}}
+        return sensitivity_pass(*arguments, *contiguous(
+            delta, chosen["dyn"], chosen["d_hx"], chosen["d_Phi"], chosen["d_Gam"], chosen["d_offset"],
+            chosen["d_X_tr"], chosen["d_y"], chosen["d_Qx"], chosen["d_D"], chosen["d_E"], chosen["d_drift"],
+            chosen["d_sphi"], chosen["d_sq"], chosen["d_sp0"]))
+
+    k = der["dyn"].size
+    with spare_thread() as spare:
+        if not spare or k < SPLIT_FROM:
+            return run(None)
+        first, second = np.arange(k // 2), np.arange(k // 2, k)
+        other = {}
+        helper = threading.Thread(target=lambda: other.update(out=run(second)), name="smd-derivatives")
+        helper.start()
+        try:
+            here = run(first)
+        finally:
+            helper.join()
+    if "out" not in other:  # the helper failed: compute its half here (an error then shows as itself)
+        other["out"] = run(second)
+    there = other["out"]
+    return here[0], here[1], np.hstack([here[2], there[2]]), np.hstack([here[3], there[3]])
 
 
 def cycle_sums(model: RecordModel, per_sample) -> np.ndarray:

@@ -14,6 +14,15 @@ A batch of records already keeps every core busy with one record per process
 (``identify FOLDER --jobs N``); its worker processes run their searches in one thread
 (:data:`THREADS_VARIABLE`).
 
+Where a record's searches cannot run side by side (one variation model still re-placing its cycle starts after
+the other has finished, the final fit, the information), one derivative pass at a time ran on one core while the
+other waited: measured on six 30 s records with two threads, a derivative pass ran alone during 0.7-1.4 s of
+1.6-2.8 s. The person's entry points count the threads their searches keep busy (:func:`record_cores`,
+:func:`thread_map`), and a derivative pass that finds one of the ``threads`` idle (:func:`spare_thread`) splits
+its parameters' derivatives between itself and it
+(:func:`~smd_statespace.person.score.sensitivities`): each column of the derivatives is computed as in one pass
+(the same numbers to the last bit, tested), so the answer does not depend on when a thread was free.
+
 The linear algebra a search does in numpy and scipy is on small matrices (a state of 6-30, a few thousand
 samples), where a BLAS library's own threads only compete with these searches and with other processes for the
 cores: :func:`one_blas_thread` runs the person's entry points with BLAS limited to one thread (threadpoolctl,
@@ -24,14 +33,17 @@ wall time; the person's tests on two test processes, 118 -> 101 s.
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import inspect
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
 from ..errors import OptionError
 
-__all__ = ["THREADS_VARIABLE", "one_blas_thread", "search_threads", "thread_map"]
+__all__ = ["THREADS_VARIABLE", "one_blas_thread", "record_cores", "search_threads", "spare_thread",
+           "thread_map"]
 
 THREADS_VARIABLE = "SMD_STATESPACE_THREADS"
 """Environment variable: the number of threads one record's searches use when ``threads`` is not given
@@ -83,8 +95,95 @@ def thread_map(function, items, threads: int) -> list:
     items = list(items)
     if threads <= 1 or len(items) <= 1:
         return [function(item) for item in items]
-    with ThreadPoolExecutor(max_workers=min(threads, len(items))) as pool:
-        return list(pool.map(function, items))
+    workers = min(threads, len(items))
+    counted = _CORES.inside()  # a search of a person's entry point: each item running is a busy thread of the record
+
+    def run(item):
+        _count(counted, 1)
+        _CORES.local.inside = counted
+        try:
+            return function(item)
+        finally:
+            _CORES.local.inside = False
+            _count(counted, -1)
+
+    _count(counted, -1)  # the caller waits for its workers
+    try:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            return list(pool.map(run, items))
+    finally:
+        _count(counted, 1)
+
+
+def _count(counted: bool, change: int) -> None:
+    if counted:
+        with _CORES.lock:
+            _CORES.busy += change
+
+
+class _Cores:
+    """The threads a record's searches may use (``capacity``, set by the outermost entry point) and those busy now.
+
+    ``local.inside``: whether the current thread runs inside an entry point's searches (counted in ``busy``).
+    """
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.capacity = 0
+        self.busy = 0
+        self.local = threading.local()
+
+    def inside(self) -> bool:
+        return getattr(self.local, "inside", False)
+
+
+_CORES = _Cores()
+
+
+def record_cores(function):
+    """A decorator of the person's entry points: the call's searches may keep ``threads`` threads busy.
+
+    ``threads`` is the function's own argument (None: :func:`search_threads`). The outermost call sets how many
+    threads the record may use; a call made inside it (``fit_effects`` under ``identify_person``, ``diagnose``'s
+    candidates in threads) counts as part of it. :func:`thread_map`'s workers count as busy threads while they
+    run, and :func:`spare_thread` lends an idle one to a derivative pass.
+    """
+    signature = inspect.signature(function)
+
+    @functools.wraps(function)
+    def counted(*args, **kwargs):
+        if _CORES.inside():
+            return function(*args, **kwargs)
+        threads = search_threads(signature.bind_partial(*args, **kwargs).arguments.get("threads"))
+        with _CORES.lock:
+            if _CORES.busy == 0:
+                _CORES.capacity = threads
+            _CORES.busy += 1
+        _CORES.local.inside = True
+        try:
+            return function(*args, **kwargs)
+        finally:
+            _CORES.local.inside = False
+            with _CORES.lock:
+                _CORES.busy -= 1
+
+    return counted
+
+
+@contextlib.contextmanager
+def spare_thread():
+    """``with spare_thread() as spare:`` ``spare`` is True when one of the record's threads is idle, and it is then
+    counted as busy until the block ends; False outside a person's entry point (:func:`record_cores`)."""
+    with _CORES.lock:
+        spare = _CORES.inside() and _CORES.busy < _CORES.capacity
+        if spare:
+            _CORES.busy += 1
+    try:
+        yield spare
+    finally:
+        if spare:
+            with _CORES.lock:
+                _CORES.busy -= 1
 
 
 def one_blas_thread(function):
