@@ -86,15 +86,7 @@ def _sparse_rows(TT):
     row_start = np.zeros(n + 1, dtype=np.int64)
     n_entries = 0
     for t in range(n):  # first pass: how many rows and entries
-        moving[:] = False
-        count[:] = 0
-        for j in range(m):
-            for i in range(m):
-                value = TT[t, j, i]
-                if value != (1.0 if i == j else 0.0):
-                    moving[i] = True
-                if value != 0.0:
-                    count[i] += 1
+        _scan_rows(TT[t], moving, count)
         row_start[t + 1] = row_start[t]
         for i in range(m):
             if moving[i]:
@@ -107,15 +99,7 @@ def _sparse_rows(TT):
     slot = np.empty(m, dtype=np.int64)
     e = 0
     for t in range(n):  # second pass: fill them
-        moving[:] = False
-        count[:] = 0
-        for j in range(m):
-            for i in range(m):
-                value = TT[t, j, i]
-                if value != (1.0 if i == j else 0.0):
-                    moving[i] = True
-                if value != 0.0:
-                    count[i] += 1
+        _scan_rows(TT[t], moving, count)
         for i in range(m):
             slot[i] = -1
             if moving[i]:
@@ -130,6 +114,22 @@ def _sparse_rows(TT):
                     values[slot[i]] = TT[t, j, i]
                     slot[i] += 1
     return row_start, rows, entry_start, columns, values
+
+
+@numba.njit(cache=True, nogil=True)
+def _scan_rows(TTt, moving, count):
+    """Which rows of ``T_t`` (``TTt[j, i]`` is ``T_t[i, j]``) are not the identity's, and their nonzero entries'
+    count (into ``moving``, ``count``)."""
+    m = TTt.shape[0]
+    moving[:] = False
+    count[:] = 0
+    for j in range(m):
+        for i in range(m):
+            value = TTt[j, i]
+            if value != (1.0 if i == j else 0.0):
+                moving[i] = True
+            if value != 0.0:
+                count[i] += 1
 
 
 @numba.njit(cache=True, nogil=True)
