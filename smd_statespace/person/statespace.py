@@ -143,7 +143,8 @@ class RecordStateSpace(MLEModel):
         def per_sample(array):  # statsmodels keeps a time-invariant matrix with a last axis of 1
             return np.broadcast_to(array, array.shape[:-1] + (n,))
 
-        return smoothed_state_means(self.record_model.y, np.broadcast_to(np.asarray(self.record_model.observed, dtype=bool), (n,)),
+        observed = np.broadcast_to(np.asarray(self.record_model.observed, dtype=bool), (n,))
+        return smoothed_state_means(self.record_model.y, observed,
                                     per_sample(ssm["design"])[0], per_sample(ssm["obs_intercept"])[0],
                                     float(np.asarray(ssm["obs_cov"]).ravel()[0]), per_sample(ssm["transition"]),
                                     per_sample(ssm["state_intercept"]), per_sample(ssm["state_cov"]),
