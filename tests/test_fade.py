@@ -84,8 +84,15 @@ def test_a_record_bouncing_end_to_end_has_no_fade_unless_asked_and_a_bad_value_i
     # asked for where there is no template to fade (cycle starts from a fixed timing): said, not silently left out
     with pytest.raises(OptionError, match="fade=True needs timing='model'"):
         identify_person(sim.record, fade=True, timing="peaks")
-    assert main(["identify", str(path), "--mass", "70", "--fade", "on", "--timing", "template"]) == 2
+    refused = ["identify", str(path), "--mass", "70", "--fade", "on", "--timing", "template", "--out"]
+    assert main(refused + [str(tmp_path / "runs" / "first")]) == 2
     assert "fade=True needs timing='model'" in capsys.readouterr().err
+    # the output folder the command made before the fit refused the options is taken back; nothing else is
+    assert not (tmp_path / "runs").exists()
+    (tmp_path / "kept").mkdir()
+    (tmp_path / "kept" / "note.txt").write_text("mine")
+    assert main(refused + [str(tmp_path / "kept" / "new")]) == 2
+    assert (tmp_path / "kept" / "note.txt").read_text() == "mine" and not (tmp_path / "kept" / "new").exists()
 
 
 def test_diagnoses_next_command_repeats_the_persons_options_given():

@@ -333,13 +333,31 @@ def prepare_record(args):
     return record, preprocess(record)
 
 
+CREATED: list = []
+"""Output directories (and their parents) this command created: :func:`remove_empty_outputs` takes back those still
+empty when the command stops on bad input."""
+
+
 def out_dir(path) -> Path:
     """Create (if needed) and return the output directory, failing clearly when it cannot be one."""
     directory = Path(path)
     if directory.exists() and not directory.is_dir():
         raise OptionError(f"--out {directory}: exists and is not a directory")
+    missing = [folder for folder in (directory, *directory.parents) if not folder.exists()]
     directory.mkdir(parents=True, exist_ok=True)
+    CREATED.extend(missing)  # the deepest first
     return directory
+
+
+def remove_empty_outputs() -> None:
+    """Remove the output directories this command created and left empty (a command stopped by bad input after
+    making its ``--out`` folder, e.g. an option that only the fit can refuse): nothing written is touched."""
+    for directory in CREATED:
+        try:
+            directory.rmdir()  # only an empty directory
+        except OSError:
+            pass
+    CREATED.clear()
 
 
 def load_truth(path):

@@ -34,7 +34,7 @@ import sys
 
 from .. import __version__
 from . import compare, crowd, demo, diagnose, hsi, identify, simulate, stats, structure
-from .common import PROG
+from .common import CREATED, PROG, remove_empty_outputs
 from ..effects import load_effects_file, load_installed_effects
 from ..errors import SMDInputError
 
@@ -125,14 +125,17 @@ def main(argv=None) -> int:
         names = ", ".join(choice for choice in parser._subparsers._group_actions[0].choices)
         return _fail(f"choose a command: {names} (see '{PROG} --help')")
     args.effects = [*args.effects, *getattr(args, "command_effects", [])]
+    CREATED.clear()
     try:
         load_installed_effects()
         for path in args.effects:
             load_effects_file(path)
         return args.run(args)
     except SMDInputError as exc:
+        remove_empty_outputs()
         return _fail(exc)
     except KeyboardInterrupt:
+        remove_empty_outputs()
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
