@@ -10,8 +10,8 @@ from smd_statespace.errors import OptionError
 from smd_statespace.person import identify_person, kalman, sensitivity
 from smd_statespace.person.screen import generic_library, screen
 from smd_statespace.person import score as score_module
-from smd_statespace.person.threads import (THREADS_VARIABLE, available_cores, record_cores, search_threads, spare_thread,
-                                          thread_map)
+from smd_statespace.person.threads import (THREADS_VARIABLE, available_cores, record_cores, search_threads, spare_map,
+                                          spare_thread, thread_map)
 from smd_statespace.simulation import simulate_bouncing
 
 
@@ -106,6 +106,27 @@ def test_a_derivative_pass_split_with_an_idle_thread_is_the_whole_pass_to_the_la
     passes.clear()
     lent, _ = entry(threads=1)
     assert lent == (False, False) and passes == [params.size]
+
+
+def test_a_list_of_trial_starts_is_evaluated_half_in_an_idle_thread_and_in_order():
+    """spare_map gives the list a loop gives; inside an entry point with a thread idle, its second half runs in that
+    thread (the likelihoods of a search's trial starts), outside one or with one thread, here."""
+    where = {}
+
+    def square(item):
+        where[item] = threading.current_thread().name
+        return item * item
+
+    @record_cores
+    def entry(threads):
+        return spare_map(square, range(6))
+
+    assert entry(threads=2) == [0, 1, 4, 9, 16, 25]
+    here = threading.current_thread().name
+    assert [where[i] == here for i in range(6)] == [True] * 3 + [False] * 3
+    where.clear()
+    assert entry(threads=1) == spare_map(square, range(6)) == [0, 1, 4, 9, 16, 25]
+    assert set(where.values()) == {here}
 
 
 def test_screen_in_two_threads_equals_one(record):

@@ -82,14 +82,13 @@ the likelihood took ``2 k^2`` likelihoods, 610 ms).
 from __future__ import annotations
 
 import math
-import threading
 
 import numpy as np
 
 from .model import RecordModel
 from .sensitivity import sensitivity_pass
 from .system import contiguous
-from .threads import spare_thread
+from .threads import spare_halves
 
 __all__ = ["DYNAMICS_STEP", "FORWARD_STEP", "SPLIT_FROM", "cycle_sums", "profile_out", "score", "system_derivatives",
            "sensitivity_pass", "sensitivities"]
@@ -471,7 +470,7 @@ def sensitivities(arguments, delta, der) -> tuple:
     """``(v, f, dv, df)`` of :func:`~smd_statespace.person.sensitivity.sensitivity_pass` with the system's
     ``arguments`` (``SystemArrays.pass_arguments``) and derivatives ``der`` (:func:`system_derivatives`).
 
-    Where one of the record's threads is idle (:func:`~smd_statespace.person.threads.spare_thread`) and there are
+    Where one of the record's threads is idle (:func:`~smd_statespace.person.threads.spare_halves`) and there are
     :data:`SPLIT_FROM` parameters or more, the second half of the parameters' derivatives is computed in that
     thread while this one computes the first: every column is computed as in one pass, so the numbers are the same
     to the last bit (tested), whichever way it ran.
@@ -484,20 +483,10 @@ def sensitivities(arguments, delta, der) -> tuple:
             chosen["d_sphi"], chosen["d_sq"], chosen["d_sp0"]))
 
     k = der["dyn"].size
-    with spare_thread() as spare:
-        if not spare or k < SPLIT_FROM:
-            return run(None)
-        first, second = np.arange(k // 2), np.arange(k // 2, k)
-        other = {}
-        helper = threading.Thread(target=lambda: other.update(out=run(second)), name="smd-derivatives")
-        helper.start()
-        try:
-            here = run(first)
-        finally:
-            helper.join()
-    if "out" not in other:  # the helper failed: compute its half here (an error then shows as itself)
-        other["out"] = run(second)
-    there = other["out"]
+    halves = spare_halves(lambda: run(np.arange(k // 2)), lambda: run(np.arange(k // 2, k))) if k >= SPLIT_FROM else None
+    if halves is None:
+        return run(None)
+    here, there = halves
     return here[0], here[1], np.hstack([here[2], there[2]]), np.hstack([here[3], there[3]])
 
 

@@ -42,8 +42,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 from ..errors import OptionError
 
-__all__ = ["THREADS_VARIABLE", "one_blas_thread", "record_cores", "search_threads", "spare_thread",
-           "thread_map"]
+__all__ = ["THREADS_VARIABLE", "one_blas_thread", "record_cores", "search_threads", "spare_halves", "spare_map",
+           "spare_thread", "thread_map"]
 
 THREADS_VARIABLE = "SMD_STATESPACE_THREADS"
 """Environment variable: the number of threads one record's searches use when ``threads`` is not given
@@ -184,6 +184,34 @@ def spare_thread():
         if spare:
             with _CORES.lock:
                 _CORES.busy -= 1
+
+
+def spare_halves(first, second):
+    """``(first(), second())`` with ``second()`` run in an idle thread of the record while ``first()`` runs here, or
+    None (and nothing run) when no thread is idle (:func:`spare_thread`). An error in either is raised here."""
+    with spare_thread() as spare:
+        if not spare:
+            return None
+        other = {}
+        helper = threading.Thread(target=lambda: other.update(out=second()), name="smd-spare")
+        helper.start()
+        try:
+            here = first()
+        finally:
+            helper.join()
+    if "out" not in other:  # the helper failed: its half again here, where its error shows as itself
+        other["out"] = second()
+    return here, other["out"]
+
+
+def spare_map(function, items) -> list:
+    """``[function(item) for item in items]``, the second half in an idle thread of the record when there is one
+    (:func:`spare_halves`): the same list either way (the likelihoods of a search's many trial starts)."""
+    items = list(items)
+    half = len(items) // 2
+    halves = spare_halves(lambda: [function(item) for item in items[:half]],
+                          lambda: [function(item) for item in items[half:]]) if len(items) > 1 else None
+    return [function(item) for item in items] if halves is None else halves[0] + halves[1]
 
 
 def one_blas_thread(function):
