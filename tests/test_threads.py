@@ -233,3 +233,14 @@ def test_the_blas_limit_of_calls_in_threads_gives_the_callers_setting_back_which
     other.join(10)
     assert seen == {"first": 1, "second": 1}
     assert setting["threads"] == 2
+
+
+@pytest.mark.filterwarnings("error::pytest.PytestUnhandledThreadExceptionWarning")
+def test_an_error_in_the_idle_threads_half_is_raised_in_the_caller_and_not_left_in_the_thread(capsys):
+    @record_cores
+    def entry(threads):
+        return spare_map(lambda item: 1 // (item - 4), range(6))  # item 4 is in the second half
+
+    with pytest.raises(ZeroDivisionError):
+        entry(threads=2)
+    assert "Exception in thread" not in capsys.readouterr().err

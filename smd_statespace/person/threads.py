@@ -21,7 +21,8 @@ other waited: measured on six 30 s records with two threads, a derivative pass r
 :func:`thread_map`), and a derivative pass that finds one of the ``threads`` idle (:func:`spare_thread`) splits
 its parameters' derivatives between itself and it
 (:func:`~smd_statespace.person.score.sensitivities`): each column of the derivatives is computed as in one pass
-(the same numbers to the last bit, tested), so the answer does not depend on when a thread was free.
+(the same numbers to the last bit, tested), so the answer does not depend on when a thread was free. A search's
+list of trial starts is evaluated the same way, half in an idle thread (:func:`spare_map`).
 
 The linear algebra a search does in numpy and scipy is on small matrices (a state of 6-30, a few thousand
 samples), where a BLAS library's own threads only compete with these searches and with other processes for the
@@ -193,14 +194,21 @@ def spare_halves(first, second):
         if not spare:
             return None
         other = {}
-        helper = threading.Thread(target=lambda: other.update(out=second()), name="smd-spare")
+
+        def run_second():
+            try:
+                other["out"] = second()
+            except BaseException as exc:  # raised in the caller's thread below, not printed by the helper's
+                other["error"] = exc
+
+        helper = threading.Thread(target=run_second, name="smd-spare")
         helper.start()
         try:
             here = first()
         finally:
             helper.join()
-    if "out" not in other:  # the helper failed: its half again here, where its error shows as itself
-        other["out"] = second()
+    if "error" in other:
+        raise other["error"]
     return here, other["out"]
 
 
