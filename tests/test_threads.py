@@ -10,8 +10,8 @@ from smd_statespace.errors import OptionError
 from smd_statespace.person import identify_person, kalman, sensitivity
 from smd_statespace.person.screen import generic_library, screen
 from smd_statespace.person import score as score_module
-from smd_statespace.person.threads import (THREADS_VARIABLE, available_cores, record_cores, search_threads, spare_map,
-                                          spare_thread, thread_map)
+from smd_statespace.person.threads import (THREADS_VARIABLE, available_cores, record_cores, search_threads, spare_best,
+                                          spare_map, spare_thread, thread_map)
 from smd_statespace.simulation import simulate_bouncing
 
 
@@ -127,6 +127,10 @@ def test_a_list_of_trial_starts_is_evaluated_half_in_an_idle_thread_and_in_order
     where.clear()
     assert entry(threads=1) == spare_map(square, range(6)) == [0, 1, 4, 9, 16, 25]
     assert set(where.values()) == {here}
+    # the best of them as max() takes it: the first of equals
+    starts = [("a", 1), ("b", 3), ("c", 2), ("d", 3)]
+    best = record_cores(lambda threads: spare_best(lambda start: start[1], starts))
+    assert best(threads=2) == best(threads=1) == max(starts, key=lambda start: start[1]) == ("b", 3)
 
 
 def test_screen_in_two_threads_equals_one(record):

@@ -50,7 +50,7 @@ from ..model.fitted import propose
 from .effect_adapter import fitted_record, record_harmonics, record_starts
 from .model import RecordModel
 from .search import WIDER_SANDWICH
-from .threads import one_blas_thread, record_cores, spare_map
+from .threads import one_blas_thread, record_cores, spare_best
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects",
            "configured_for_record", "split_effects", "record_signals", "effect_model", "at_zero", "fit_effects"]
@@ -239,9 +239,7 @@ def _starts(model: RecordModel, result, root, effects) -> list:
                 values.update(part)
             starts.append(np.clip([values.get(name, value) for name, value in zip(model.param_names, default)],
                                   low, high))
-        # the likelihoods of many starts (a floor mode's grid of frequencies) half in an idle thread; the first best
-        likelihoods = spare_map(model.loglike, starts) if len(starts) > 1 else [0.0]
-        out.append(starts[max(range(len(starts)), key=likelihoods.__getitem__)])
+        out.append(spare_best(model.loglike, starts))  # a floor mode's many frequencies: half in an idle thread
     return out
 
 

@@ -483,7 +483,7 @@ def sensitivities(arguments, delta, der) -> tuple:
             chosen["d_sphi"], chosen["d_sq"], chosen["d_sp0"]))
 
     k = der["dyn"].size
-    halves = spare_halves(lambda: run(np.arange(k // 2)), lambda: run(np.arange(k // 2, k))) if k >= SPLIT_FROM else None
+    halves = None if k < SPLIT_FROM else spare_halves(lambda: run(np.arange(k // 2)), lambda: run(np.arange(k // 2, k)))
     if halves is None:
         return run(None)
     here, there = halves

@@ -23,7 +23,7 @@ from scipy import optimize, stats
 from ..errors import OptionError, SMDInputError
 from .comparison import comparison_row
 from .model import PERSON, RecordModel
-from .threads import spare_map, thread_map
+from .threads import spare_best, thread_map
 from .timing import CycleTiming
 
 __all__ = ["COV_TYPES", "WIDER_SANDWICH", "FitError", "fit_model", "information", "profile_interval",
@@ -521,8 +521,7 @@ def fit_timing(model_for, timing, variation, first=None, step=lambda *_: None):
                 return model.pack({**named, "log_var_phase": phase, "log_var_rate": rate})
 
             candidates = [start_for(a, b) for a in PHASE_VARIANCE_STARTS[0] for b in PHASE_VARIANCE_STARTS[1]]
-            likelihoods = spare_map(model.loglike, candidates)  # half in an idle thread; the first best
-            start = candidates[max(range(len(candidates)), key=likelihoods.__getitem__)]
+            start = spare_best(model.loglike, candidates)  # their likelihoods half in an idle thread
         else:
             start = params
         fitted = fit_model(model, start, quick=True)

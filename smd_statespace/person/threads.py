@@ -22,7 +22,7 @@ other waited: measured on six 30 s records with two threads, a derivative pass r
 its parameters' derivatives between itself and it
 (:func:`~smd_statespace.person.score.sensitivities`): each column of the derivatives is computed as in one pass
 (the same numbers to the last bit, tested), so the answer does not depend on when a thread was free. A search's
-list of trial starts is evaluated the same way, half in an idle thread (:func:`spare_map`).
+list of trial starts is evaluated the same way, half in an idle thread (:func:`spare_map`, :func:`spare_best`).
 
 The linear algebra a search does in numpy and scipy is on small matrices (a state of 6-30, a few thousand
 samples), where a BLAS library's own threads only compete with these searches and with other processes for the
@@ -43,8 +43,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 from ..errors import OptionError
 
-__all__ = ["THREADS_VARIABLE", "one_blas_thread", "record_cores", "search_threads", "spare_halves", "spare_map",
-           "spare_thread", "thread_map"]
+__all__ = ["THREADS_VARIABLE", "one_blas_thread", "record_cores", "search_threads", "spare_best", "spare_halves",
+           "spare_map", "spare_thread", "thread_map"]
 
 THREADS_VARIABLE = "SMD_STATESPACE_THREADS"
 """Environment variable: the number of threads one record's searches use when ``threads`` is not given
@@ -220,6 +220,16 @@ def spare_map(function, items) -> list:
     halves = spare_halves(lambda: [function(item) for item in items[:half]],
                           lambda: [function(item) for item in items[half:]]) if len(items) > 1 else None
     return [function(item) for item in items] if halves is None else halves[0] + halves[1]
+
+
+def spare_best(function, items):
+    """The first of ``items`` with the largest ``function`` value, as ``max(items, key=function)`` takes it, the
+    values computed by :func:`spare_map` (a search's trial starts by their likelihood)."""
+    items = list(items)
+    if len(items) == 1:
+        return items[0]
+    values = spare_map(function, items)
+    return items[max(range(len(items)), key=values.__getitem__)]
 
 
 def one_blas_thread(function):
