@@ -310,3 +310,55 @@ def test_a_scoring_search_that_runs_out_of_steps_is_finished_by_lbfgs(record, mo
     finished = search.fit_model(model, start)
     assert finished["converged"] and "then L-BFGS-B" in finished["message"]
     assert finished["loglike"] == pytest.approx(full["loglike"], abs=1e-2)
+
+
+class _Bowl:
+    """A stand-in model for ``search._stretched``: log-likelihood ``-|x - top|^2`` (unit scales)."""
+
+    def __init__(self, top):
+        self.top, self.scales, self.calls = np.asarray(top, dtype=float), np.ones(2), 0
+
+    def filter(self, params):
+        self.calls += 1
+        return {"loglike": -float(np.sum((params - self.top) ** 2))}
+
+
+@pytest.mark.parametrize("top, high, kept, tried", [
+    ((0.5, 0.05), 1.0, (0.4, 0.04), 3),     # far along the step: 2x and 4x gain, 8x overshoots -> 4x kept
+    ((0.12, 0.012), 1.0, (0.1, 0.01), 1),   # the step nearly reached it: 2x loses at once -> the step as taken
+    ((5.0, 0.5), 0.3, (0.3, 0.08), 3),      # 4x and 8x would leave the bound: clipped to it, 8x kept
+])
+def test_a_step_is_stretched_while_the_likelihood_rises_and_no_farther(top, high, kept, tried):
+    from smd_statespace.person.search import _stretched
+
+    model = _Bowl(top)
+    x, trial = np.zeros(2), np.array([0.1, 0.01])
+    low, high = np.array([-1.0, -1.0]), np.array([high, 1.0])
+    out, filtered, count = _stretched(model, x, trial, model.filter(trial), low, high)
+    np.testing.assert_allclose(out, kept, atol=1e-12)
+    assert filtered["loglike"] == pytest.approx(-np.sum((np.asarray(kept) - top) ** 2))
+    assert count == tried == model.calls - 1
+
+
+def test_scoring_along_a_ridge_is_stretched_to_the_same_maximum_with_fewer_derivative_passes(record, monkeypatch):
+    """The "smooth" model with a phase template on the 10 s record: with its steps stretched the search ends at
+    the maximum it reaches without (or higher), with fewer derivative passes."""
+    from smd_statespace.person import score as score_module
+    from smd_statespace.person import search
+
+    model = build(record, variation="smooth", phase_template=TEMPLATE)
+    start = model.start_params(3.3, 0.25, -3.0)
+    passes = []
+    counted = score_module.score
+
+    def counting(*args, **kwargs):
+        passes.append(1)
+        return counted(*args, **kwargs)
+
+    monkeypatch.setattr(score_module, "score", counting)
+    stretched = search.fit_model(model, start)
+    with_stretch, passes[:] = len(passes), []
+    monkeypatch.setattr(search, "STRETCHES", 0)
+    plain = search.fit_model(model, start)
+    assert stretched["converged"] and stretched["loglike"] >= plain["loglike"] - 1e-3
+    assert with_stretch < len(passes), (with_stretch, len(passes))
