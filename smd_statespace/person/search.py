@@ -273,9 +273,9 @@ def _stretched(model: RecordModel, x, trial, filtered, low, high) -> tuple:
     Where the expected information curves more than the likelihood does (a ridge the variation model leaves
     flat), each scoring step is short and the next one points the same way: the "smooth" model's search of
     one record crept 30 steps along such a ridge, ``f_h`` 3.10 -> 3.54 Hz gaining 0.02-0.04 a step. The step is
-    tried again at 2, 4, ... :data:`STRETCHES` times its length (clipped to the bounds), one likelihood each,
-    and the farthest that still gains is kept (a pattern move, Hooke and Jeeves 1961). Returns ``(trial,
-    filtered, likelihoods computed)``.
+    tried again at twice its length, then four times, up to ``2 ** STRETCHES`` (:data:`STRETCHES`; clipped to the
+    bounds), one likelihood each, for as long as each gains over the one before (a pattern move, Hooke and
+    Jeeves 1961). Returns ``(trial, filtered, likelihoods computed)``.
     """
     step = trial - x
     tried = 0
