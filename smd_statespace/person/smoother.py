@@ -177,9 +177,13 @@ def _smooth(y, observed, Z, d, h, row_start, rows, entry_start, columns, values,
     P = P0.copy()
     TP = np.empty((m, m))
     moved = np.empty(m)
+    # copies by loops: a slice assignment compiles numba's shape-mismatch error (string formatting), seconds of
+    # compilation at a package's first use
     for t in range(n):
-        a_pred[t] = a
-        P_pred[t] = P
+        for i in range(m):
+            a_pred[t, i] = a[i]
+            for j in range(m):
+                P_pred[t, i, j] = P[i, j]
         if observed[t]:
             f = h
             e = y[t] - d[t]
@@ -199,7 +203,9 @@ def _smooth(y, observed, Z, d, h, row_start, rows, entry_start, columns, values,
                     P[i, j] -= gain * M[t, j]
         # predict: a <- T a + c, P <- T P T' + Q, over the moving rows' entries only
         first, last = row_start[t], row_start[t + 1]
-        TP[:, :] = P
+        for i in range(m):
+            for j in range(m):
+                TP[i, j] = P[i, j]
         for e in range(first, last):
             i = rows[e]
             total = 0.0
@@ -212,7 +218,9 @@ def _smooth(y, observed, Z, d, h, row_start, rows, entry_start, columns, values,
             moved[i] = total
         for e in range(first, last):
             a[rows[e]] = moved[rows[e]]
-        P[:, :] = TP
+        for i in range(m):
+            for j in range(m):
+                P[i, j] = TP[i, j]
         for e in range(first, last):
             i = rows[e]
             for j in range(m):
@@ -236,7 +244,8 @@ def _backward(row_start, rows, entry_start, columns, values, Z, observed, v, F, 
     out = np.empty((n, m))
     for t in range(n - 1, -1, -1):
         # u = T_t' r_t; then r_{t-1} = u + Z_t' (v_t - M_t' u) / F_t
-        u[:] = r
+        for j in range(m):
+            u[j] = r[j]
         for e in range(row_start[t], row_start[t + 1]):
             u[rows[e]] = 0.0
         for e in range(row_start[t], row_start[t + 1]):
@@ -250,7 +259,8 @@ def _backward(row_start, rows, entry_start, columns, values, Z, observed, v, F, 
             for j in range(m):
                 r[j] = u[j] + Z[t, j] * scale
         else:
-            r[:] = u
+            for j in range(m):
+                r[j] = u[j]
         for i in range(m):
             total = a_pred[t, i]
             for j in range(m):
