@@ -58,7 +58,11 @@ def state_size(code, nx, p, n_template):
     return nx + p
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+# a cycle boundary's reset runs once a cycle: its arrays in any layout, ``step`` a run-time flag, so that numba
+# compiles each reset once rather than once per caller's layouts and literal flags (4 times each, about 2.4 s of a
+# package's first use)
+@numba.njit("void(int64, float64[:, :], int64, float64[:], float64[:], int64, int64, boolean)", cache=True,
+            fastmath={"reassoc", "contract"})
 def reset_covariance(code, P, p, D, E, o, n_template, step):
     """The covariance's part of a cycle boundary's new draw (in place); the force states start at row ``o``.
 
@@ -89,8 +93,9 @@ def reset_covariance(code, P, p, D, E, o, n_template, step):
             P[i, i] = P[j, j] + D[i - o]
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _reset(code, a, A, P, p, D, E, n_free, n_template, step=True):
+@numba.njit("void(int64, float64[:], float64[:, :], float64[:, :], int64, float64[:], float64[:], int64, int64, "
+            "boolean)", cache=True, fastmath={"reassoc", "contract"})
+def _reset(code, a, A, P, p, D, E, n_free, n_template, step):
     """Draw the force coefficients again at a cycle boundary (in place); they start at row ``n_free``."""
     q = A.shape[1]
     o = n_free
@@ -290,7 +295,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
     for i in range(nx):
         A[i, i] = 1.0
     if code == INDEPENDENT:
-        _reset(code, a, A, P, p, D, E, n_free, n_template)
+        _reset(code, a, A, P, p, D, E, n_free, n_template, True)
     elif code == RANDOM_WALK:
         for i in range(n_template):
             A[nx + i, n_free + i] = 1.0
@@ -301,7 +306,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
             P[nx + i, nx + p + i] = D[i] * smooth_p0[0, 1]
             P[nx + p + i, nx + i] = D[i] * smooth_p0[1, 0]
             P[nx + p + i, nx + p + i] = D[i] * smooth_p0[1, 1]
-        _reset(code, a, A, P, p, D, E, n_free, n_template)
+        _reset(code, a, A, P, p, D, E, n_free, n_template, True)
     else:
         for i in range(n_template):
             A[nx + p + i, n_free + i] = 1.0
@@ -339,7 +344,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
                 if code == BOTH:
                     P[nx + p + i, nx + p + i] += drift[i]
             if reset[k]:
-                _reset(code, a, A, P, p, D, E, n_free, n_template)
+                _reset(code, a, A, P, p, D, E, n_free, n_template, True)
         # update with y_k
         if varying:
             row = hx[k]

@@ -57,7 +57,8 @@ FASTMATH = {"contract"}
 """Floating-point licence of the pass: ``a * b + c`` may be fused (no reordering of sums)."""
 
 
-@numba.njit(cache=True, fastmath=FASTMATH)
+@numba.njit("void(int64, float64[:], float64[:, :], float64[:], float64[:], int64, int64, int64, float64[:], boolean)",
+            cache=True, fastmath=FASTMATH)  # once a cycle: compiled once for every layout (kalman.reset_covariance)
 def _reset(code, x, P, D, E, p, o, n_template, tau, step):
     """:func:`kalman._reset` on a state mean ``x`` at known ``delta`` (``tau``: the template, or 0 for a derivative).
 
