@@ -13,7 +13,8 @@ import numpy as np
 from .calibration import CALIBRATION, model_error_floor, wald_interval
 from .fade import NOTE_TAIL, fade_note
 from .results import PRIOR_SD, VARIATION_DISAGREEMENT, PersonResult
-from .search import WIDER_SANDWICH, information, profile_interval
+from .profile import profile_interval
+from .search import WIDER_SANDWICH, information
 
 __all__ = ["person_result", "honest_intervals", "undetermined_interval"]
 

@@ -35,7 +35,8 @@ class VariationFit:
     variation : str
         The variation model (:data:`~smd_statespace.person.variation.VARIATIONS`).
     timing : {"first", "re-placed"}
-        At which cycle starts: the first timing, or those the model re-placed with its own fit.
+        At which cycle starts: the first timing, or those the model re-placed with its own fit (its best fit
+        when it stopped re-placing, for a model left far behind: :data:`~smd_statespace.person.search.BEHIND`).
     loglike : float
         Its log-likelihood.
     n_params : int

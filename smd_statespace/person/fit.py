@@ -38,8 +38,8 @@ from .model import PERSON, VARIATIONS, Regressor, RecordModel
 from .fade import fading
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
 from .screen import time_change
-from .search import (COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing,
-                     fit_model, profile_interval)
+from .profile import profile_interval
+from .search import COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, fit_model
 from .threads import one_blas_thread, record_cores, search_threads, thread_map
 from .timing import TIMING_METHODS, estimate_timing
 
