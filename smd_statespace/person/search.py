@@ -26,7 +26,8 @@ from .model import PERSON, RecordModel
 from .threads import spare_best, thread_map
 from .timing import CycleTiming
 
-__all__ = ["COV_TYPES", "WIDER_SANDWICH", "FitError", "fit_model", "information", "corrected_timing", "fit_timing", "choose_with_own_timing"]
+__all__ = ["COV_TYPES", "WIDER_SANDWICH", "FitError", "fit_model", "information", "corrected_timing", "fit_timing",
+           "choose_with_own_timing"]
 
 
 START_F_H = (1.2, 1.7, 2.3, 3.0, 3.9, 5.0)
@@ -502,10 +503,8 @@ def _left_behind(chains, clean) -> tuple:
 
     candidates = [chain for chain, ok in zip(chains, clean) if ok and not chain.ran_onto_bound
                   and chain.best[1]["converged"]]
-    if not candidates:
-        return None, []
-    leader = min(candidates, key=aic)
-    return leader, [chain for chain in chains if not chain.finished and chain is not leader
+    leader = min(candidates, key=aic, default=None)
+    return leader, [chain for chain in chains if leader is not None and not chain.finished and chain is not leader
                     and aic(chain) - aic(leader) > 2 * BEHIND]
 
 
