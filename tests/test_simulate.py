@@ -142,6 +142,26 @@ def test_cycles_reproduce_force_bio_and_describe_variation():
     assert np.mean(cycles["blf1"]) == pytest.approx(0.25, rel=0.05)
 
 
+def test_the_harmonics_can_vary_in_phase_alone_and_by_default_vary_alike():
+    """``phase_variation`` sets the phases' jitter apart from the amplitudes' (a force that keeps its size and shifts
+    its shape); left out, the record is the one ``coef_variation`` alone gives, to the last bit."""
+    same = simulate_bouncing(duration=15.0, seed=3, phase_variation=0.10)
+    assert np.array_equal(same.record.force, simulate_bouncing(duration=15.0, seed=3).record.force)
+    phased = simulate_bouncing(duration=15.0, seed=3, coef_variation=0.0, phase_variation=0.10)
+    cycles, blf, phases = phased.cycles, phased.truth["blf"], phased.truth["phases"]
+    jitter = []
+    for i in range(1, len(blf) + 1):
+        assert np.allclose(cycles[f"blf{i}"], blf[i - 1], rtol=1e-12)  # the size kept, cycle after cycle
+        angle = np.arctan2(cycles[f"b{i}"], cycles[f"a{i}"]) - phases[i - 1]
+        jitter.append(np.angle(np.exp(1j * angle)))
+    assert np.std(jitter) == pytest.approx(0.10, rel=0.2)
+    assert phased.truth["variations"]["phase_jitter_rad"] == 0.10
+    with pytest.raises(OptionError, match="phase_variation is a setting of variation='jumps'"):
+        simulate_bouncing(duration=5.0, seed=3, variation="smooth", phase_variation=0.1)
+    with pytest.raises(OptionError, match="phase_variation must be 0-1"):
+        simulate_bouncing(duration=5.0, seed=3, phase_variation=2.0)
+
+
 def test_truth_is_json_and_follows_eq17_eq18(tmp_path):
     sim = simulate_bouncing(mass=57.4, f_h=1.784, xi_h=0.568, duration=4.0, seed=1, effects={"floor_mode": {}})
     truth = json.loads(json.dumps(sim.truth))

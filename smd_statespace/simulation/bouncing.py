@@ -131,7 +131,7 @@ def _jump_record(settings, rng_blocks, time):
     """``(cycles, states)`` of the jumps variation."""
     s = settings
     t_start, t_end, frequency, amplitude, phase = _draw_cycles(
-        rng_blocks, s.duration, s.f_b, s.all_blf, s.all_phases, s.fb_variation, s.coef_variation,
+        rng_blocks, s.duration, s.f_b, s.all_blf, s.all_phases, s.fb_variation, s.coef_variation, s.phase_variation,
     )
     n_total = amplitude.shape[1]
     a = np.column_stack([amplitude[:, i] * np.cos(phase[:, i]) for i in range(n_total)])
@@ -186,6 +186,7 @@ def simulate_bouncing(
     effects=None,
     seed=None,
     variation="jumps",
+    phase_variation=None,
 ):
     """Simulate one person bouncing: GRF record plus the truth behind it.
 
@@ -354,6 +355,15 @@ def simulate_bouncing(
         ``"pulses"``: ``contact_ratio``, ``pulse_height_g``,
         ``requested_blf``, ...; ``"tempo"``: ``ramp``, ``ramp_direction``,
         ``wander_sd``, ``run_in_s``, ...).
+    phase_variation : float, optional
+        With ``"jumps"``: the standard deviation (rad, 0-1) of each harmonic's
+        phase jitter on its own, ``coef_variation`` then setting only the
+        amplitudes'. None (default): ``coef_variation``, a perturbation of the
+        same size in every direction of each harmonic's ``(a_i, b_i)``, as the
+        record-level model's variation assumes. ``coef_variation=0`` with
+        ``phase_variation=0.1``: a force whose harmonics keep their size and
+        shift their phases from cycle to cycle (the truth's
+        ``phase_jitter_rad``).
 
     Returns
     -------
@@ -367,7 +377,7 @@ def simulate_bouncing(
         Any other invalid argument (the message names it).
     """
     s = _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_variation, coef_variation, noise,
-                          effects, variation)
+                          effects, variation, phase_variation)
     rng, seed_record = _resolve_seed(seed)
     n_samples = int(np.floor(s.duration * s.fs + 1e-9)) + 1
     time = np.arange(n_samples) / s.fs

@@ -45,7 +45,7 @@ def _resolve_seed(seed):
 
 
 def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_variation, coef_variation, noise,
-                      effects, variation):
+                      effects, variation, phase_variation=None):
     """Validate the arguments of :func:`simulate_bouncing`; return them checked and completed (a namespace)."""
     checked = _check_numbers(mass, f_b, f_h, xi_h, duration, fs, blf, a0, fb_variation, coef_variation, noise,
                              variation)
@@ -63,9 +63,22 @@ def _check_simulation(mass, f_b, f_h, xi_h, duration, fs, blf, phases, a0, fb_va
         variation=variation, all_blf=np.concatenate([c["blf"], extra_blf]),
         all_phases=np.concatenate([phases, extra_phases]),
     )
+    settings.phase_variation = _phase_variation(phase_variation, c["coef_variation"], variation)
     if variation == "pulses":
         _check_pulses(settings)
     return settings
+
+
+def _phase_variation(value, coef_variation: float, variation: str) -> float:
+    """``phase_variation`` checked (rad, 0-1, only with the jumps variation); None is ``coef_variation``."""
+    if value is None:
+        return coef_variation
+    if variation != "jumps":
+        raise OptionError(f"simulate_bouncing: phase_variation is a setting of variation='jumps', not {variation!r}")
+    value = _number(value, "phase_variation", nonnegative=True)
+    if value > 1.0:
+        raise OptionError(f"simulate_bouncing: phase_variation must be 0-1 (rad), got {value!r}")
+    return value
 
 
 def _check_numbers(mass, f_b, f_h, xi_h, duration, fs, blf, a0, fb_variation, coef_variation, noise, variation):

@@ -36,7 +36,7 @@ def _truth(settings, seed_record, n_cycles, generator=None):
     variations = generator.get("variations") or {
         "fb_variation": s.fb_variation,
         "coef_variation": s.coef_variation,
-        "phase_jitter_rad": s.coef_variation,
+        "phase_jitter_rad": s.phase_variation,
         "truncation_sd": TRUNCATION_SD,
         "generator": s.variation,
     }

@@ -118,8 +118,9 @@ cycles gives ``"matern"`` the correlation time of ``"smooth"``."""
 # the jumps
 
 
-def _draw_cycles(rng_blocks, duration, f_b, blf, phases, fb_variation, coef_variation):
-    """Cycle table from pre-drawn standard normals; see :func:`simulate_bouncing`."""
+def _draw_cycles(rng_blocks, duration, f_b, blf, phases, fb_variation, coef_variation, phase_variation=None):
+    """Cycle table from pre-drawn standard normals; see :func:`simulate_bouncing` (``phase_variation`` None: the
+    phases jitter by ``coef_variation`` rad)."""
     start_fraction, eps, amp_noise, phase_noise = rng_blocks
     frequency = f_b * (1.0 + fb_variation * eps)
     t_end = np.cumsum(1.0 / frequency) - start_fraction / f_b
@@ -127,7 +128,7 @@ def _draw_cycles(rng_blocks, duration, f_b, blf, phases, fb_variation, coef_vari
     frequency, t_end = frequency[:n_cycles], t_end[:n_cycles]
     t_start = np.concatenate([[-start_fraction / f_b], t_end[:-1]])
     amplitude = blf * np.maximum(1.0 + coef_variation * amp_noise[:n_cycles], 0.0)
-    phase = phases + coef_variation * phase_noise[:n_cycles]
+    phase = phases + (coef_variation if phase_variation is None else phase_variation) * phase_noise[:n_cycles]
     return t_start, t_end, frequency, amplitude, phase
 
 
