@@ -12,10 +12,13 @@ cycle to cycle in one way at a time (``simulate_bouncing``):
 ``frequency``  the cycle frequency alone (2 %).
 
 and prints, per variation and term, each record's coefficient, its z (estimate / sd) and its likelihood ratio
-(1 degree of freedom; 10.8 is p 0.001)::
+(1 degree of freedom; 10.8 is p 0.001). With ``--diagnose``, ``diagnose`` as a user runs it instead (every
+registered effect and the library of generic terms, ``diagnose_person``) on the same clean records: what it
+proposes is a false alarm::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/even_terms_variation.py --records 6 --jobs 2 \\
         --out benchmarks/results/even_terms_variation.md
+    OPENBLAS_NUM_THREADS=1 python benchmarks/even_terms_variation.py --records 8 --jobs 2 --diagnose
 """
 
 from __future__ import annotations
@@ -66,25 +69,47 @@ def fit_one(job) -> dict:
             "lr": float(result.effect_test()["lr"]), "f_h": result.f_h, "seconds": time.perf_counter() - started}
 
 
+def diagnose_one(job) -> dict:
+    """``diagnose`` on one clean record: what it proposes (nothing is right)."""
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.diagnose import diagnose_person
+    from smd_statespace.simulation import simulate_bouncing
+
+    variation, _, record, seed = job
+    sim = simulate_bouncing(**PERSON, seed=seed, variation="jumps", **VARIATIONS[variation])
+    started = time.perf_counter()
+    diagnosis = diagnose_person(identify_person(sim.record, threads=1), threads=1)
+    return {"variation": variation, "record": record, "proposed": ", ".join(diagnosis.missing) or "nothing",
+            "seconds": time.perf_counter() - started}
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--records", type=int, default=6, help="records per variation (default 6)")
     parser.add_argument("--terms", default="u2", help="generic terms, comma-separated (default u2; also v2, u_v)")
     parser.add_argument("--seed", type=int, default=0, help="SeedSequence root of the records (default 0)")
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--diagnose", action="store_true", help="diagnose each clean record with every candidate")
     parser.add_argument("--out", type=Path, default=None, help="also write the tables as Markdown")
     args = parser.parse_args(argv)
+    if args.diagnose:
+        args.terms = "diagnose"
     seeds = [int(child.generate_state(1)[0]) for child in np.random.SeedSequence(args.seed).spawn(args.records)]
     jobs = [(variation, term, i, seed) for term in args.terms.split(",") for variation in VARIATIONS
             for i, seed in enumerate(seeds)]  # the same records' seeds for every variation
     started = time.perf_counter()
     with ProcessPoolExecutor(args.jobs) as pool:
-        rows = pd.DataFrame(list(pool.map(fit_one, jobs)))
-    summary = rows.groupby(["term", "variation"], sort=False).agg(
-        records=("z", "size"), coefficient_mean=("coefficient", "mean"), z_mean=("z", "mean"),
-        z_min=("z", "min"), z_max=("z", "max"), lr_over_10_8=("lr", lambda lr: int((lr > 10.83).sum())))
-    lines = [f"`python benchmarks/even_terms_variation.py --records {args.records} --terms {args.terms} "
-             f"--seed {args.seed}` ({(time.perf_counter() - started) / 60:.1f} min, {args.jobs} processes)", "",
+        rows = pd.DataFrame(list(pool.map(diagnose_one if args.diagnose else fit_one, jobs)))
+    if args.diagnose:
+        summary = rows.groupby("variation", sort=False).agg(
+            records=("proposed", "size"), false_alarms=("proposed", lambda p: int((p != "nothing").sum())))
+    else:
+        summary = rows.groupby(["term", "variation"], sort=False).agg(
+            records=("z", "size"), coefficient_mean=("coefficient", "mean"), z_mean=("z", "mean"),
+            z_min=("z", "min"), z_max=("z", "max"), lr_over_10_8=("lr", lambda lr: int((lr > 10.83).sum())))
+    how = "--diagnose" if args.diagnose else f"--terms {args.terms}"
+    lines = [f"`python benchmarks/even_terms_variation.py --records {args.records} {how} --seed {args.seed}` "
+             f"({(time.perf_counter() - started) / 60:.1f} min, {args.jobs} processes)", "",
              markdown_table(summary.reset_index().round(3)), "", markdown_table(rows.round(4))]
     print("\n".join(lines))
     if args.out:
