@@ -40,11 +40,11 @@ def test_simulate_writes_a_readable_record_and_its_truth(tmp_path, capsys):
 
 def test_simulate_default_truth_path_and_options(tmp_path):
     status, out = simulate(tmp_path, "--fs", "200", "--noise", "0", "--blf", "0.3,0.1", "--fb-variation", "0",
-                           "--coef-variation", "0")
+                           "--coef-variation", "0", "--phase-variation", "0.05")
     assert status == 0
     truth = json.loads((tmp_path / "rec_truth.json").read_text())
     assert truth["fs"] == 200.0 and truth["noise"] == 0.0 and truth["blf"] == [0.3, 0.1]
-    assert truth["variations"]["fb_variation"] == 0.0
+    assert truth["variations"]["fb_variation"] == 0.0 and truth["variations"]["phase_jitter_rad"] == 0.05
     assert read_record(out, 70.0).fs == pytest.approx(200.0)
 
 
@@ -123,6 +123,7 @@ def error_line(capsys):
         (["--effect", "floor_mode", "--effect", "floor_mode"], "given twice"),
         (["--fb", "-2"], "argument --fb: must be a positive number"),
         (["--fs", "10"], "fs 10 Hz is too low"),
+        (["--phase-variation", "0.1", "--variation", "smooth"], "--phase-variation applies to --variation jumps"),
         (["--seed", "1.5"], "argument --seed"),
         (["--out", "/nonexistent-dir/rec.csv"], "does not exist"),
     ],

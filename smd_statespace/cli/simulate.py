@@ -83,6 +83,10 @@ def add_simulate(subparsers):
                         help="cycle-to-cycle relative SD of f_b (default 0.02)")
     parser.add_argument("--coef-variation", type=_nonnegative, metavar="FRAC",
                         help="cycle-to-cycle relative SD of the force harmonics (default 0.10)")
+    parser.add_argument("--phase-variation", type=_nonnegative, metavar="RAD",
+                        help="with --variation jumps: SD of each harmonic's phase jitter on its own, --coef-variation "
+                             "then setting only the amplitudes' (default: --coef-variation, the harmonics varying "
+                             "alike in size and phase)")
     parser.add_argument("--variation", choices=VARIATIONS,
                         help="how the force varies from cycle to cycle: jumps (each cycle its own frequency and "
                              "harmonics, jumping at the boundaries; default), smooth (frequency and harmonics "
@@ -133,6 +137,9 @@ def run_simulate(args) -> int:
     if lab and not args.lab:
         raise OptionError(f"--{lab[0]} applies to a lab's record (--lab)")
     out, truth = _out_paths(args)
+    if args.phase_variation is not None and (args.lab or args.accelerometer or args.variation not in (None, "jumps")):
+        raise OptionError("--phase-variation applies to --variation jumps on a force plate (not --lab or "
+                          "--accelerometer)")
     if args.lab:
         return _simulate_lab(args, out, truth)
     missing = [f"--{flag}" for flag in ("mass", "fb", "fh", "xi", "duration") if getattr(args, flag) is None]
@@ -168,6 +175,7 @@ def run_simulate(args) -> int:
             effects=effects or None,
             seed=args.seed,
             variation=args.variation,
+            phase_variation=args.phase_variation,
         )
     except SMDInputError as exc:
         # The simulator names itself ("simulate_bouncing: ..."); on the command line that is noise.
