@@ -109,12 +109,19 @@ TRUE_PARAMETER = {"cubic_stiffness": ("beta_3", "beta_3"), "quadratic_damping": 
                   "term_f_step": ("c_f_step", "c_f_step")}
 """The effect parameter whose error is counted: ``(estimated name, key of the simulation's truth)``."""
 
-GENERATORS = ("jumps", "smooth", "lab", "lab_smooth")
+GENERATORS = ("jumps", "smooth", "lab", "lab_smooth", "jumps_phase", "jumps_size")
 """The two generators of force variation of :func:`simulate_bouncing`, and ``lab``: a lab's force-plate export of a
 whole trial (:func:`simulate_lab_record`: standing 4 s before and after, ramps, 1000 Hz, mains hum, a drifting zero,
 1 N noise; jumps variation), which the fit reaches through the record front end as a user's export would; and
 ``lab_smooth``: the same with the smooth variation (a force that changes continuously from cycle to cycle, as a
-person's does, where the jumps variation's force jumps at every cycle boundary)."""
+person's does, where the jumps variation's force jumps at every cycle boundary). ``jumps_phase`` and ``jumps_size``
+break the record-level model's assumption that each harmonic varies alike in size and phase
+(:data:`JUMPS_SETTINGS`; ``benchmarks/even_terms_variation.py``): the harmonics' phases alone jitter (0.1 rad), or
+their sizes alone (10 %), the frequency by 2 % in both."""
+
+JUMPS_SETTINGS = {"jumps_phase": {"coef_variation": 0.0, "phase_variation": 0.1},
+                  "jumps_size": {"phase_variation": 0.0}}
+"""``simulate_bouncing``'s settings of the jumps generators that vary the force one way (variation "jumps")."""
 
 LAB_KINDS = {"clean", "term_f_drift", "term_f_step"}
 """What the lab generator makes: a person without an effect, or whose ``f_h`` drifts or steps over the bout (the
@@ -221,7 +228,8 @@ def one(task) -> dict:
     row = {"kind": kind, "size": size, "generator": generator, "index": index,
            **{k: v for k, v in person.items() if k != "blf"}}
     common = dict(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], duration=DURATION,
-                  fs=FS, blf=person["blf"], seed=sim_seed, variation=generator)
+                  fs=FS, blf=person["blf"], seed=sim_seed, variation="jumps" if generator in JUMPS_SETTINGS
+                  else generator, **JUMPS_SETTINGS.get(generator, {}))
     started = time.perf_counter()
     try:
         if generator.startswith("lab"):
@@ -439,7 +447,8 @@ def main(argv=None):
                         help="also write every record's row here (and, as each ends, to the same name .jsonl)")
     parser.add_argument("--resume", action="store_true", help="keep the rows already in the .jsonl, run the rest")
     parser.add_argument("--sizes", default="small,large", help="effect sizes to run (default small,large)")
-    parser.add_argument("--generators", default=",".join(GENERATORS), help="generators of force variation")
+    parser.add_argument("--generators", default=",".join(GENERATORS[:4]),
+                        help=f"generators of force variation, of {','.join(GENERATORS)} (default: the first four)")
     parser.add_argument("--kinds", default=",".join(KINDS), help=f"kinds of record (default all: {', '.join(KINDS)})")
     args = parser.parse_args(argv)
     work = tasks(args.records, args.seed, tuple(args.sizes.split(",")), tuple(args.generators.split(",")),
