@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["BOUND_REACH", "VariationFit", "comparison_row", "reaches_bound"]
+__all__ = ["BOUND_REACH", "VariationFit", "aic", "comparison_row", "reaches_bound"]
 
 
 BOUND_REACH = 1.645
@@ -75,9 +75,14 @@ def comparison_row(model, fitted, timing, effects=()) -> VariationFit:
     named = model.unpack(fitted["params"])
     on_bound = model.person_at_bound(fitted["params"]) or reaches_bound(model, fitted["params"])
     return VariationFit(variation=model.variation, timing=timing, loglike=float(fitted["loglike"]),
-                        n_params=len(fitted["params"]), aic=2 * len(fitted["params"]) - 2 * float(fitted["loglike"]),
+                        n_params=len(fitted["params"]), aic=aic(fitted),
                         converged=bool(fitted["converged"]), on_bound=bool(on_bound), f_h=float(named["f_h"]),
                         xi_h=float(named["xi_h"]), effects=tuple(effects))
+
+
+def aic(fitted) -> float:
+    """Akaike's criterion of a fit (``fit_model``'s dict): ``2 n_params - 2 loglike``."""
+    return 2 * len(fitted["params"]) - 2 * float(fitted["loglike"])
 
 
 def reaches_bound(model, params, z=BOUND_REACH) -> bool:

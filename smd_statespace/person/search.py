@@ -21,7 +21,7 @@ import numpy as np
 from scipy import optimize
 
 from ..errors import OptionError, SMDInputError
-from .comparison import comparison_row
+from .comparison import aic, comparison_row
 from .model import PERSON, RecordModel
 from .threads import spare_best, thread_map
 from .timing import CycleTiming
@@ -475,10 +475,10 @@ def choose_with_own_timing(model_for, timing, fits, first_best, step, suspect=()
         thread_map(_Chain.advance, [c for c in chains if not c.finished and c not in stopped], threads)
         if rounds >= 2 and not stopped:  # from the first re-placement on
             leader, stopped = _left_behind(chains, clean)
-    model, fitted, rows, best = _choose(chains, fits, first_best, suspect)
+    model, fitted, rows, best = _choose(chains, clean, first_best)
     if stopped and (chains[best] is not leader or leader.ran_onto_bound or rows[best].on_bound):
         thread_map(_Chain.finish, stopped, threads)  # every model's re-placements, as without the stop
-        model, fitted, rows, best = _choose(chains, fits, first_best, suspect)
+        model, fitted, rows, best = _choose(chains, clean, first_best)
     step(sum(chain.remaining for chain in stopped))  # the fits not made
     fitted = fit_model(model, fitted["params"])
     step()
@@ -498,25 +498,21 @@ the re-placed starts follow). At 50 the loser stopped early on 87 of the 120, sa
 def _left_behind(chains, clean) -> tuple:
     """``(leader, chains to stop)``: the chain of the best fit so far among the models whose fits are all off
     their bounds and that are not suspect, and those whose best trails it by more than :data:`BEHIND`."""
-    def aic(chain):
-        return 2 * len(chain.best[1]["params"]) - 2 * chain.best[1]["loglike"]
-
     candidates = [chain for chain, ok in zip(chains, clean) if ok and not chain.ran_onto_bound
                   and chain.best[1]["converged"]]
-    leader = min(candidates, key=aic, default=None)
+    leader = min(candidates, key=lambda chain: aic(chain.best[1]), default=None)
     return leader, [chain for chain in chains if leader is not None and not chain.finished and chain is not leader
-                    and aic(chain) - aic(leader) > 2 * BEHIND]
+                    and aic(chain.best[1]) - aic(leader.best[1]) > 2 * BEHIND]
 
 
-def _choose(chains, fits, first_best, suspect) -> tuple:
-    """``(model, quick fit, rows, index)`` of the variation model chosen among the chains' best quick fits."""
+def _choose(chains, clean, first_best) -> tuple:
+    """``(model, quick fit, rows, index)`` of the variation model chosen among the chains' best quick fits;
+    ``clean``: per chain, its first fit off the bounds and its model not suspect."""
     finished = [chain.best for chain in chains]
-    suspect = set(suspect) | {chain.best[0].variation for chain in chains if chain.ran_onto_bound}
     rows = [comparison_row(m, f, "re-placed") for m, f in finished]
     inside = [i for i, row in enumerate(rows) if not row.on_bound and row.converged]
     # a model that ran onto a bound at the first timing is suspect even when the re-placed starts bring it in
-    never_on_bound = [i for i in inside if not fits[i][0].person_at_bound(fits[i][1]["params"])
-                      and fits[i][0].variation not in suspect]
+    never_on_bound = [i for i in inside if clean[i] and not chains[i].ran_onto_bound]
     eligible = never_on_bound or inside or [first_best]
     best = min(eligible, key=lambda i: rows[i].aic)
     return (*finished[best], rows, best)
