@@ -78,8 +78,8 @@ def main(argv=None):
     pass_args = sys.pass_arguments(model.y, model.n_coefficients)
     der = system_derivatives(model, params, sys)
     sens_args = pass_args + (fitted["delta"], der["dyn"], der["d_hx"], der["d_Phi"], der["d_Gam"],
-                             der["d_offset"], der["d_X_tr"], der["d_y"], der["d_Qx"], der["d_D"], der["d_D_pair"],
-                             der["d_E"], der["d_drift"], der["d_sphi"], der["d_sq"], der["d_sp0"])
+                             der["d_offset"], der["d_X_tr"], der["d_y"], der["d_Qx"], der["d_D"], der["d_E"],
+                             der["d_drift"], der["d_sphi"], der["d_sq"], der["d_sp0"])
     score(model, params)  # compile
     sensitivity_pass(*sens_args)
     print(f"load average {os.getloadavg()[0]:.2f}; {record.time.size} samples, {k} parameters "

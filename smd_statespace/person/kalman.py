@@ -58,43 +58,13 @@ def state_size(code, nx, p, n_template):
     return nx + p
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _add_pairs(P, D_pair, o, p):
-    """``P[i, i + 1]`` and ``P[i + 1, i]`` gain ``D_pair[i - o]`` for the states from row ``o`` (in place)."""
-    for i in range(o, o + p - 1):
-        value = D_pair[i - o]
-        if value != 0.0:
-            P[i, i + 1] += value
-            P[i + 1, i] += value
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def add_smooth_pairs(P, D_pair, M, nx, p, n_template):
-    """The smooth variation's cross-covariances of a harmonic's two coefficients (in place): the pairs
-    ``(deviation, rate)`` of states ``i`` and ``i + 1`` gain ``D_pair[i] M`` (``M``: the Matern step's process
-    covariance, or its stationary one, for a unit variance)."""
-    for i in range(n_template - 1):
-        value = D_pair[i]
-        if value == 0.0:
-            continue
-        own = (nx + i, nx + p + i)
-        other = (nx + i + 1, nx + p + i + 1)
-        for a in range(2):
-            for b in range(2):
-                P[own[a], other[b]] += value * M[a, b]
-                P[other[b], own[a]] += value * M[a, b]
-
-
 # a cycle boundary's reset runs once a cycle: its arrays in any layout, ``step`` a run-time flag, so that numba
 # compiles each reset once rather than once per caller's layouts and literal flags (4 times each: the first identify
 # after installing took 28.2 s with them, 23.2 s without)
-@numba.njit("void(int64, float64[:, :], int64, float64[:], float64[:], float64[:], int64, int64, boolean)",
-            cache=True, fastmath={"reassoc", "contract"})
-def reset_covariance(code, P, p, D, D_pair, E, o, n_template, step):
+@numba.njit("void(int64, float64[:, :], int64, float64[:], float64[:], int64, int64, boolean)", cache=True,
+            fastmath={"reassoc", "contract"})
+def reset_covariance(code, P, p, D, E, o, n_template, step):
     """The covariance's part of a cycle boundary's new draw (in place); the force states start at row ``o``.
-
-    ``D_pair[i]`` is the covariance of the draws of states ``i`` and ``i + 1`` (a harmonic's two coefficients
-    when their variation is not alike in size and phase; 0 elsewhere).
 
     Shared by :func:`_reset` (the augmented pass) and the sensitivity pass of
     :mod:`~smd_statespace.person.score`, which applies it to ``P`` and, being
@@ -107,8 +77,6 @@ def reset_covariance(code, P, p, D, D_pair, E, o, n_template, step):
                 P[i, c] = 0.0
                 P[c, i] = 0.0
             P[i, i] = D[i - o]
-        if code == INDEPENDENT:
-            _add_pairs(P, D_pair, o, p)
     elif code == RANDOM_WALK:  # alpha := alpha + e
         for i in range(o, o + p):
             P[i, i] += E[i - o]
@@ -123,12 +91,11 @@ def reset_covariance(code, P, p, D, D_pair, E, o, n_template, step):
             for c in range(m):
                 P[c, i] = P[c, j]
             P[i, i] = P[j, j] + D[i - o]
-        _add_pairs(P, D_pair, o, p)
 
 
-@numba.njit("void(int64, float64[:], float64[:, :], float64[:, :], int64, float64[:], float64[:], float64[:], int64, "
-            "int64, boolean)", cache=True, fastmath={"reassoc", "contract"})
-def _reset(code, a, A, P, p, D, D_pair, E, n_free, n_template, step):
+@numba.njit("void(int64, float64[:], float64[:, :], float64[:, :], int64, float64[:], float64[:], int64, int64, "
+            "boolean)", cache=True, fastmath={"reassoc", "contract"})
+def _reset(code, a, A, P, p, D, E, n_free, n_template, step):
     """Draw the force coefficients again at a cycle boundary (in place); they start at row ``n_free``."""
     q = A.shape[1]
     o = n_free
@@ -149,7 +116,7 @@ def _reset(code, a, A, P, p, D, D_pair, E, n_free, n_template, step):
             a[i] = a[i + p]
             for c in range(q):
                 A[i, c] = A[i + p, c]
-    reset_covariance(code, P, p, D, D_pair, E, o, n_template, step)
+    reset_covariance(code, P, p, D, E, o, n_template, step)
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
@@ -217,7 +184,7 @@ def rotate_pairs(X, n_template, r0, r1, f00, f01, f10, f11, columns):
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, D_pair, nx):
+def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx):
     """Advance every coefficient's smooth deviation one sample (in place, variation "smooth").
 
     The pair ``(alpha_i - tau_i, alpha_dot_i)`` (rows ``n_x + i`` and
@@ -242,11 +209,10 @@ def _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, D_pair, nx):
         P[r0, r1] += D[i] * smooth_q[0, 1]
         P[r1, r0] += D[i] * smooth_q[1, 0]
         P[r1, r1] += D[i] * smooth_q[1, 1]
-    add_smooth_pairs(P, D_pair, smooth_q, nx, p, n_template)
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, D_pair, E, drift, n_template,
+def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                    smooth_phi, smooth_q, smooth_p0, observed):
     """Run the augmented Kalman filter over one record.
 
@@ -282,11 +248,6 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
         relative to ``sigma^2``; with :data:`SMOOTH`, ``D`` holds the
         stationary variances of the coefficients' smooth deviations (and of
         the timing states' draws).
-    D_pair : ndarray, shape (p,)
-        Covariance of the draws (or of the smooth deviations) of force states
-        ``i`` and ``i + 1``, relative to ``sigma^2``: a harmonic's two
-        coefficients when they vary more in size than in phase or the
-        reverse; 0 elsewhere.
     drift : ndarray, shape (p,)
         Variance of a per-sample random walk of the coefficients, relative to
         ``sigma^2`` (0: coefficients constant within a cycle).
@@ -334,7 +295,7 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
     for i in range(nx):
         A[i, i] = 1.0
     if code == INDEPENDENT:
-        _reset(code, a, A, P, p, D, D_pair, E, n_free, n_template, True)
+        _reset(code, a, A, P, p, D, E, n_free, n_template, True)
     elif code == RANDOM_WALK:
         for i in range(n_template):
             A[nx + i, n_free + i] = 1.0
@@ -345,12 +306,11 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
             P[nx + i, nx + p + i] = D[i] * smooth_p0[0, 1]
             P[nx + p + i, nx + i] = D[i] * smooth_p0[1, 0]
             P[nx + p + i, nx + p + i] = D[i] * smooth_p0[1, 1]
-        add_smooth_pairs(P, D_pair, smooth_p0, nx, p, n_template)
-        _reset(code, a, A, P, p, D, D_pair, E, n_free, n_template, True)
+        _reset(code, a, A, P, p, D, E, n_free, n_template, True)
     else:
         for i in range(n_template):
             A[nx + p + i, n_free + i] = 1.0
-        _reset(code, a, A, P, p, D, D_pair, E, n_free, n_template, False)
+        _reset(code, a, A, P, p, D, E, n_free, n_template, False)
     e_out = np.empty(N)
     Ev_out = np.empty((N, q))
     f_out = np.empty(N)
@@ -378,13 +338,13 @@ def augmented_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, 
                 for i in range(nx):
                     A[i, nx + n_template + j] += X_tr[k - 1, i, j]
             if code == SMOOTH:
-                _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, D_pair, nx)
+                _smooth_step(a, A, P, p, n_template, smooth_phi, smooth_q, D, nx)
             for i in range(p):
                 P[nx + i, nx + i] += drift[i]
                 if code == BOTH:
                     P[nx + p + i, nx + p + i] += drift[i]
             if reset[k]:
-                _reset(code, a, A, P, p, D, D_pair, E, n_free, n_template, True)
+                _reset(code, a, A, P, p, D, E, n_free, n_template, True)
         # update with y_k
         if varying:
             row = hx[k]

@@ -30,12 +30,9 @@ Variation models of the coefficients (chosen by likelihood in
     ``ell`` for all coefficients, at least :data:`SMOOTH_MIN_CYCLES` mean cycles; ``d'' = -2 lambda d' - lambda^2 d + white
     noise``, ``lambda = sqrt(3) / ell``), sampled exactly at every sample.
 
-``D`` and ``E`` have one variance for ``a0`` and one per harmonic. ``E`` is
-the same in every direction of the harmonic's ``(a_i, b_i)``; with a phase
-template, ``D`` splits into the harmonic's size (along the template) and its
-phase (across), their ratio ``log_phase_size_ratio`` shared by the harmonics
-(:mod:`~smd_statespace.person.variation`); without one it is the same in
-every direction too.
+``D`` and ``E`` are diagonal with one variance for ``a0`` and one per harmonic
+(shared by ``a_i`` and ``b_i``: a perturbation of the harmonic's complex
+amplitude with no preferred phase).
 
 The transition is the exact discretisation of Eq. 2 over one sample with the
 force of Eq. 4 inside the step (phase linear in time), so no discretisation
@@ -44,11 +41,11 @@ error enters the likelihood (the article's Euler step, Eq. 11-12, is not used).
 Parameters estimated by maximum likelihood (:attr:`RecordModel.param_names`):
 ``f_h`` (Hz), ``xi_h`` (-), ``log_var_d_0 .. log_var_d_n`` (log of ``D``'s
 variances relative to ``sigma^2``), likewise ``log_var_e_*``,
-``log_smooth_time`` (``log ell``, ``ell`` in s; variation "smooth"),
-``log_phase_size_ratio``, and with ``process_noise=True`` ``log_var_w`` (a
-white force on the COM, variance per second relative to ``sigma^2``).
-``sigma^2``, the template, ``u_0``, ``u'_0`` and the coefficients of effects'
-regressors are concentrated out (GLS, :mod:`~smd_statespace.person.kalman`).
+``log_smooth_time`` (``log ell``, ``ell`` in s; variation "smooth"), and with
+``process_noise=True`` ``log_var_w`` (a white force on the COM, variance per
+second relative to ``sigma^2``). ``sigma^2``, the template, ``u_0``, ``u'_0``
+and the coefficients of effects' regressors are concentrated out (generalised
+least squares inside :mod:`smd_statespace.person.kalman`).
 """
 
 from __future__ import annotations
@@ -65,7 +62,7 @@ from .fade import fade_regressor
 from .dynamics import PersonDynamics
 from .system import RecordSystem, Regressor, integrated_white_noise, matern32_step, regressor_steps, step_mean
 from .timing import CycleTiming
-from .variation import PHASE_SIZE, PHASE_SIZE_BOUNDS, VARIATIONS, harmonic_shape
+from .variation import VARIATIONS
 
 __all__ = ["PERSON", "VARIATIONS", "Regressor", "RecordSystem", "RecordModel", "coefficient_names"]
 
@@ -330,7 +327,7 @@ class RecordModel:
         """Names of the parameters searched by maximum likelihood."""
         names = list(PERSON) + VARIATIONS[self.variation].variance_names(self.variance_groups)
         if self.phase_template is not None:
-            names += ["log_var_phase", "log_var_rate"] + ([PHASE_SIZE] if VARIATIONS[self.variation].per_cycle else [])
+            names += ["log_var_phase", "log_var_rate"]
         if self.drift:
             names += [f"log_var_s_{i}" for i in self.variance_groups]
         if self.process_noise:
@@ -342,8 +339,9 @@ class RecordModel:
         """Search bounds of the parameters, in the order of :attr:`param_names`."""
         smooth = (np.log(SMOOTH_MIN_CYCLES / np.mean(self.timing.f_b)), np.log(LONGEST_SMOOTH_TIME))
         effects = {slot.name: tuple(slot.search or (slot.low, slot.high)) for slot in self.dynamics.parameters}
-        named = {"log_smooth_time": smooth, PHASE_SIZE: PHASE_SIZE_BOUNDS, **effects}
-        return [F_H_BOUNDS, XI_H_BOUNDS] + [named.get(name, LOG_VAR_BOUNDS) for name in self.param_names[len(PERSON):]]
+        return [F_H_BOUNDS, XI_H_BOUNDS] + [
+            smooth if name == "log_smooth_time" else effects.get(name, LOG_VAR_BOUNDS)
+            for name in self.param_names[len(PERSON):]]
 
     @property
     def scales(self) -> np.ndarray:
@@ -402,12 +400,10 @@ class RecordModel:
         return self.at_bound(params, "f_h") or self.at_bound(params, "xi_h")
 
     def start_params(self, f_h=2.5, xi_h=0.3, log_var=-3.0) -> np.ndarray:
-        """A starting point: the given ``f_h``, ``xi_h``, one log variance ratio for every group, harmonics
-        varying alike in size and phase and, for variation "smooth", a length scale of two mean bouncing cycles."""
+        """A starting point: the given ``f_h``, ``xi_h``, one log variance ratio for every group and,
+        for variation "smooth", a length scale of two mean bouncing cycles."""
         values = np.full(len(self.param_names), float(log_var))
         values[0], values[1] = f_h, xi_h
-        if PHASE_SIZE in self.param_names:
-            values[self.param_names.index(PHASE_SIZE)] = 0.0
         if "log_smooth_time" in self.param_names:
             values[self.param_names.index("log_smooth_time")] = np.log(2.0 / np.mean(self.timing.f_b))
         for slot in self.dynamics.parameters:  # an effect starts absent where it can, else at its nominal
@@ -416,22 +412,14 @@ class RecordModel:
 
     # ------------------------------------------------------------------ system
     def _variances(self, params):
-        """``D``, ``D_pair`` (:func:`~smd_statespace.person.variation.harmonic_shape`), ``E``, the drift (per
-        force state) and the process-noise rate from the parameter vector."""
+        """``D``, ``E`` (per coefficient) and the process-noise rate from the parameter vector."""
         params = np.r_[np.asarray(params, dtype=float), -np.inf]  # index -1: a variance of 0
         index = self._variance_index
         zeros = np.zeros(self.n_force_states)
         D, E, S = (np.exp(params[index[name]]) if index[name] is not None else zeros
                    for name in ("log_var_d", "log_var_e", "log_var_s"))
         w = float(np.exp(params[index["log_var_w"]])) if index["log_var_w"] is not None else 0.0
-        diag, pair, _, _ = self.variance_shape(params[:-1])
-        return D * diag, D * pair, E, S, w
-
-    def variance_shape(self, params) -> tuple:
-        """:func:`~smd_statespace.person.variation.harmonic_shape` at ``params``' :data:`PHASE_SIZE` (factors 1
-        and no pairs without one)."""
-        ratio = params[self.param_names.index(PHASE_SIZE)] if PHASE_SIZE in self.param_names else None
-        return harmonic_shape(self.phase_template, self.n_force_states, ratio)
+        return D, E, S, w
 
     @property
     def _variance_index(self) -> dict:
@@ -513,7 +501,7 @@ class RecordModel:
     def system(self, params) -> RecordSystem:
         """The arrays of the compiled pass for a parameter vector (:class:`RecordSystem`)."""
         dynamics = self._dynamics(params)
-        D, D_pair, E, S, w = self._variances(params)
+        D, E, S, w = self._variances(params)
         nx = self.n_dynamic
         qx = w * integrated_white_noise(dynamics["noise_A"], dynamics["noise_b"], self.dt) if w > 0 else np.zeros(
             (nx, nx))
@@ -521,9 +509,9 @@ class RecordModel:
         smooth = matern32_step(np.exp(params[where]), self.dt) if where is not None else (np.zeros((2, 2)),) * 3
         return RecordSystem(hx=dynamics["hx"], H=self._H_all, Phi=dynamics["Phi"], Gam=dynamics["Gam"], Qx=qx,
                             offset=dynamics["offset"], y_known=dynamics["y_known"], X_obs=self._X_obs,
-                            X_tr=dynamics["X_tr"], reset=self._phase[3], code=VARIATIONS[self.variation].code, D=D,
-                            D_pair=D_pair, E=E, drift=S, smooth_phi=smooth[0], smooth_q=smooth[1],
-                            smooth_p0=smooth[2], observed=self.observed)
+                            X_tr=dynamics["X_tr"], reset=self._phase[3], code=VARIATIONS[self.variation].code, D=D, E=E,
+                            drift=S, smooth_phi=smooth[0], smooth_q=smooth[1], smooth_p0=smooth[2],
+                            observed=self.observed)
 
     def timing_rates(self) -> np.ndarray:
         """Phase rate ``2 pi f_b`` of every cycle (rad/s), shape (J,)."""
@@ -561,3 +549,44 @@ class RecordModel:
         raw = fitted["innovations_raw"] - fitted["innovation_regression"] @ fitted["delta"]
         standard = raw / np.sqrt(fitted["innovation_variance_unscaled"] * fitted["sigma2"])
         return standard, raw
+
+    def free_run(self, params, delta) -> np.ndarray:
+        """The output ``GRF / M_h - g`` (m/s^2) simulated freely over the record, without the measurement.
+
+        The force is the template of ``delta`` in every cycle (the cycles' own variation is what the model
+        leaves to chance), on the model's cycle timing; the dynamics start from ``delta``'s initial state and
+        are never corrected by the measurement (MATLAB's ``sim``/``compare``). A nonlinear effect runs
+        linearised about its fitted path.
+
+        Parameters
+        ----------
+        params : ndarray
+            The searched parameters.
+        delta : ndarray, shape (q,) or (q, m)
+            Linear unknowns ``[initial state, template, regressor coefficients]`` (``delta_names``); with
+            ``m`` columns, ``m`` runs at once.
+
+        Returns
+        -------
+        ndarray, shape (T,) or (T, m)
+        """
+        delta = np.asarray(delta, dtype=float)
+        columns = delta.reshape(delta.shape[0], -1)
+        system = self.system(params)
+        nx, p, n = self.n_dynamic, self.n_coefficients, self.y.size
+        force = np.zeros((system.H.shape[1], columns.shape[1]))
+        force[:p] = columns[nx:nx + p]  # the template; phase errors 0
+        beta = columns[nx + p:]
+        phi = np.broadcast_to(system.Phi, (n, nx, nx))
+        drive = np.einsum("kij,jm->kim", system.Gam, force) + system.offset[:, :, None]
+        if beta.size:
+            drive = drive + np.einsum("kir,rm->kim", system.X_tr, beta)
+        states = np.empty((n, nx, columns.shape[1]))
+        states[0] = columns[:nx]
+        for k in range(1, n):
+            states[k] = phi[k - 1] @ states[k - 1] + drive[k - 1]
+        out = (np.einsum("ki,kim->km", np.broadcast_to(system.hx, (n, nx)), states)
+               + system.H @ force + system.y_known[:, None])
+        if beta.size:
+            out = out + system.X_obs @ beta
+        return out.reshape((n,) + delta.shape[1:])

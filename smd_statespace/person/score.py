@@ -86,7 +86,6 @@ import math
 import numpy as np
 
 from .model import RecordModel
-from .variation import PHASE_SIZE
 from .sensitivity import sensitivity_pass
 from .system import contiguous
 from .threads import spare_halves
@@ -285,7 +284,7 @@ def system_derivatives(model: RecordModel, params, system=None, step=None, metho
         dynamics' derivatives (-1: not a dynamics parameter); those stacks
         ``d_hx``, ``d_Phi``, ``d_Gam``, ``d_offset``, ``d_X_tr`` and ``d_y``
         (the derivative of ``-y_known``); and for every parameter ``d_Qx``
-        (k, n_x, n_x), ``d_D``, ``d_D_pair``, ``d_E``, ``d_drift`` (k, p), ``d_sphi``,
+        (k, n_x, n_x), ``d_D``, ``d_E``, ``d_drift`` (k, p), ``d_sphi``,
         ``d_sq``, ``d_sp0`` (k, 2, 2).
     """
     params = np.asarray(params, dtype=float)
@@ -306,12 +305,11 @@ def system_derivatives(model: RecordModel, params, system=None, step=None, metho
     stacks = {name: [] for name in DYNAMIC_ARRAYS}
     p = sys.D.size
     nx = model.n_dynamic
-    out = {"d_Qx": np.zeros((k, nx, nx)), "d_D": np.zeros((k, p)), "d_D_pair": np.zeros((k, p)),
-           "d_E": np.zeros((k, p)), "d_drift": np.zeros((k, p)), "d_sphi": np.zeros((k, 2, 2)),
-           "d_sq": np.zeros((k, 2, 2)), "d_sp0": np.zeros((k, 2, 2))}
+    out = {"d_Qx": np.zeros((k, nx, nx)), "d_D": np.zeros((k, p)), "d_E": np.zeros((k, p)),
+           "d_drift": np.zeros((k, p)), "d_sphi": np.zeros((k, 2, 2)), "d_sq": np.zeros((k, 2, 2)),
+           "d_sp0": np.zeros((k, 2, 2))}
     scales = model.scales
     values = {"D": sys.D, "E": sys.E, "drift": sys.drift}
-    diag, _, d_diag, d_pair = model.variance_shape(params)
     rate = float(np.exp(params[names.index("log_var_w")])) if "log_var_w" in names else 0.0
     base = _Discretisation(model, params) if analytic and any(name in dynamic for name in names) else None
     for j, name in enumerate(names):
@@ -338,10 +336,6 @@ def system_derivatives(model: RecordModel, params, system=None, step=None, metho
                 out["d_Qx"][j] = sys.Qx
             else:
                 out[f"d_{which}"][j] = np.where(mask, values[which], 0.0)
-                if which == "D":  # a harmonic's pair moves with its group's variance
-                    out["d_D_pair"][j] = np.where(mask, sys.D_pair, 0.0)
-        elif name == PHASE_SIZE:  # D = d diag(r), D_pair = d pair(r): d times the factors' derivatives
-            out["d_D"][j], out["d_D_pair"][j] = sys.D / diag * d_diag, sys.D / diag * d_pair
         else:
             raise ValueError(f"no derivative of the system arrays with respect to {name!r}")
     n_dyn = len(stacks["hx"])
@@ -467,7 +461,7 @@ SPLIT_FROM = 4
 """Parameters a derivative pass must have to split them with an idle thread (:func:`sensitivities`): half a pass
 costs about 0.6 of a whole one (the filter itself is in both halves)."""
 
-_PER_PARAMETER = ("dyn", "d_Qx", "d_D", "d_D_pair", "d_E", "d_drift", "d_sphi", "d_sq", "d_sp0")
+_PER_PARAMETER = ("dyn", "d_Qx", "d_D", "d_E", "d_drift", "d_sphi", "d_sq", "d_sp0")
 """The derivative arrays with one entry per parameter (first axis); the others are per dynamic parameter, indexed
 through ``dyn``."""
 
@@ -485,8 +479,8 @@ def sensitivities(arguments, delta, der) -> tuple:
         chosen = der if columns is None else {**der, **{key: der[key][columns] for key in _PER_PARAMETER}}
         return sensitivity_pass(*arguments, *contiguous(
             delta, chosen["dyn"], chosen["d_hx"], chosen["d_Phi"], chosen["d_Gam"], chosen["d_offset"],
-            chosen["d_X_tr"], chosen["d_y"], chosen["d_Qx"], chosen["d_D"], chosen["d_D_pair"], chosen["d_E"],
-            chosen["d_drift"], chosen["d_sphi"], chosen["d_sq"], chosen["d_sp0"]))
+            chosen["d_X_tr"], chosen["d_y"], chosen["d_Qx"], chosen["d_D"], chosen["d_E"], chosen["d_drift"],
+            chosen["d_sphi"], chosen["d_sq"], chosen["d_sp0"]))
 
     k = der["dyn"].size
     halves = None if k < SPLIT_FROM else spare_halves(lambda: run(np.arange(k // 2)), lambda: run(np.arange(k // 2, k)))

@@ -23,7 +23,6 @@ from scipy import optimize
 from ..errors import OptionError, SMDInputError
 from .comparison import aic, comparison_row
 from .model import PERSON, RecordModel
-from .variation import PHASE_SIZE
 from .threads import spare_best, thread_map
 from .timing import CycleTiming
 
@@ -576,7 +575,7 @@ def _replacements(model_for, timing, variation, first, step):
             named = base.unpack(params)
 
             def start_for(phase, rate):
-                return model.pack({**named, "log_var_phase": phase, "log_var_rate": rate, PHASE_SIZE: 0.0})
+                return model.pack({**named, "log_var_phase": phase, "log_var_rate": rate})
 
             candidates = [start_for(a, b) for a in PHASE_VARIANCE_STARTS[0] for b in PHASE_VARIANCE_STARTS[1]]
             start = spare_best(model.loglike, candidates)  # their likelihoods half in an idle thread

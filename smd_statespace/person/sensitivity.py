@@ -48,8 +48,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .kalman import (BOTH, INDEPENDENT, RANDOM_WALK, SMOOTH, add_smooth_pairs, reset_covariance, rotate_columns,
-                     rotate_pairs, state_size, step_rows)
+from .kalman import (BOTH, INDEPENDENT, RANDOM_WALK, SMOOTH, reset_covariance, rotate_columns, rotate_pairs, state_size,
+                     step_rows)
 
 __all__ = ["sensitivity_pass"]
 
@@ -57,9 +57,9 @@ FASTMATH = {"contract"}
 """Floating-point licence of the pass: ``a * b + c`` may be fused (no reordering of sums)."""
 
 
-@numba.njit("void(int64, float64[:], float64[:, :], float64[:], float64[:], float64[:], int64, int64, int64, float64[:], "
-            "boolean)", cache=True, fastmath=FASTMATH)  # once a cycle: compiled once for every layout (kalman.reset_covariance)
-def _reset(code, x, P, D, D_pair, E, p, o, n_template, tau, step):
+@numba.njit("void(int64, float64[:], float64[:, :], float64[:], float64[:], int64, int64, int64, float64[:], boolean)",
+            cache=True, fastmath=FASTMATH)  # once a cycle: compiled once for every layout (kalman.reset_covariance)
+def _reset(code, x, P, D, E, p, o, n_template, tau, step):
     """:func:`kalman._reset` on a state mean ``x`` at known ``delta`` (``tau``: the template, or 0 for a derivative).
 
     Every operation is linear in ``(x, P, D, E)`` and the template: applied
@@ -76,7 +76,7 @@ def _reset(code, x, P, D, D_pair, E, p, o, n_template, tau, step):
     elif code == BOTH:
         for i in range(o, o + p):
             x[i] = x[i + p]
-    reset_covariance(code, P, p, D, D_pair, E, o, n_template, step)
+    reset_covariance(code, P, p, D, E, o, n_template, step)
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
@@ -115,16 +115,16 @@ def _write_rows(T, G, Y, U, X, corner):
 
 
 @numba.njit(cache=True, nogil=True, fastmath=FASTMATH)
-def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, D_pair, E, drift, n_template,
+def sensitivity_pass(y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template,
                      smooth_phi, smooth_q, smooth_p0, observed, delta,
                      dyn, d_hx, d_Phi, d_Gam, d_offset, d_X_tr, d_y,
-                     d_Qx, d_D, d_D_pair, d_E, d_drift, d_sphi, d_sq, d_sp0):
+                     d_Qx, d_D, d_E, d_drift, d_sphi, d_sq, d_sp0):
     """The Kalman filter at known ``delta`` and its forward derivatives with respect to ``k`` parameters.
 
     Parameters
     ----------
-    y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, D_pair, E, drift, n_template, smooth_phi, \
-smooth_q, smooth_p0, observed
+    y, hx, H, Phi, Gam, Qx, offset, X_obs, X_tr, reset, code, D, E, drift, n_template, smooth_phi, smooth_q, \
+smooth_p0, observed
         As :func:`~smd_statespace.person.kalman.augmented_pass` (``y`` less
         the known part of the observation; a missing sample's innovation and its derivatives are 0, its
         variance 1 and its derivatives 0).
@@ -138,8 +138,8 @@ smooth_q, smooth_p0, observed
         respect to the dynamic parameters, stacked on a first axis.
     d_y : ndarray, shape (n_dyn, N)
         Derivatives of ``y`` (minus those of the known part of the observation).
-    d_Qx, d_D, d_D_pair, d_E, d_drift, d_sphi, d_sq, d_sp0 : ndarray
-        Derivatives of ``Qx``, ``D``, ``D_pair``, ``E``, ``drift``, ``smooth_phi``,
+    d_Qx, d_D, d_E, d_drift, d_sphi, d_sq, d_sp0 : ndarray
+        Derivatives of ``Qx``, ``D``, ``E``, ``drift``, ``smooth_phi``,
         ``smooth_q``, ``smooth_p0`` with respect to every parameter (first axis ``k``).
 
     Returns
@@ -177,9 +177,9 @@ smooth_q, smooth_p0, observed
         x[i] = delta[i]
     # the start, as augmented_pass's
     if code == INDEPENDENT:
-        _reset(code, x, P, D, D_pair, E, p, nx, n_template, tau, True)
+        _reset(code, x, P, D, E, p, nx, n_template, tau, True)
         for j in range(k):
-            _reset(code, dx[j], dP[:, j, :], d_D[j], d_D_pair[j], d_E[j], p, nx, n_template, zero, True)
+            _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, True)
     elif code == RANDOM_WALK:
         for i in range(n_template):
             x[nx + i] = tau[i]
@@ -196,19 +196,15 @@ smooth_q, smooth_p0, observed
                 dP[a, j, b] = d_D[j, i] * smooth_p0[0, 1] + D[i] * d_sp0[j, 0, 1]
                 dP[b, j, a] = d_D[j, i] * smooth_p0[1, 0] + D[i] * d_sp0[j, 1, 0]
                 dP[b, j, b] = d_D[j, i] * smooth_p0[1, 1] + D[i] * d_sp0[j, 1, 1]
-        add_smooth_pairs(P, D_pair, smooth_p0, nx, p, n_template)
+        _reset(code, x, P, D, E, p, nx, n_template, tau, True)
         for j in range(k):
-            add_smooth_pairs(dP[:, j, :], d_D_pair[j], smooth_p0, nx, p, n_template)
-            add_smooth_pairs(dP[:, j, :], D_pair, d_sp0[j], nx, p, n_template)
-        _reset(code, x, P, D, D_pair, E, p, nx, n_template, tau, True)
-        for j in range(k):
-            _reset(code, dx[j], dP[:, j, :], d_D[j], d_D_pair[j], d_E[j], p, nx, n_template, zero, True)
+            _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, True)
     else:
         for i in range(n_template):
             x[nx + p + i] = tau[i]
-        _reset(code, x, P, D, D_pair, E, p, nx, n_template, tau, False)
+        _reset(code, x, P, D, E, p, nx, n_template, tau, False)
         for j in range(k):
-            _reset(code, dx[j], dP[:, j, :], d_D[j], d_D_pair[j], d_E[j], p, nx, n_template, zero, False)
+            _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, False)
     v_out = np.empty(N)
     f_out = np.empty(N)
     dv_out = np.empty((N, k))
@@ -340,8 +336,6 @@ smooth_q, smooth_p0, observed
                         dP[a, j, b] += d_D[j, i] * smooth_q[0, 1] + D[i] * d_sq[j, 0, 1]
                         dP[b, j, a] += d_D[j, i] * smooth_q[1, 0] + D[i] * d_sq[j, 1, 0]
                         dP[b, j, b] += d_D[j, i] * smooth_q[1, 1] + D[i] * d_sq[j, 1, 1]
-                    add_smooth_pairs(dP[:, j, :], d_D_pair[j], smooth_q, nx, p, n_template)
-                    add_smooth_pairs(dP[:, j, :], D_pair, d_sq[j], nx, p, n_template)
                 rotate_pairs(P, n_template, nx, nx + p, f00, f01, f10, f11, True)
                 rotate_pairs(x.reshape((m, 1)), n_template, nx, nx + p, f00, f01, f10, f11, False)
                 for i in range(n_template):
@@ -352,7 +346,6 @@ smooth_q, smooth_p0, observed
                     P[a, b] += D[i] * smooth_q[0, 1]
                     P[b, a] += D[i] * smooth_q[1, 0]
                     P[b, b] += D[i] * smooth_q[1, 1]
-                add_smooth_pairs(P, D_pair, smooth_q, nx, p, n_template)
             for i in range(p):
                 P[nx + i, nx + i] += drift[i]
                 for j in range(k):
@@ -362,9 +355,9 @@ smooth_q, smooth_p0, observed
                     for j in range(k):
                         dP[nx + p + i, j, nx + p + i] += d_drift[j, i]
             if reset[kk]:
-                _reset(code, x, P, D, D_pair, E, p, nx, n_template, tau, True)
+                _reset(code, x, P, D, E, p, nx, n_template, tau, True)
                 for j in range(k):
-                    _reset(code, dx[j], dP[:, j, :], d_D[j], d_D_pair[j], d_E[j], p, nx, n_template, zero, True)
+                    _reset(code, dx[j], dP[:, j, :], d_D[j], d_E[j], p, nx, n_template, zero, True)
         # ---- update with y_k
         if varying:
             row = hx[kk]

@@ -56,9 +56,6 @@ class RecordSystem:
     D, E, drift : ndarray, shape (p,)
         Variances of the coefficients' deviation per cycle, of their random walk per cycle
         and of their drift per sample.
-    D_pair : ndarray, shape (p,)
-        Covariance of the deviations of coefficients ``i`` and ``i + 1`` (a harmonic's ``a_k``, ``b_k``
-        where they vary more in size than in phase, or the reverse; 0 elsewhere).
     smooth_phi, smooth_q, smooth_p0 : ndarray, shape (2, 2)
         The Matern-3/2 step, its process covariance and its stationary covariance (variation
         "smooth"; zeros otherwise).
@@ -78,7 +75,6 @@ class RecordSystem:
     reset: np.ndarray
     code: int
     D: np.ndarray
-    D_pair: np.ndarray
     E: np.ndarray
     drift: np.ndarray
     smooth_phi: np.ndarray
@@ -94,8 +90,8 @@ class RecordSystem:
         Every array is C-contiguous (:func:`contiguous`): the compiled passes are compiled once per layout of
         their arguments."""
         return contiguous(y - self.y_known, self.hx, self.H, self.Phi, self.Gam, self.Qx, self.offset, self.X_obs,
-                          self.X_tr, self.reset, self.code, self.D, self.D_pair, self.E, self.drift, n_template,
-                          self.smooth_phi, self.smooth_q, self.smooth_p0, self.observed)
+                          self.X_tr, self.reset, self.code, self.D, self.E, self.drift, n_template, self.smooth_phi,
+                          self.smooth_q, self.smooth_p0, self.observed)
 
 
 def contiguous(*arguments) -> tuple:

@@ -42,7 +42,7 @@ from .search import fit_model
 from .timing import CycleTiming
 
 __all__ = ["MIN_HALF_CYCLES", "BREAK_MARGIN", "halves", "break_folds", "part", "held_out_prediction",
-           "held_out_loglike", "free_run", "held_out_free_run", "cross_validated_loglike", "held_out_gain"]
+           "held_out_loglike", "held_out_free_run", "cross_validated_loglike", "held_out_gain"]
 
 MIN_HALF_CYCLES = 8
 """Fewest whole force cycles in each half (the record-level model needs as many to estimate the variation)."""
@@ -177,53 +177,10 @@ def held_out_loglike(model, params, delta, sigma2) -> float:
     return held_out_prediction(model, params, delta, sigma2)["loglike"]
 
 
-def free_run(model, params, delta) -> np.ndarray:
-    """The output ``GRF / M_h - g`` (m/s^2) of ``model`` simulated freely over its record, without the measurement.
-
-    The force is the template of ``delta`` in every cycle (the cycles' own variation is what the model
-    leaves to chance), on the model's cycle timing; the dynamics start from ``delta``'s initial state and
-    are never corrected by the measurement (MATLAB's ``sim``/``compare``). A nonlinear effect runs
-    linearised about its fitted path.
-
-    Parameters
-    ----------
-    model : RecordModel
-    params : ndarray
-        The searched parameters.
-    delta : ndarray, shape (q,) or (q, m)
-        Linear unknowns ``[initial state, template, regressor coefficients]`` (``delta_names``); with
-        ``m`` columns, ``m`` runs at once.
-
-    Returns
-    -------
-    ndarray, shape (T,) or (T, m)
-    """
-    delta = np.asarray(delta, dtype=float)
-    columns = delta.reshape(delta.shape[0], -1)
-    system = model.system(params)
-    nx, p, n = model.n_dynamic, model.n_coefficients, model.y.size
-    force = np.zeros((system.H.shape[1], columns.shape[1]))
-    force[:p] = columns[nx:nx + p]  # the template; phase errors 0
-    beta = columns[nx + p:]
-    phi = np.broadcast_to(system.Phi, (n, nx, nx))
-    drive = np.einsum("kij,jm->kim", system.Gam, force) + system.offset[:, :, None]
-    if beta.size:
-        drive = drive + np.einsum("kir,rm->kim", system.X_tr, beta)
-    states = np.empty((n, nx, columns.shape[1]))
-    states[0] = columns[:nx]
-    for k in range(1, n):
-        states[k] = phi[k - 1] @ states[k - 1] + drive[k - 1]
-    out = (np.einsum("ki,kim->km", np.broadcast_to(system.hx, (n, nx)), states)
-           + system.H @ force + system.y_known[:, None])
-    if beta.size:
-        out = out + system.X_obs @ beta
-    return out.reshape((n,) + delta.shape[1:])
-
-
 def held_out_free_run(model, params, delta) -> np.ndarray:
     """Free run of ``model``'s record (a held-out part) at parameters and template fitted elsewhere (m/s^2).
 
-    :func:`free_run` with ``delta``'s template; the part's own
+    :meth:`~smd_statespace.person.model.RecordModel.free_run` with ``delta``'s template; the part's own
     initial state and regressor coefficients are estimated by least squares on the run, as MATLAB's
     ``compare`` estimates the initial condition of validation data.
     """
@@ -232,7 +189,7 @@ def held_out_free_run(model, params, delta) -> np.ndarray:
     base[own] = 0.0
     columns = np.repeat(base[:, None], 1 + own.size, axis=1)
     columns[own, 1 + np.arange(own.size)] = 1.0
-    runs = free_run(model, params, columns)
+    runs = model.free_run(params, columns)
     response = runs[:, 1:] - runs[:, :1]  # the run is affine in the part's own unknowns
     observed = model.observed
     estimate, *_ = np.linalg.lstsq(response[observed], (model.y - runs[:, 0])[observed], rcond=None)

@@ -20,16 +20,6 @@ template ``tau``:
   length scale ``ell``), with its rate as a second state per coefficient.
 
 Every model may add a drift per sample (variance ``S``).
-
-With a phase template, a harmonic's two coefficients need not vary alike: its
-per-cycle draw (``D``, and the smooth deviation) has a part along the
-template's coefficients (the harmonic's size) and a part across them (its
-phase), with variances ``d e^(-r/2)`` and ``d e^(r/2)``: ``d`` the group's
-``log_var_d`` and ``r`` one log ratio :data:`PHASE_SIZE` shared by the
-harmonics (:func:`harmonic_shape`). ``r = 0`` is the same variance in every
-direction; a force whose harmonics jitter in phase and keep their size has
-``r > 0``. In the coefficients ``(a_k, b_k)`` that is a 2 x 2 block, whose
-off-diagonal the passes take as ``D_pair``.
 """
 
 from __future__ import annotations
@@ -44,55 +34,7 @@ from . import kalman
 if TYPE_CHECKING:  # annotations only
     from .model import RecordSystem
 
-__all__ = ["PHASE_SIZE", "PHASE_SIZE_BOUNDS", "StateSpaceLayout", "Variation", "VARIATIONS", "harmonic_shape"]
-
-PHASE_SIZE = "log_phase_size_ratio"
-"""Name of the parameter ``r``: the log of the ratio of each harmonic's per-cycle variance across its template
-(phase) to that along it (size), shared by the harmonics (the module's description)."""
-
-PHASE_SIZE_BOUNDS = (-10.0, 10.0)
-"""Search range of :data:`PHASE_SIZE`: at either end a harmonic varies, in effect, in one direction only."""
-
-
-def harmonic_shape(template, n_states, ratio) -> tuple:
-    """Factors of the per-cycle variances of the force states for the log ratio ``ratio`` (:data:`PHASE_SIZE`).
-
-    Parameters
-    ----------
-    template : ndarray, shape (2 n + 1,)
-        The phase template ``[a0, a1, b1, ...]`` (g): each harmonic's size runs along ``(a_k, b_k)``.
-    n_states : int
-        Force states (the coefficients, then the timing states, whose factors are 1).
-    ratio : float or None
-        ``r``; None: no ratio (every factor 1, no pairs).
-
-    Returns
-    -------
-    diag, pair, d_diag, d_pair : ndarray, shape (n_states,)
-        ``D = d diag``, ``D_pair = d pair`` (at the row of each ``a_k``, the covariance with ``b_k``), ``d``
-        the group's variance, and their derivatives with respect to ``r``.
-    """
-    diag, pair, d_diag, d_pair = np.ones(n_states), np.zeros(n_states), np.zeros(n_states), np.zeros(n_states)
-    if ratio is None:
-        return diag, pair, d_diag, d_pair
-    template = np.asarray(template, dtype=float)
-    a, b = template[1::2], template[2::2]
-    size = np.hypot(a, b)
-    c = np.divide(a, size, out=np.ones_like(a), where=size > 0)  # along the template: (c, s)
-    s = np.divide(b, size, out=np.zeros_like(b), where=size > 0)
-    along, across = np.exp(-0.5 * ratio), np.exp(0.5 * ratio)
-    end = template.size
-    diag[1:end:2], diag[2:end:2] = along * c * c + across * s * s, along * s * s + across * c * c
-    pair[1:end:2] = (along - across) * c * s
-    d_diag[1:end:2] = 0.5 * (-along * c * c + across * s * s)
-    d_diag[2:end:2] = 0.5 * (-along * s * s + across * c * c)
-    d_pair[1:end:2] = -0.5 * (along + across) * c * s
-    return diag, pair, d_diag, d_pair
-
-
-def _with_pairs(sys) -> np.ndarray:
-    """The per-cycle covariance matrix of the force states: ``diag(D)`` and the pairs' ``D_pair``."""
-    return np.diag(sys.D) + np.diag(sys.D_pair[:-1], 1) + np.diag(sys.D_pair[:-1], -1)
+__all__ = ["StateSpaceLayout", "Variation", "VARIATIONS"]
 
 
 @dataclass(frozen=True)
@@ -171,7 +113,7 @@ class Variation:
             (``alpha`` and the extra block), to be placed by the caller.
         """
         alpha, starts = layout.alpha, layout.starts
-        D, E, drift = _with_pairs(sys), np.diag(sys.E), np.diag(sys.drift)
+        D, E, drift = np.diag(sys.D), np.diag(sys.E), np.diag(sys.drift)
         size = self.state_size(layout.nx, layout.p, layout.n_template) - layout.nx
         mean, cov = np.zeros(size), np.zeros((size, size))
         mean[:layout.p] = tau
@@ -204,12 +146,6 @@ class Variation:
             state_cov[np.ix_(rows, rows)] += sys.D[i] * qs[:, :, None]
             own = [i, p + i]
             cov[np.ix_(own, own)] = sys.D[i] * p0
-            if sys.D_pair[i] != 0.0:  # with the next coefficient (a harmonic's b_k): D_pair times the same step
-                other, others = [nx + i + 1, nx + p + i + 1], [i + 1, p + i + 1]
-                state_cov[np.ix_(rows, other)] += sys.D_pair[i] * qs[:, :, None]
-                state_cov[np.ix_(other, rows)] += sys.D_pair[i] * qs.T[:, :, None]
-                cov[np.ix_(own, others)] = sys.D_pair[i] * p0
-                cov[np.ix_(others, own)] = sys.D_pair[i] * p0.T
         timing = slice(nx + n_template, nx + p)  # the phase and rate errors are drawn again per cycle
         transition[timing, :, starts] = 0.0
         state_cov[timing, timing, starts] = np.diag(sys.D[n_template:])[:, :, None]
@@ -219,7 +155,7 @@ class Variation:
         """A walking base ``m`` (the extra block) and a fresh deviation ``d`` around it per cycle."""
         nx, p, starts = layout.nx, layout.p, layout.starts
         alpha, base = layout.alpha, layout.extra
-        D, E, drift = _with_pairs(sys), np.diag(sys.E), np.diag(sys.drift)
+        D, E, drift = np.diag(sys.D), np.diag(sys.E), np.diag(sys.drift)
         state_cov[base, base, :] += drift[:, :, None]
         transition[alpha, :, starts] = 0.0
         for i in range(p):
