@@ -18,12 +18,16 @@ proposes is a false alarm. With ``--true-timing`` the fits use the simulator's o
 table), not the starts the model places: where the force jumps at its true starts, the even terms' share
 comes from starts placed elsewhere (2026-11-30: on phase-jittered records the likelihood ratio of ``u2`` and
 ``v2`` fell from 9-36 to 3-13 at the true starts, while the person without a term fitted only 2-6 better
-there)::
+there). ``--start-jitter MS`` adds random errors (sd in ms, drawn from each record's seed) to those true starts:
+errors of 2.5 ms alone, not tied to the force, gave ``u2`` and ``v2`` likelihood ratios of 10-32 on
+phase-jittered records (2026-11-30)::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/even_terms_variation.py --records 6 --jobs 2 \\
         --out benchmarks/results/even_terms_variation.md
     OPENBLAS_NUM_THREADS=1 python benchmarks/even_terms_variation.py --records 8 --jobs 2 --diagnose
     OPENBLAS_NUM_THREADS=1 python benchmarks/even_terms_variation.py --records 6 --jobs 2 --true-timing
+    OPENBLAS_NUM_THREADS=1 python benchmarks/even_terms_variation.py --records 6 --jobs 2 --true-timing \
+        --start-jitter 2.5
 """
 
 from __future__ import annotations
@@ -64,10 +68,10 @@ def fit_one(job) -> dict:
     from smd_statespace.person import identify_person
     from smd_statespace.simulation import simulate_bouncing
 
-    variation, term, record, seed, true_timing = job
+    variation, term, record, seed, true_timing, jitter_ms = job
     sim = simulate_bouncing(**PERSON, seed=seed, variation="jumps", **VARIATIONS[variation])
     if true_timing:
-        _use_true_starts(sim)
+        _use_true_starts(sim, jitter_ms, seed)
     started = time.perf_counter()
     result = identify_person(sim.record, effects=[f"term:kind={term},scale={SCALE}"], check_change=False,
                              threads=1, timing="template" if true_timing else "model")
@@ -77,14 +81,16 @@ def fit_one(job) -> dict:
             "lr": float(result.effect_test()["lr"]), "f_h": result.f_h, "seconds": time.perf_counter() - started}
 
 
-def _use_true_starts(sim) -> None:
+def _use_true_starts(sim, jitter_ms: float = 0.0, seed: int = 0) -> None:
     """Make ``identify_person`` in this process start every cycle where the simulator started it (with
-    ``timing="template"`` they are kept as they are): the benchmark's probe, not an option of the package."""
+    ``timing="template"`` they are kept as they are), each moved by a normal error of sd ``jitter_ms``: the
+    benchmark's probe, not an option of the package."""
     from smd_statespace.person import CycleTiming
     from smd_statespace.person import fit
 
     cycles = sim.cycles
     starts = np.r_[cycles["t_start"].to_numpy(), cycles["t_end"].to_numpy()[-1]]
+    starts = starts + np.random.default_rng(seed).normal(0.0, jitter_ms / 1000.0, starts.size)
     fit.estimate_timing = lambda *args, **kwargs: CycleTiming(starts, "template")
 
 
@@ -94,7 +100,7 @@ def diagnose_one(job) -> dict:
     from smd_statespace.person.diagnose import diagnose_person
     from smd_statespace.simulation import simulate_bouncing
 
-    variation, _, record, seed, _ = job
+    variation, _, record, seed, _, _ = job
     sim = simulate_bouncing(**PERSON, seed=seed, variation="jumps", **VARIATIONS[variation])
     started = time.perf_counter()
     diagnosis = diagnose_person(identify_person(sim.record, threads=1), threads=1)
@@ -111,15 +117,19 @@ def main(argv=None) -> None:
     parser.add_argument("--diagnose", action="store_true", help="diagnose each clean record with every candidate")
     parser.add_argument("--true-timing", action="store_true",
                         help="fit at the simulator's own cycle starts (not with --diagnose)")
+    parser.add_argument("--start-jitter", type=float, default=0.0, metavar="MS",
+                        help="with --true-timing: random errors of the true starts, sd in ms (default 0)")
     parser.add_argument("--out", type=Path, default=None, help="also write the tables as Markdown")
     args = parser.parse_args(argv)
+    if args.start_jitter and not args.true_timing:
+        parser.error("--start-jitter: errors of the true starts, with --true-timing only")
     if args.diagnose and args.true_timing:
         parser.error("--true-timing: the fits with one term only, not with --diagnose")
     if args.diagnose:
         args.terms = "diagnose"
     seeds = [int(child.generate_state(1)[0]) for child in np.random.SeedSequence(args.seed).spawn(args.records)]
-    jobs = [(variation, term, i, seed, args.true_timing) for term in args.terms.split(",") for variation in VARIATIONS
-            for i, seed in enumerate(seeds)]  # the same records' seeds for every variation
+    jobs = [(variation, term, i, seed, args.true_timing, args.start_jitter) for term in args.terms.split(",")
+            for variation in VARIATIONS for i, seed in enumerate(seeds)]  # the same records' seeds for every variation
     started = time.perf_counter()
     with ProcessPoolExecutor(args.jobs) as pool:
         rows = pd.DataFrame(list(pool.map(diagnose_one if args.diagnose else fit_one, jobs)))
@@ -131,6 +141,7 @@ def main(argv=None) -> None:
             records=("z", "size"), coefficient_mean=("coefficient", "mean"), z_mean=("z", "mean"),
             z_min=("z", "min"), z_max=("z", "max"), lr_over_10_8=("lr", lambda lr: int((lr > 10.83).sum())))
     how = "--diagnose" if args.diagnose else f"--terms {args.terms}" + (" --true-timing" if args.true_timing else "")
+    how += f" --start-jitter {args.start_jitter:g}" if args.start_jitter else ""
     lines = [f"`python benchmarks/even_terms_variation.py --records {args.records} {how} --seed {args.seed}` "
              f"({(time.perf_counter() - started) / 60:.1f} min, {args.jobs} processes)", "",
              markdown_table(summary.reset_index().round(3)), "", markdown_table(rows.round(4))]
