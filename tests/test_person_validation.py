@@ -287,3 +287,24 @@ def test_a_held_out_gain_made_by_a_few_samples_is_weak_and_one_spread_over_the_c
     assert weak["held_out_weak"] and not weak["held_out_worse"] and not weak["significant"]
     # a change in time predicts the other half by extrapolating its course: there a positive gain is enough
     assert held_out(passed, before, small, level, heavy_tailed=False, in_time=True)["significant"]
+
+
+@pytest.mark.parametrize("name, noted", [("term:v2", True), ("term:f_drift", False)])
+def test_a_proposed_term_even_in_the_motion_gets_the_note_on_cycle_starts(name, noted):
+    """A proposed v2 (damping that differs up and down) is said to take up cycle starts a few milliseconds off where
+    the force changes abruptly (docs/effects.md: the source of the false alarms on clean simulated records); a
+    proposed drift of f_h is not."""
+    from types import SimpleNamespace
+
+    from smd_statespace.person.diagnose import PersonDiagnosis
+
+    base = SimpleNamespace(test_pvalues=lambda: {"kurtosis": 3.0, "ljung_box_p": 0.5}, change=None)
+    row = verdict({"effect": name, "passed": True, "held_out_before": 1000.0, "held_out": 1030.0,
+                   "held_out_samples": 1500, "held_out_z": 3.0, "log_p": -12.0, "lr": 30.0, "on_bound": False,
+                   "zero": False, "less_white": False, "held_out_worse": False, "held_out_weak": False,
+                   "settled": True, "likelihood": "approximate", "f_h": 2.8, "xi_h": 0.3,
+                   "held_out_free_run_fit": 80.0, "held_out_free_run_fit_before": 80.0, "lr_scale": 1.0})
+    diagnosis = PersonDiagnosis(base=base, fits={}, rows=[row], failed={}, alpha=0.01)
+    assert diagnosis.missing == [name]
+    assert any(note.startswith(f"{name}: a term even in the motion also takes up cycle starts")
+               for note in diagnosis.notes()) == noted

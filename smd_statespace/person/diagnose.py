@@ -70,8 +70,8 @@ from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
 from .threads import one_blas_thread, record_cores, search_threads, thread_map
 from .validation import MIN_HALF_CYCLES
-from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, held_out, held_out_checks, held_out_z, less_white,
-                      needed_z, verdict, without_key)
+from .verdict import (HEAVY_TAILS, HELD_OUT, LESS_WHITE, even_term_notes, held_out, held_out_checks, held_out_z,
+                      less_white, needed_z, verdict, without_key)
 
 __all__ = ["HEAVY_TAILS", "LESS_WHITE", "SCALE_NOTE", "SCREENED", "ZERO_Z", "held_out_z", "PersonDiagnosis",
            "diagnose_person", "candidate_row", "held_out", "verdict", "less_white", "HELD_OUT", "label",
@@ -361,6 +361,7 @@ class PersonDiagnosis:
                 out.append(f"{name}: its linearised path had not settled after the last linearisation (the "
                            f"approximate likelihood kept rising, LR {table.loc[name, 'lr']:.1f}, as the path "
                            "followed the data): not evidence, so it is not proposed")
+            out += even_term_notes(self.missing)
             approximate = list(table.index[table["likelihood"] == "approximate"])
             if approximate:
                 out.append(f"{', '.join(approximate)}: nonlinear, so its likelihood is approximate (linearised about "
