@@ -182,5 +182,4 @@ def even_term_notes(proposed) -> list:
         return []
     return [f"{', '.join(even)}: a term even in the motion also takes up cycle starts placed a few milliseconds off "
             "where the force changes abruptly from cycle to cycle (on simulated clean records such terms were proposed "
-            "falsely; docs/effects.md): trust it where f_h and the residuals improve with it and it is found on more "
-            "than one record of the person"]
+            "falsely; docs/effects.md): check that another record of the person shows it too before trusting it"]
