@@ -296,6 +296,19 @@ def test_scoring_reaches_the_maximum_the_difference_search_reaches(record, name)
     assert 0.5 * g @ np.linalg.solve(info, g) < 1e-2
 
 
+def test_a_looser_stop_rule_stops_sooner_near_the_same_maximum(record):
+    """identify's first fits stop at a gain of 0.1 (fit.FIRST_GAIN): on the "smooth" model, whose scoring converges
+    linearly (gains falling by about 0.6 a step), that takes fewer passes than the intermediate fits' rule and
+    leaves less than 1 of log-likelihood on the way (a geometric tail of 0.1 x 0.6 / 0.4), never more than there."""
+    from smd_statespace.person.fit import FIRST_GAIN
+    from smd_statespace.person.search import fit_model
+
+    model = CASES["smooth"](record)
+    quick, first = fit_model(model, quick=True), fit_model(model, quick=FIRST_GAIN)
+    assert first["n_evaluations"] < quick["n_evaluations"]
+    assert quick["loglike"] - 1.0 < first["loglike"] <= quick["loglike"] + 1e-9
+
+
 def test_a_scoring_search_that_runs_out_of_steps_is_finished_by_lbfgs(record, monkeypatch):
     """Scoring allowed one step only does not converge; fit_model then finishes with L-BFGS-B (exact gradient)
     from there and reaches the maximum scoring reaches with all its steps."""

@@ -45,7 +45,6 @@ FIT_METHODS = ("scoring", "lbfgs", "lbfgs-difference")
 QUICK_GAIN = 1e-3
 """Stop rule of the intermediate fits (log-likelihood units gained by the last step)."""
 
-
 FINAL_GAIN = 1e-5
 """Stop rule of the final fit (log-likelihood units gained by the last step)."""
 
@@ -103,10 +102,10 @@ def fit_model(model: RecordModel, start=None, quick=False, method="scoring") -> 
     start : ndarray, optional
         Starting parameters; default the best of a coarse search over
         :data:`START_F_H` x :data:`START_XI_H`.
-    quick : bool
-        Looser stop rule (intermediate fits): :data:`QUICK_GAIN` instead of
-        :data:`FINAL_GAIN` for ``"scoring"``, a relative change of 1e-7 of the
-        likelihood for the L-BFGS-B methods.
+    quick : bool or float
+        Looser stop rule (intermediate fits): :data:`QUICK_GAIN` (or the gain
+        given) instead of :data:`FINAL_GAIN` for ``"scoring"``, a relative change
+        of 1e-7 of the likelihood for the L-BFGS-B methods.
     method : {"scoring", "lbfgs", "lbfgs-difference"}
         ``"scoring"`` (default): Fisher scoring with the exact gradient and the
         profile's expected information, both from one derivative pass of the
@@ -155,7 +154,8 @@ def fit_model(model: RecordModel, start=None, quick=False, method="scoring") -> 
     start = np.asarray(start, dtype=float) / scales
     prefix = ""
     if method == "scoring":
-        params, loglike, n, converged, message = _scoring(model, start * scales, QUICK_GAIN if quick else FINAL_GAIN)
+        gain = FINAL_GAIN if not quick else QUICK_GAIN if quick is True else float(quick)
+        params, loglike, n, converged, message = _scoring(model, start * scales, gain)
         count[0] += n
         if converged or not np.isfinite(loglike):
             return {"params": params, "loglike": loglike, "n_evaluations": count[0], "converged": converged,
