@@ -532,3 +532,45 @@ def test_harmonic_gains_of_the_person_alone_match_a_linear_solve():
                 lhs = 1j * nu[k, i] * np.eye(2) - a[r]
                 rhs = (np.exp(1j * nu[k, i] * dt) * np.eye(2) - p[r]) @ bb[r]
                 np.testing.assert_allclose(gains[k, i], np.linalg.solve(lhs, rhs), rtol=1e-12, atol=1e-15)
+
+
+def test_a_grid_of_trial_starts_is_computed_coarse_to_fine():
+    """grid_best computes every other grid point, then the neighbours of the best of those: a peak between two
+    coarse points is found at about half the cost; a lone spike whose neighbours are low is missed (the grid must be
+    fine enough that a peak spans neighbours, as the floor's 1 % grid is)."""
+    from smd_statespace.person.extend import GRID_KEEP, grid_best
+
+    grid = np.geomspace(2.0, 20.0, 232)
+    peak = 2.0 + 25.0 / (1.0 + (np.log(grid / 3.53) / 0.012) ** 2)  # a floor's narrow peak at 3.53 Hz
+    values = np.r_[0.0, peak + 0.5 * np.sin(grid)]  # the innovations' line first, then the grid
+    computed = []
+
+    def counted(i):
+        computed.append(i)
+        return values[i]
+
+    best = grid_best(counted, range(values.size), leading=1)
+    assert best == int(np.argmax(values)) and best % 2 == 0  # between the coarse points 1, 3, 5, ...
+    assert len(computed) == len(set(computed)) <= values.size // 2 + 1 + 2 * GRID_KEEP
+    spike = np.zeros(values.size)
+    spike[100], spike[1::2] = 5.0, 1.0 + np.arange(1, values.size, 2) * 1e-3
+    assert grid_best(spike.__getitem__, range(spike.size), leading=1) != 100
+
+
+def test_the_modal_floor_starts_where_its_whole_grid_does(long_fit):
+    """The floor mode's trial frequencies are an ordered grid after the innovations' line: the search's start is
+    the whole grid's best start by likelihood, from about 130 of its 233 likelihoods."""
+    from smd_statespace.person import extend
+    from smd_statespace.person.effect_adapter import record_grid_start, record_starts
+
+    floor = extend.configured_for_record("floor_mode:source=modal", long_fit)
+    trials = record_starts(floor, long_fit)
+    frequencies = [trial["f_f"] for trial in trials]
+    assert record_grid_start(floor) == 1 and np.all(np.diff(frequencies[1:]) > 0)
+    model = extend.effect_model(long_fit, [floor])
+    counted, seen, j = extend.effect_model(long_fit, [floor]), [], model.position("f_f")
+    counted.loglike = lambda params: seen.append(params[j]) or model.loglike(params)
+    start = extend._starts(counted, long_fit, long_fit, [floor])[0]
+    assert len(seen) < 0.6 * len(frequencies)  # 136 of 233 here
+    every = [model.loglike(np.r_[start[:j], f, start[j + 1:]]) for f in frequencies]
+    assert start[j] == frequencies[int(np.argmax(every))]

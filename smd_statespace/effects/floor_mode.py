@@ -424,6 +424,12 @@ class FloorMode(Effect):
         xi_f, mu = float(np.clip(0.01, d_lo, d_hi)), float(np.clip(0.01, m_lo, m_hi))
         return [{"f_f": f, "xi_f": xi_f, "mass_ratio": mu} for f in frequencies]
 
+    def record_grid_start(self) -> int:
+        """:meth:`record_starts`' log grid begins after the innovations' line: the search takes its likelihood at
+        every other frequency, then around the best of those (close frequencies give close likelihoods: a start 1 %
+        off the floor kept 15 of the 25 gained at it, :data:`RECORD_FREQUENCY_STEP`)."""
+        return 1
+
     @property
     def modal(self) -> bool:
         """Whether the floor mode is estimated (``source="modal"``)."""

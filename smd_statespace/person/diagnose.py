@@ -22,8 +22,9 @@ test stays the screening's, made where the person without it was fitted).
 Candidates, by default (:func:`~smd_statespace.model.fitted.propose`): every registered effect
 (a user's too); the floor as the measured floor when the record has a
 ``floor_acc`` column, else as an estimated floor mode (``floor_mode:source=modal``),
-whose frequency is searched over a fine grid of about 230 trials, which costs
-seconds, and whose test counts them (Bonferroni).
+whose frequency is searched from the best of a fine grid of about 230 trials (the likelihood at every
+other one and around the best of those: :func:`~smd_statespace.person.extend.grid_best`), which costs about a
+second, and whose test counts them (Bonferroni).
 
 Generic terms: besides those, every generic term of the library
 (:data:`~smd_statespace.effects.generic.TERMS`: a spring stiffer on one side, one that hardens with amplitude,

@@ -13,11 +13,13 @@ function                   protocol              default
 :func:`record_harmonics`   :class:`RecordHarmonics`   0 (the effect's parameters are estimated)
 :func:`record_starts`      :class:`RecordStarts`      none (0 where the range holds 0, else the nominal)
 :func:`record_search_size` :class:`RecordSearchSize`  1 (one search, no multiple testing)
+:func:`record_grid_start`  :class:`RecordStartGrid`   None (every trial start's likelihood is computed)
 ========================== ===================== =====================================================
 
 The extra harmonics enter as more harmonics of the force's template
 (``record_harmonics``), the estimated floor mode starts from a grid of
-frequencies and counts them (``record_starts``, ``record_search_size``).
+frequencies and counts them (``record_starts``, ``record_search_size``); the frequencies are an ordered grid
+(``record_grid_start``), so the search computes the likelihood at every other one and then around the best.
 
 What an effect reads of the fit without it is a :class:`~smd_statespace.model.fitted.FittedRecord`
 (:func:`fitted_record`), not the :class:`~smd_statespace.person.results.PersonResult`: the functions here
@@ -34,8 +36,8 @@ if TYPE_CHECKING:  # annotations only
     from ..model import Effect, SMDModel
     from .results import PersonResult
 
-__all__ = ["RecordHarmonics", "RecordSearchSize", "RecordStarts", "fitted_record", "record_harmonics",
-           "record_search_size", "record_starts"]
+__all__ = ["RecordHarmonics", "RecordSearchSize", "RecordStartGrid", "RecordStarts", "fitted_record",
+           "record_grid_start", "record_harmonics", "record_search_size", "record_starts"]
 
 
 @runtime_checkable
@@ -52,6 +54,15 @@ class RecordStarts(Protocol):
 
     def record_starts(self, fitted: FittedRecord) -> list:
         """Candidate starting values of the effect's parameters, each a dict by slot name."""
+
+
+@runtime_checkable
+class RecordStartGrid(Protocol):
+    """An effect whose trial starts end in an ordered grid of one parameter: neighbours give close likelihoods."""
+
+    def record_grid_start(self) -> int:
+        """Index, in :meth:`RecordStarts.record_starts`' list, of the grid's first point (the trials before it are
+        one-off starts, each computed)."""
 
 
 @runtime_checkable
@@ -87,6 +98,15 @@ def record_starts(effect: "Effect", result: "PersonResult") -> list:
     their slot's nominal value.
     """
     return effect.record_starts(fitted_record(result)) if isinstance(effect, RecordStarts) else []
+
+
+def record_grid_start(effect: "Effect") -> int | None:
+    """Where the ordered grid begins in ``effect``'s trial starts (:func:`record_starts`), or None: no grid.
+
+    On a grid the search computes the likelihood at every other point and then at the neighbours of the
+    best of those (:func:`~smd_statespace.person.extend.grid_best`) instead of at every point.
+    """
+    return int(effect.record_grid_start()) if isinstance(effect, RecordStartGrid) else None
 
 
 def record_search_size(effect: "Effect", result: "PersonResult") -> int:
