@@ -260,6 +260,36 @@ def test_an_undetermined_f_h_gets_an_interval_as_wide_as_the_record_leaves_it(lo
             model.bounds[1])
 
 
+@pytest.mark.parametrize("sd, parts", [(0.001, True), (0.5, False)])
+def test_a_person_who_changes_gets_the_parts_intervals_where_they_determine_it(long_sim, sd, parts):
+    """A person whose halves differ: no one value, so f_h is not determined. Where the record determines f_h apart
+    from that (sd 0.001) its interval spans the whole record's and the halves' (on 13 lab exports of changing
+    people, 2026-11-30: a quarter to a third of the prior's width, each holding the bout's mean f_h); where it does
+    not (sd 0.5), the prior's width as for any undetermined parameter."""
+    from scipy import stats
+
+    from smd_statespace.person.answer import honest_intervals
+    from smd_statespace.person.results import PRIOR_SD
+
+    model = RecordModel(long_sim.record.time, acceleration(long_sim), true_timing(long_sim), variation="independent")
+    params = model.start_params(2.8, 0.25)
+    narrow = {"f_h": (2.79, 2.81), "xi_h": (0.24, 0.26)}
+    cov = np.diag(np.r_[sd, np.full(params.size - 1, 0.001)] ** 2)  # the sd of f_h as given, the others small
+    result = PersonResult(long_sim.record, model, params, cov, np.ones(params.size, bool), 0.0, narrow, "wald", 0.9,
+                          [])
+    result.misfit_share = 0.0
+    halves = [{"f_h_low": 2.9, "f_h_high": 3.0}, {"f_h_low": 2.6, "f_h_high": 2.7}]
+    result.change = {"changed": ["f_h"], "halves": halves}
+    assert not result.determined("f_h") and result.determined_apart_from_change("f_h") is parts
+    low, high = honest_intervals(result)["f_h"]
+    if parts:
+        assert (low, high) == (2.6, 3.0)
+    else:
+        half = stats.norm.ppf(0.95) * PRIOR_SD["f_h"]
+        assert (low, high) == pytest.approx((2.8 - half, 2.8 + half))
+    assert honest_intervals(result)["xi_h"] == narrow["xi_h"]  # not named by the halves
+
+
 @pytest.mark.parametrize("other_f_h, other_aic, spans", [(3.2, 5.2, True), (3.2, 25.0, False),
                                                          (2.45, 5.2, False)])
 def test_the_f_h_interval_spans_the_variation_models_the_record_cannot_rule_out(long_sim, other_f_h, other_aic,
@@ -533,12 +563,19 @@ def test_wald_interval_is_symmetric_inside_the_bounds_and_ends_at_a_bound_it_wou
 @pytest.mark.slow
 def test_a_1000_hz_record_is_fitted_at_100_hz_and_says_so(tmp_path, capsys, monkeypatch):
     from smd_statespace import progress
+    from smd_statespace.person import fit as fit_module
     from smd_statespace.person.fit import AUTO_VARIATIONS
     from smd_statespace.person.search import TIMING_ITERATIONS
 
     sim = simulate_bouncing(mass=70, f_b=2.2, f_h=2.8, xi_h=0.25, duration=30, fs=1000.0, seed=11)
     capsys.readouterr()
     monkeypatch.setattr(progress, "watched", lambda stream=None: True)  # as on a terminal
+
+    class EveryUpdate(progress.tqdm):  # drawn at every update: tqdm skips those within 0.1 s of the last drawn
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, mininterval=0, miniters=1, **kwargs)
+
+    monkeypatch.setattr(fit_module, "tqdm", EveryUpdate)
     result = identify_person(sim.record, progress=True)
     # every variation model: its first fit and its own timing fits; the winner's final fit; the halves'; the
     # information

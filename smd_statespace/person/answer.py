@@ -109,12 +109,15 @@ def undetermined_interval(result, name) -> tuple:
     Measured before the rule (docs/person-benchmark-generators.md, 60 records): of the 14
     calibrated ``f_h`` intervals that missed the truth, 8 belonged to estimates already
     flagged as not determined (3 smooth-drift records, 5 pulse trains).
+
+    A parameter not determined only because the person changes during the record keeps its
+    interval here: :func:`honest_intervals` widens it to span the record's parts'.
     """
     low, high = result.intervals[name]
     bounds = result.model.bound(name)
     if result.artefact(name):
         return float(bounds[0]), float(bounds[1])
-    if result.determined(name):
+    if result.determined_apart_from_change(name):  # a person who changes: honest_intervals spans the parts'
         return low, high
     wide = wald_interval(result.model.unpack(result.params)[name], PRIOR_SD[name], result.level, bounds)
     return min(low, wide[0]), max(high, wide[1])

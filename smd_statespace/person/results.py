@@ -392,9 +392,15 @@ class PersonResult(RecordChecks):
         the estimate is not at a search bound, ``xi_h`` is at most 1 (an over-damped fit has no resonance to
         determine), ``f_h`` is not where a resonance mimics the force (:attr:`at_bouncing_frequency`), the
         record's halves agree on it (:attr:`change`) and the model does not misfit the record (:attr:`misfit`)."""
-        if name == "f_h" and self.at_bouncing_frequency:
-            return False
         if self.change and name in self.change["changed"]:  # two people in one record: no one value
+            return False
+        return self.determined_apart_from_change(name)
+
+    def determined_apart_from_change(self, name) -> bool:
+        """:meth:`determined` but for the person changing during the record: where this is True and the person
+        changes, the record determines the parameter in each of its parts, and its interval spans the parts'
+        (:func:`~smd_statespace.person.answer.honest_intervals`) rather than what was known before the record."""
+        if name == "f_h" and self.at_bouncing_frequency:
             return False
         if self.misfit:
             return False
