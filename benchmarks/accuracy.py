@@ -661,6 +661,20 @@ def markdown_table(frame: pd.DataFrame, formats: dict | None = None) -> str:
     return "\n".join(lines)
 
 
+def markdown_report(title: str, script: str, argv, started: float, body: list, out: Path | None) -> str:
+    """A benchmark's markdown report: ``# title``, the command that made it (``script`` with ``argv``, default the
+    process's arguments) and its minutes since ``started`` (``time.perf_counter()``), then ``body``'s lines; printed,
+    and written to ``out`` when given. Returns the text."""
+    arguments = list(sys.argv[1:] if argv is None else argv)
+    command = " ".join(["python", f"benchmarks/{script}"] + arguments)
+    minutes = (time.perf_counter() - started) / 60
+    text = "\n".join([f"# {title}", "", f"`{command}` ({minutes:.1f} min)", "", *body]) + "\n"
+    print(text)
+    if out:
+        Path(out).write_text(text, encoding="utf-8")
+    return text
+
+
 def main_table(summaries: dict, baselines: dict) -> str:
     """The main table: one row per estimator plus the data-free guesses."""
     rows = []

@@ -21,17 +21,12 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 os.environ.setdefault("SMD_STATESPACE_THREADS", "1")
 
-import argparse  # noqa: E402
 import dataclasses  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
-from concurrent.futures import ProcessPoolExecutor  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
 
-from accuracy import markdown_table  # noqa: E402  (benchmarks/, the script's own folder)
+from accuracy import markdown_report, markdown_table  # noqa: E402  (benchmarks/, the script's own folder)
 import person_effects  # noqa: E402
 
 FLOOR = "floor_mode:source=modal"
@@ -47,9 +42,8 @@ def one(task) -> dict:
     kind, size, generator, index, person, sim_seed, effects = task
     row = {"kind": kind, "size": size, "generator": generator, "index": index}
     try:
-        sim = simulate_bouncing(noise=person_effects.NOISE, effects=effects, mass=person["mass"], f_b=person["f_b"],
-                                f_h=person["f_h"], xi_h=person["xi_h"], duration=person_effects.DURATION,
-                                fs=person_effects.FS, blf=person["blf"], seed=sim_seed, variation=generator)
+        sim = simulate_bouncing(noise=person_effects.NOISE, effects=effects,
+                                **person_effects.simulation_settings(person, sim_seed, generator))
         base = identify_person(dataclasses.replace(sim.record, floor_acc=None), measured_floor=False)
     except Exception as exc:  # a record refused (contact lost) is reported, not fatal
         return {**row, "error": " ".join(str(exc).split())[:120]}
@@ -82,36 +76,20 @@ def one(task) -> dict:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--records", type=int, default=8, help="records per row (clean: twice as many)")
-    parser.add_argument("--seed", type=int, default=92, help="seed of the people (person_effects.tasks)")
-    parser.add_argument("--jobs", type=int, default=2, help="processes")
-    parser.add_argument("--out", type=Path, help="markdown file to write (default: print only)")
-    args = parser.parse_args(argv)
-    if args.records < 1 or args.jobs < 1:
-        parser.error("--records and --jobs must be at least 1")
-    tasks = person_effects.tasks(args.records, args.seed, generators=("jumps", "smooth"),
-                                 kinds=("clean", "floor_unmeasured"))
-    started = time.perf_counter()
-    with ProcessPoolExecutor(args.jobs) as pool:
-        rows = pd.DataFrame(list(pool.map(one, tasks)))
+    args, rows, started = person_effects.study_of_tasks(__doc__.split("\n\n")[0], ("clean", "floor_unmeasured"),
+                                                        one, argv)
     done = rows[rows["trials"].notna()] if "trials" in rows else rows.iloc[:0]
     summary = (done.groupby(["generator", "kind", "size"])
                .agg(records=("same", "size"), same=("same", "sum"), computed=("computed", "mean"),
                     trials=("trials", "mean"), worst_loss=("loss", "max"), whole_s=("whole_s", "median"),
                     coarse_to_fine_s=("coarse_to_fine_s", "median")))
-    lines = [f"# The floor mode's trial grid, coarse to fine (seed {args.seed}, {args.records} records a row)", "",
-             f"`{' '.join(['python', 'benchmarks/floor_grid.py'] + (argv if argv is not None else sys.argv[1:]))}`"
-             f" ({(time.perf_counter() - started) / 60:.1f} min)", "",
-             f"The whole grid's choice on {int(done['same'].sum())} of {len(done)} records, with "
-             f"{done['computed'].mean():.0f} likelihoods instead of {done['trials'].mean():.0f} "
-             f"({done['coarse_to_fine_s'].sum():.1f} s against {done['whole_s'].sum():.1f} s, one thread a record); "
-             f"{len(rows) - len(done)} records refused.", "",
-             markdown_table(summary.reset_index().round(3)), "", markdown_table(rows.round(4))]
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if args.out:
-        args.out.write_text(text, encoding="utf-8")
+    markdown_report(f"The floor mode's trial grid, coarse to fine (seed {args.seed}, {args.records} records a row)",
+                    "floor_grid.py", argv, started,
+                    [f"The whole grid's choice on {int(done['same'].sum())} of {len(done)} records, with "
+                     f"{done['computed'].mean():.0f} likelihoods instead of {done['trials'].mean():.0f} "
+                     f"({done['coarse_to_fine_s'].sum():.1f} s against {done['whole_s'].sum():.1f} s, one thread a "
+                     f"record); {len(rows) - len(done)} records refused.", "",
+                     markdown_table(summary.reset_index().round(3)), "", markdown_table(rows.round(4))], args.out)
 
 
 if __name__ == "__main__":

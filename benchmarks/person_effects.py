@@ -221,15 +221,40 @@ def _finite(value):
     return float(value) if np.isfinite(value) else None
 
 
+def simulation_settings(person: dict, sim_seed: int, generator: str) -> dict:
+    """``simulate_bouncing``'s arguments for a task's person on one of the generators that are not lab exports (all
+    but ``noise`` and ``effects``)."""
+    return dict(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], duration=DURATION,
+                fs=FS, blf=person["blf"], seed=sim_seed, variation="jumps" if generator in JUMPS_SETTINGS
+                else generator, **JUMPS_SETTINGS.get(generator, {}))
+
+
+def study_of_tasks(description: str, kinds, function, argv=None, generators=("jumps", "smooth")) -> tuple:
+    """A small study over :func:`tasks` (its people, on ``generators``, of ``kinds``): the command line (``--records``,
+    ``--seed``, ``--jobs``, ``--out``; one line and exit 2 when misused), then ``function`` of every task in
+    ``--jobs`` processes. Returns ``(args, rows as a DataFrame, started)`` (``time.perf_counter()`` at the start)."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--records", type=int, default=8, help="records per kind, size and generator (clean: twice)")
+    parser.add_argument("--seed", type=int, default=92, help="seed of the people (person_effects.tasks)")
+    parser.add_argument("--jobs", type=int, default=2, help="processes")
+    parser.add_argument("--out", type=Path, help="markdown file to write (default: print only)")
+    args = parser.parse_args(argv)
+    if args.records < 1 or args.jobs < 1:
+        parser.error("--records and --jobs must be at least 1")
+    started = time.perf_counter()
+    with ProcessPoolExecutor(args.jobs) as pool:
+        rows = pd.DataFrame(list(pool.map(function, tasks(args.records, args.seed, generators=generators,
+                                                          kinds=kinds))))
+    return args, rows, started
+
+
 def one(task) -> dict:
     """Simulate, identify, diagnose and identify with the true effect one record; never raises."""
     _load_user_effect()
     kind, size, generator, index, person, sim_seed, effects = task
     row = {"kind": kind, "size": size, "generator": generator, "index": index,
            **{k: v for k, v in person.items() if k != "blf"}}
-    common = dict(mass=person["mass"], f_b=person["f_b"], f_h=person["f_h"], xi_h=person["xi_h"], duration=DURATION,
-                  fs=FS, blf=person["blf"], seed=sim_seed, variation="jumps" if generator in JUMPS_SETTINGS
-                  else generator, **JUMPS_SETTINGS.get(generator, {}))
+    common = simulation_settings(person, sim_seed, generator)
     started = time.perf_counter()
     try:
         if generator.startswith("lab"):

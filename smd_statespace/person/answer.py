@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .calibration import CALIBRATION, model_error_floor, wald_interval
+from .calibration import CALIBRATION, EFFECT_CALIBRATION, model_error_floor, wald_interval
 from .fade import NOTE_TAIL, fade_note
 from .results import PRIOR_SD, VARIATION_DISAGREEMENT, PersonResult
 from .profile import profile_interval
@@ -25,7 +25,7 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
 
     The covariance of the estimates (:func:`information`), the intervals of
     ``f_h`` and ``xi_h`` (calibrated Wald, Wald or profile, see
-    :func:`identify_person`) and Wald intervals of the effects' parameters.
+    :func:`identify_person`) and Wald intervals of the effects' parameters (widened by :data:`~smd_statespace.person.calibration.EFFECT_CALIBRATION` where calibrated).
     ``extra`` goes to the result (``before``, ``effects``, ``linearisations``, ``settled``).
     """
     params = fitted["params"]
@@ -47,12 +47,14 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
             # the floor widens the interval, not the sd: the sd says what the record determines
             floor = 0.0 if intervals == "wald" else model_error_floor(name, named["f_h"], model.variation)
             interval[name] = wald_interval(named[name], float(np.hypot(se[name], floor)), level, bounds[name])
+    widen = EFFECT_CALIBRATION if intervals == "calibrated" else 1.0  # the interval, not the sd (calibration.py)
     for name in model.effect_parameters:  # the effects' parameters: Wald intervals from the information
-        interval[name] = (wald_interval(named[name], se[name], level, bounds[name])
+        interval[name] = (wald_interval(named[name], widen * se[name], level, bounds[name])
                           if np.isfinite(se[name]) else tuple(bounds[name]))
     method = {"profile": "profile", "wald": f"wald ({cov_type})"}.get(
         intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, {factors['xi_h']:g}, "
-                   "with a model-error floor; undetermined: the yardstick's width)")
+                   "with a model-error floor; undetermined: the yardstick's width"
+                   + (f"; effects' parameters: intervals x {EFFECT_CALIBRATION:g})" if model.effect_parameters else ")"))
     result = PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
                           intervals=interval, interval_method=method, level=level, comparison=list(comparison),
                           n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),

@@ -398,8 +398,9 @@ class PersonResult(RecordChecks):
 
     def determined_apart_from_change(self, name) -> bool:
         """:meth:`determined` but for the person changing during the record: where this is True and the person
-        changes, the record determines the parameter in each of its parts, and its interval spans the parts'
-        (:func:`~smd_statespace.person.answer.honest_intervals`) rather than what was known before the record."""
+        changes, the whole record's fit pins the parameter down but no one value describes it, and its interval
+        spans the whole record's and the halves' (:func:`~smd_statespace.person.answer.honest_intervals`) rather than
+        what was known before the record."""
         if name == "f_h" and self.at_bouncing_frequency:
             return False
         if self.misfit:
