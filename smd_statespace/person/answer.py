@@ -25,7 +25,8 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
 
     The covariance of the estimates (:func:`information`), the intervals of
     ``f_h`` and ``xi_h`` (calibrated Wald, Wald or profile, see
-    :func:`identify_person`) and Wald intervals of the effects' parameters (widened by :data:`~smd_statespace.person.calibration.EFFECT_CALIBRATION` where calibrated).
+    :func:`identify_person`) and Wald intervals of the effects' parameters (widened by
+    :data:`~smd_statespace.person.calibration.EFFECT_CALIBRATION` where calibrated).
     ``extra`` goes to the result (``before``, ``effects``, ``linearisations``, ``settled``).
     """
     params = fitted["params"]
@@ -51,10 +52,10 @@ def person_result(record, model, fitted, *, intervals="calibrated", level=0.9, c
     for name in model.effect_parameters:  # the effects' parameters: Wald intervals from the information
         interval[name] = (wald_interval(named[name], widen * se[name], level, bounds[name])
                           if np.isfinite(se[name]) else tuple(bounds[name]))
+    effects = f"; effects' parameters: intervals x {EFFECT_CALIBRATION:g}" if model.effect_parameters else ""
     method = {"profile": "profile", "wald": f"wald ({cov_type})"}.get(
         intervals, f"calibrated wald ({cov_type}, sds x {factors['f_h']:g}, {factors['xi_h']:g}, "
-                   "with a model-error floor; undetermined: the yardstick's width"
-                   + (f"; effects' parameters: intervals x {EFFECT_CALIBRATION:g})" if model.effect_parameters else ")"))
+                   f"with a model-error floor; undetermined: the yardstick's width{effects})")
     result = PersonResult(record=record, model=model, params=params, cov=cov, free=free, loglike=fitted["loglike"],
                           intervals=interval, interval_method=method, level=level, comparison=list(comparison),
                           n_evaluations=fitted["n_evaluations"], record_warnings=list(record_warnings),
