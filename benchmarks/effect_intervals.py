@@ -83,17 +83,17 @@ def one(task) -> dict:
     name, key = person_effects.TRUE_PARAMETER[kind]
     truth = float(sim.truth["effects"][next(iter(effects))][key])
     estimate = fitted.effect_estimates().loc[name]
-    low, high = fitted.model.bound(name)
-    span = fitted.model.time[-1] - fitted.model.time[0]
+    whole_record, truth_in_range = person_effects.fair_comparison(fitted, name, truth)
     return {**row, "parameter": name, "truth": truth, "estimate": float(estimate["value"]),
             "sd": float(estimate["sd"]), "low": float(estimate["low"]), "high": float(estimate["high"]),
             "sd_sandwich": _sandwich_sd(fitted, fitted.model.position(name)),
-            "whole_record": bool(span > 0.9 * person_effects.DURATION), "truth_in_range": bool(low <= truth <= high),
+            "whole_record": whole_record, "truth_in_range": truth_in_range,
             "f_h_true": person["f_h"], "f_h": fitted.f_h, "f_h_sd": float(fitted.sd("f_h"))}
 
 
-def summary(rows: pd.DataFrame) -> pd.DataFrame:
-    """Coverage and z per kind and size, on the records the comparison is fair on (fitted whole, truth in range)."""
+def fair_rows(rows: pd.DataFrame) -> pd.DataFrame:
+    """The records the comparison is fair on (fitted whole, truth in range), with each one's z and whether the
+    reported interval, the information's and the wider of it and the sandwich's hold the truth."""
     z90 = stats.norm.ppf(0.95)
     fair = rows[rows["whole_record"].astype(bool) & rows["truth_in_range"].astype(bool)].copy()
     fair["z"] = (fair["estimate"] - fair["truth"]) / fair["sd"]
@@ -102,6 +102,11 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
     fair["covered_wider"] = ((fair["estimate"] - fair["truth"]).abs()
                              <= z90 * np.maximum(fair["sd"], fair["sd_sandwich"].fillna(0.0)))
     fair["sandwich_ratio"] = fair["sd_sandwich"] / fair["sd"]
+    return fair
+
+
+def summary(fair: pd.DataFrame) -> pd.DataFrame:
+    """Coverage and z per kind and size of :func:`fair_rows`."""
     return fair.groupby(["kind", "size"]).agg(records=("z", "size"), covered=("covered", "mean"),
                                               covered_information=("covered_information", "mean"),
                                               covered_wider=("covered_wider", "mean"), z_mean=("z", "mean"),
@@ -111,16 +116,16 @@ def summary(rows: pd.DataFrame) -> pd.DataFrame:
 def main(argv=None) -> None:
     args, rows, started = person_effects.study_of_tasks(__doc__.split("\n\n")[0], KINDS, one, argv)
     done = rows[rows["estimate"].notna()] if "estimate" in rows else rows.iloc[:0]
-    table = summary(done)
-    fair = done["whole_record"].astype(bool) & done["truth_in_range"].astype(bool)
-    covered = ((done["low"] <= done["truth"]) & (done["truth"] <= done["high"]))[fair]
+    fair = fair_rows(done)
     markdown_report(f"Effects' parameter intervals against the truth (seed {args.seed}, {args.records} records a row)",
                     "effect_intervals.py", argv, started,
-                    [f"90 % intervals hold the truth on {int(covered.sum())} of {int(fair.sum())} records fitted whole "
-                     f"with the truth in the search range; left out: {int((~done['whole_record'].astype(bool)).sum())} "
-                     f"fitted in part, {int((~done['truth_in_range'].astype(bool)).sum())} with the truth outside the "
-                     f"range; {len(rows) - len(done)} records refused.", "",
-                     markdown_table(table.reset_index().round(3)), "", markdown_table(rows.round(4))], args.out)
+                    [f"90 % intervals hold the truth on {int(fair['covered'].sum())} of {len(fair)} records fitted "
+                     f"whole with the truth in the search range; left out: "
+                     f"{int((~done['whole_record'].astype(bool)).sum())} fitted in part, "
+                     f"{int((~done['truth_in_range'].astype(bool)).sum())} with the truth outside the range; "
+                     f"{len(rows) - len(done)} records refused.", "",
+                     markdown_table(summary(fair).reset_index().round(3)), "", markdown_table(rows.round(4))],
+                    args.out)
 
 
 if __name__ == "__main__":

@@ -229,6 +229,15 @@ def simulation_settings(person: dict, sim_seed: int, generator: str) -> dict:
                 else generator, **JUMPS_SETTINGS.get(generator, {}))
 
 
+def fair_comparison(fitted, name: str, truth: float) -> tuple:
+    """``(whole_record, truth_in_range)`` of an effect parameter's estimate against its truth: the record was fitted
+    whole (not one of two bouts the front end split it into, where a step's truth is elsewhere) and the truth lies in
+    the parameter's search range. Where either is False the comparison is not the estimator's to answer."""
+    low, high = fitted.model.bound(name)
+    span = fitted.model.time[-1] - fitted.model.time[0]
+    return bool(span > 0.9 * DURATION), bool(low <= truth <= high)
+
+
 def study_of_tasks(description: str, kinds, function, argv=None, generators=("jumps", "smooth")) -> tuple:
     """A small study over :func:`tasks` (its people, on ``generators``, of ``kinds``): the command line (``--records``,
     ``--seed``, ``--jobs``, ``--out``; one line and exit 2 when misused), then ``function`` of every task in
@@ -313,13 +322,9 @@ def one(task) -> dict:
                 name, key = TRUE_PARAMETER[kind]
                 truth = sim.truth["effects"][next(iter(effects))][key]
                 estimate = fitted.effect_estimates().loc[name]
-                low, high = fitted.model.bound(name)
-                span = fitted.model.time[-1] - fitted.model.time[0]
-                # fair: the record fitted whole (not one of two bouts the front end split it into, where a step's
-                # truth is elsewhere) and the truth inside the search range (benchmarks/effect_intervals.py)
                 row.update(parameter=name, parameter_truth=truth, parameter_estimate=estimate["value"],
                            parameter_covered=bool(estimate["low"] <= truth <= estimate["high"]),
-                           parameter_fair=bool(span > 0.9 * DURATION and low <= truth <= high))
+                           parameter_fair=all(fair_comparison(fitted, name, truth)))
     except Exception as exc:  # noqa: BLE001 - one record must never kill the study
         row.update(error=f"{type(exc).__name__}: {str(exc).splitlines()[0][:160]}",
                    seconds=time.perf_counter() - started)
