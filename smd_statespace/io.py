@@ -211,6 +211,9 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
             hint = "it looks like kN; multiply by 1000 to get N"
         elif 0.7 <= -mean / weight <= 1.3:  # a plate whose vertical axis points down (Fz negative under a load)
             hint = "it looks like the plate's vertical axis points down; multiply by -1 to get the upward force"
+        elif abs(mean) < 0.1 * weight and np.std(force) > 0.05 * weight:  # a plate zeroed with the person on it
+            hint = (f"it looks like the body weight was subtracted (the plate zeroed with the person on it); add "
+                    f"mass*g = {weight:.1f} N to get the force")
         else:
             hint = "check the units (N) and the --mass value"
         raise RecordError(

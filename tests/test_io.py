@@ -154,6 +154,10 @@ def test_a_record_with_the_empty_plate_before_and_after_is_read():
     on = (t > 2.0) & (t < 7.0)  # a plate whose z axis points down: the force is negative under a load
     with pytest.raises(RecordError, match="vertical axis points down; multiply by -1"):
         make_record(t[on], -force[on], 70.0)
+    with pytest.raises(RecordError, match=r"body weight was subtracted .* add mass\*g = 686.5 N"):
+        make_record(t[on], force[on] - 70 * G, 70.0)  # a plate zeroed with the person standing on it
+    with pytest.raises(RecordError, match="check the units"):
+        make_record(t[on], np.full(on.sum(), 1e-3), 70.0)  # about 0 and flat: no body weight to have been taken off
 
 
 def test_a_time_column_in_milliseconds_is_refused_in_one_line_that_says_so(tmp_path, capsys):
