@@ -93,6 +93,15 @@ BOUNCING_RANGE = (1.0, 4.5)
 ACTIVE_FRACTION = 0.8
 """Below this fraction of the record bouncing, a warning says where the person bounced."""
 
+ACTIVE_SPREAD = 0.03
+"""Standard deviation of the force over one period, as a fraction of body weight, above which the person moves.
+
+The front end's measure of movement is the same size (:data:`~smd_statespace.signals.frontend.ACTIVE_LEVEL`: the
+RMS of the 0.7-10 Hz force over 1 s; for a force swinging by ``A`` both are about ``A / sqrt(2)``), so a bout it
+keeps is not then counted as no cycles here. At 5 % (until 2026-11-30) a gentle bouncer, 110 kg swinging by about
+70 N (a lab export of ``benchmarks/lab_records.py``'s held-out row, seed 4360, record 18), was refused as "0.0 force
+cycles of 0.58 s in 30.3 s" after the front end had found 36 cycles of bouncing in it."""
+
 MASS_TOLERANCE = 0.05
 """Relative difference between the mean force and ``M g`` that is reported."""
 
@@ -277,7 +286,7 @@ def repeating_period(weight_fraction, dt):
 
 
 def _active(time, weight_fraction, period):
-    """Mask of samples inside windows (one period long) whose force varies by more than 5 % of body weight.
+    """Mask of samples inside windows (one period long) whose force's sd is over :data:`ACTIVE_SPREAD` of body weight.
 
     A window at either end of the record holds only the record's own samples (the moving sums divided by how many
     samples they add): padded with zeros, a person standing at the start or the end looked as if bouncing there, and
@@ -288,7 +297,7 @@ def _active(time, weight_fraction, period):
     count = np.convolve(np.ones_like(weight_fraction), window, mode="same")
     mean = np.convolve(weight_fraction, window, mode="same") / count
     spread = np.sqrt(np.maximum(np.convolve(weight_fraction**2, window, mode="same") / count - mean**2, 0.0))
-    return spread > 0.05
+    return spread > ACTIVE_SPREAD
 
 
 def _mean_cycle(weight_fraction, dt, period, count):
