@@ -81,6 +81,14 @@ their neighbourhood). On two quiet lab records (noise 0.7 N) a bump 4-6 % off ``
 neighbourhood, regrouped the cycles in pairs and the person came out on the search bound (f_b read as 1.34 Hz,
 truth 2.67 Hz; f_h +79 %)."""
 
+SUBHARMONIC_STRONG = (300.0, 0.05)
+"""A line this many times above its neighbourhood (ten times :data:`SUBHARMONIC_RATIO`) may lie up to this fraction
+off ``f_b / 2`` (``f_b / 3``): where the GRF's humps are not locked to the force cycle (a person whose ``f_h``
+drifts towards ``2 f_b`` shows humps at 4.37 Hz over a fundamental at 2.25 Hz, 2958 times its neighbourhood:
+``benchmarks/lab_records.py --people lab``, seed 4361, change row, record 12), the peaks' rate is not twice the
+fundamental's, and that record was refused as "median bouncing frequency 4.39 Hz is outside the supported range".
+The spurious bumps above were 31-33 times their neighbourhood."""
+
 
 @dataclass(frozen=True)
 class CycleTiming:
@@ -307,7 +315,8 @@ def _cycles_per_peak(time, force, peaks, fb_range):
         near = (freq > f_sub * 0.6) & (freq < f_sub * 1.4) & ~((freq > f_sub * 0.85) & (freq < f_sub * 1.15))
         ratio = power[line].max() / max(float(np.median(power[near])), 1e-300)
         at = freq[line][np.argmax(power[line])]
-        if ratio > best_ratio and abs(at / f_sub - 1.0) <= SUBHARMONIC_OFFSET:
+        offset = SUBHARMONIC_STRONG[1] if ratio >= SUBHARMONIC_STRONG[0] else SUBHARMONIC_OFFSET
+        if ratio > best_ratio and abs(at / f_sub - 1.0) <= offset:
             best, best_ratio = group, ratio
     return best
 
