@@ -368,3 +368,19 @@ def test_diagnoses_floor_candidate_is_the_measured_floor_or_else_the_estimated_m
     with_accelerometer, without = fitted(np.zeros(10)), fitted(None)
     assert FloorMode.propose(with_accelerometer).source == "measured"
     assert FloorMode.propose(without).spec == "floor_mode:source=modal"  # as the verdict prints it
+
+
+def test_a_floor_parameter_held_at_its_search_bound_is_said_so_not_given_an_sd_of_nan():
+    """``diagnose``'s row of an estimated floor whose mass ratio ended on its search bound read "mass_ratio 0.001 ±
+    nan -" (a lab export whose f_h drifts): a parameter held at a bound has no sd, and the words say where it is."""
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from smd_statespace.person.diagnose import _parameters_text
+
+    same = SimpleNamespace(model=SimpleNamespace(n_harmonics=4))
+    estimates = pd.DataFrame([{"parameter": "f_f", "unit": "Hz", "value": 9.135, "sd": 0.067, "on_bound": False},
+                              {"parameter": "mass_ratio", "unit": "-", "value": 0.001, "sd": np.nan, "on_bound": True}]
+                             ).set_index("parameter")
+    assert _parameters_text(same, same, estimates) == "f_f 9.135 ± 0.067 Hz; mass_ratio 0.001 (on its search bound)"

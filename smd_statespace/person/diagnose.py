@@ -144,7 +144,12 @@ def indistinguishable_from_zero(base, fitted, estimates, z: float = ZERO_Z) -> b
 
 def _parameters_text(base, fitted, estimates) -> str:
     """The effect's estimates in words: its parameters, the load factors of added harmonics, or 'known input'."""
-    parts = [f"{name} {r['value']:.4g} ± {r['sd']:.2g} {r['unit']}".rstrip() for name, r in estimates.iterrows()]
+    def text(name, r):  # a parameter held at its search bound has no sd: said so, not "± nan"
+        if r["on_bound"] and not np.isfinite(r["sd"]):
+            return f"{name} {r['value']:.4g}{'' if r['unit'] in ('', '-') else ' ' + r['unit']} (on its search bound)"
+        return f"{name} {r['value']:.4g} ± {r['sd']:.2g} {r['unit']}".rstrip()
+
+    parts = [text(name, r) for name, r in estimates.iterrows()]
     parts += [f"BLF{i} {blf['blf']:.3g} ± {blf['sd']:.2g} g" for i, blf in _added_harmonics(base, fitted).iterrows()]
     return "; ".join(parts) or "none (a known input)"
 
