@@ -66,6 +66,7 @@ from ..effects.generic import SAME_AS, label
 from .detection import unseen_change
 from .extend import configured_for_record, fit_effects
 from .in_time import in_time_words
+from .report import unit_suffix
 from .robust import MIN_SCALE, added_unknowns, robust_scale
 from .screen import generic_library, screen
 from .supremum import log_p_value, scan_trim
@@ -146,7 +147,7 @@ def _parameters_text(base, fitted, estimates) -> str:
     """The effect's estimates in words: its parameters, the load factors of added harmonics, or 'known input'."""
     def text(name, r):  # a parameter held at its search bound has no sd: said so, not "± nan"
         if r["on_bound"] and not np.isfinite(r["sd"]):
-            return f"{name} {r['value']:.4g}{'' if r['unit'] in ('', '-') else ' ' + r['unit']} (on its search bound)"
+            return f"{name} {r['value']:.4g}{unit_suffix(r['unit'])} (on its search bound)"
         return f"{name} {r['value']:.4g} ± {r['sd']:.2g} {r['unit']}".rstrip()
 
     parts = [text(name, r) for name, r in estimates.iterrows()]

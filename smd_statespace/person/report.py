@@ -17,7 +17,7 @@ from .judgement import (DETERMINED_FRACTION, F_B_COINCIDENCE, MISFIT_SHARE, PRIO
 from .phone_report import phone_words
 
 __all__ = ["CONFOUNDED", "change_words", "one_person_line", "person_warnings", "ratio_words", "result_dict",
-           "summary_text", "table_row"]
+           "summary_text", "table_row", "unit_suffix"]
 
 
 CONFOUNDED = 0.9
@@ -87,7 +87,7 @@ def person_warnings(result) -> list:
     if disagreement:
         out.append(disagreement)
     for name, row in result.effect_estimates().iterrows():
-        unit = _unit(row["unit"])
+        unit = unit_suffix(row["unit"])
         if row["on_bound"]:
             out.append(f"{name} = {row['value']:.4g}{unit} sits on its search bound ({row['range_low']:g}-"
                        f"{row['range_high']:g}): not an estimate; the record does not show this effect as "
@@ -249,7 +249,7 @@ def summary_text(result, verbose=False) -> str:
     if result.effects:
         lines[0] = lines[0][:-1] + f" with {', '.join(e.spec for e in result.effects)}:"
         for name, row in result.effect_estimates().iterrows():
-            lines.append(f"  {name} = {row['value']:.4g}{_unit(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
+            lines.append(f"  {name} = {row['value']:.4g}{unit_suffix(row['unit'])}  (sd {row['sd']:.3g}; {pct} % "
                          f"interval {row['low']:.4g} to {row['high']:.4g})")
         lines += in_time_words(result)
         before = d["before"]
@@ -284,7 +284,7 @@ def ratio_words(result) -> str:
             "the one tested")
 
 
-def _unit(unit: str) -> str:
+def unit_suffix(unit: str) -> str:
     """A unit as printed after a value: `` Hz``, nothing for a dimensionless one (``"-"``)."""
     return "" if unit in ("-", "") else f" {unit}"
 
