@@ -434,7 +434,9 @@ def check_bouncing(record: Record) -> BouncingCheck:
         check.findings.append(Finding(
             "not_rhythmic", True,
             f"{cycles:.1f} force cycles of {period:.2f} s in {duration:.1f} s; bouncing needs at least "
-            f"{MIN_REGULAR_CYCLES} regular cycles"))
+            f"{MIN_REGULAR_CYCLES} regular cycles (the force's sd over a period is above {ACTIVE_SPREAD:.0%} of body "
+            f"weight for {check.active_seconds:.1f} s: a shorter bout, or bouncing gentler than that, which is not "
+            "told from standing)"))
         return check
     gait = _gait(fraction, dt, period)
     if gait is not None:

@@ -201,3 +201,24 @@ def test_compare_puts_the_person_identify_gives_beside_the_cycles_on_a_lab_expor
     # the record read back from the CSV is the person of the record in memory: the noise floor's draw is seeded by
     # the record's rounded summaries, not by the bytes the CSV's 6 decimals change (2.48 against 2.64 Hz before)
     assert person.f_h == pytest.approx(lab_person.f_h, rel=1e-6)
+
+
+def test_a_kept_bout_that_is_refused_says_what_the_front_end_kept():
+    """A gentle bouncer (a swing about 3 % of body weight in RMS; ``lab_records.py --people lab``, seed 4363, lab row
+    17) bounces for 30 s, but the front end found only two 3 s bouts in it, and the refusal of the one it kept
+    said "2.9 force cycles of 0.61 s in 3.1 s" of a 42 s record. It now says which part that was, what else was
+    found, why so few cycles count, and how to choose another part."""
+    from smd_statespace.applicability import NotBouncingError
+
+    lab = simulate_lab_record(
+        mass=78.48876345720909, f_b=1.6695184407411152, f_h=4.293133827093149, xi_h=0.4757751028286562,
+        blf=(0.13671693988438094, 0.053323365806852194, 0.008332296411811291, 0.011625112701943814),
+        variation="smooth", fb_variation=0.029838112846911426, coef_variation=0.14773738208823095, fs=1000.0,
+        stand_before=4.118543686289128, stand_after=5.249266605467169, bout=30.566486937133025,
+        ramp_up=1.1750437777600928, ramp_down=2.9236055467598563, sway=2.8755684951486895, hum_frequency=60,
+        hum=(3.587409732127018, 3.348180380992503, 4.051983377509776), hum_variation=0.16619466315022155,
+        drift=20.321794531822313, noise=3.976697014217965, tire=0.2359282283670165, slow=0.06615084425154862,
+        seed=np.random.SeedSequence(4363, spawn_key=(0, 17, 1)))
+    with pytest.raises(NotBouncingError, match=r"(?s)not_rhythmic.*gentler than that.*the front end kept.*bouncing "
+                                               r"8\.4-11\.4 s.*--span START:END"):
+        identify_person(lab.record)

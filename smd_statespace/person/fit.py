@@ -25,7 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..applicability import check_bouncing, check_clipping
+from ..applicability import NotBouncingError, check_bouncing, check_clipping
 from ..errors import CycleError, OptionError, RecordError, SMDInputError
 from ..io import G, Record
 from ..progress import tqdm
@@ -391,6 +391,12 @@ def _applicable(record, prepared, check) -> list:
     found = check_bouncing(prepared.record)
     if found.refusals and check:
         check_bouncing(record).raise_if_refused()
+        if prepared.trimmed:  # the part refused is the front end's choice: say which, and what else it found
+            try:
+                found.raise_if_refused()
+            except NotBouncingError as exc:
+                raise NotBouncingError(f"{exc}; that is the part of the record the front end kept "
+                                       f"({prepared.bouts.describe()}); --span START:END fits another") from None
     return prepared.warnings + found.raise_if_refused(override=not check)
 
 
