@@ -17,6 +17,8 @@ from smd_statespace.person import identify_person
 from smd_statespace.signals import decimate_record, prepare_record, safe_factor
 from smd_statespace.simulation import simulate_bouncing, simulate_lab_record
 
+from helpers import lab_export
+
 PERSON = dict(mass=70.0, f_b=2.0, f_h=2.6, xi_h=0.3)
 
 
@@ -210,15 +212,7 @@ def test_a_kept_bout_that_is_refused_says_what_the_front_end_kept():
     found, why so few cycles count, and how to choose another part."""
     from smd_statespace.applicability import NotBouncingError
 
-    lab = simulate_lab_record(
-        mass=78.48876345720909, f_b=1.6695184407411152, f_h=4.293133827093149, xi_h=0.4757751028286562,
-        blf=(0.13671693988438094, 0.053323365806852194, 0.008332296411811291, 0.011625112701943814),
-        variation="smooth", fb_variation=0.029838112846911426, coef_variation=0.14773738208823095, fs=1000.0,
-        stand_before=4.118543686289128, stand_after=5.249266605467169, bout=30.566486937133025,
-        ramp_up=1.1750437777600928, ramp_down=2.9236055467598563, sway=2.8755684951486895, hum_frequency=60,
-        hum=(3.587409732127018, 3.348180380992503, 4.051983377509776), hum_variation=0.16619466315022155,
-        drift=20.321794531822313, noise=3.976697014217965, tire=0.2359282283670165, slow=0.06615084425154862,
-        seed=np.random.SeedSequence(4363, spawn_key=(0, 17, 1)))
+    lab = lab_export("gentle_bouncer")
     with pytest.raises(NotBouncingError, match=r"(?s)not_rhythmic.*gentler than that.*the front end kept.*bouncing "
                                                r"8\.4-11\.4 s.*--span START:END"):
         identify_person(lab.record)

@@ -20,6 +20,8 @@ from smd_statespace.person.statespace import RecordStateSpace
 from smd_statespace.signals import find_cycles
 from smd_statespace.simulation import simulate_bouncing
 
+from helpers import lab_export
+
 
 def true_timing(sim):
     cycles = sim.cycles
@@ -761,18 +763,8 @@ def test_humps_not_locked_to_the_cycle_are_regrouped_by_a_strong_line_a_little_o
     the humps' rate. The record was refused as "median bouncing frequency 4.39 Hz is outside the supported range";
     the strong line now regroups the humps (:data:`~smd_statespace.person.timing.SUBHARMONIC_STRONG`)."""
     from smd_statespace.signals import prepare_record
-    from smd_statespace.simulation import simulate_lab_record
 
-    lab = simulate_lab_record(
-        mass=83.11282516814695, f_b=2.1458099121533216, f_h=3.3783194612561775, xi_h=0.2728713186874053,
-        blf=(0.15488857211577903, 0.13478628725722017, 0.007684951767771642, 0.034005139070594936),
-        variation="smooth", fb_variation=0.0423435262849742, coef_variation=0.12692029226663357, fs=500.0,
-        stand_before=5.918854882148533, stand_after=5.0343730049824655, bout=24.95696358927828,
-        ramp_up=2.068776429740881, ramp_down=1.8448330799459305, sway=2.157229715370599, hum_frequency=50,
-        hum=(2.0770144290689974, 0.04175122314885038, 8.380736415256374), hum_variation=0.23326840506136215,
-        drift=28.20665716961086, noise=0.8989308070494908, tire=0.27300832271212405, slow=0.03510747044926596,
-        change="drift", f_h_change=0.13324441297023684, xi_h_change=-0.3836438212001354,
-        seed=np.random.SeedSequence(4361, spawn_key=(1, 12, 1)))
+    lab = lab_export("humps_not_locked")
     record = prepare_record(lab.record).record
     timing = estimate_timing(record.time, record.force)
     assert abs(timing.n_cycles / (record.time[-1] - record.time[0]) - 2.25) < 0.1  # not the humps' 4.37 Hz
