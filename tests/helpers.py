@@ -159,6 +159,16 @@ LAB_EXPORTS = {
         hum=(3.587409732127018, 3.348180380992503, 4.051983377509776), hum_variation=0.16619466315022155,
         drift=20.321794531822313, noise=3.976697014217965, tire=0.2359282283670165, slow=0.06615084425154862,
         seed=(4363, (0, 17, 1))),
+    # lab_records.py (standard people), seed 4364, held-out row 8: BLF2 above BLF1, tempo slowing 6 %, humps missed
+    "humps_missed": dict(
+        mass=55.468775123379444, f_b=2.8415684794167464, f_h=1.9813995639753728, xi_h=0.7108872462535016,
+        blf=(0.11764352533689935, 0.27698905930705053, 0.08924569945525526, 0.019828218784575125),
+        variation="smooth", fb_variation=0.0486569260223239, coef_variation=0.14871946784450243, fs=500.0,
+        stand_before=0.07793676246466252, stand_after=0.11311162463021751, bout=31.96208290666488,
+        ramp_up=2.1174155162442085, ramp_down=1.5066363481352336, sway=7.107448509572789, hum_frequency=60,
+        hum=(18.890166562572443, 4.573783767364072, 8.983689638730514), hum_variation=0.23310702581593784,
+        drift=58.71078780723569, noise=1.974548085970325, tire=0.26105841731076507, slow=0.0625263942590421,
+        seed=(4364, (2, 8, 1))),
 }
 """Lab exports the benchmarks found the library wrong on, as ``simulate_lab_record``'s settings (every value as drawn;
 ``seed`` the ``SeedSequence``'s entropy and spawn key)."""

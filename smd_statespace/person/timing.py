@@ -305,7 +305,10 @@ def _cycles_per_peak(time, force, peaks, fb_range):
     n = 4 * x.size
     power = np.abs(np.fft.rfft(x * np.hanning(x.size), n)) ** 2
     freq = np.fft.rfftfreq(n, 1.0 / fs)
-    f_peak = (peaks.size - 1) / (time[peaks[-1]] - time[peaks[0]])
+    # the peaks' rate from their usual intervals: a hump too low to be found as a peak leaves a long interval, which
+    # a count over the record's length would spread over every cycle
+    interval = np.diff(time[peaks])
+    f_peak = 1.0 / float(np.mean(interval[np.abs(interval / np.median(interval) - 1.0) < PEAK_TOLERANCE]))
     best, best_ratio = 1, SUBHARMONIC_RATIO
     for group in (2, 3):
         f_sub = f_peak / group
