@@ -96,7 +96,7 @@ ACTIVE_FRACTION = 0.8
 ACTIVE_SPREAD = 0.03
 """Standard deviation of the force over one period, as a fraction of body weight, above which the person moves.
 
-The front end's measure of movement is the same size (:data:`~smd_statespace.signals.frontend.ACTIVE_LEVEL`: the
+The front end's measure of movement takes this value (:data:`~smd_statespace.signals.frontend.ACTIVE_LEVEL`: the
 RMS of the 0.7-10 Hz force over 1 s; for a force swinging by ``A`` both are about ``A / sqrt(2)``), so a bout it
 keeps is not then counted as no cycles here. At 5 % (until 2026-11-30) a gentle bouncer, 110 kg swinging by about
 70 N (a lab export of ``benchmarks/lab_records.py``'s held-out row, seed 4360, record 18), was refused as "0.0 force

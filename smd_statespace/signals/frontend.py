@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..applicability import CONTACT_FRACTION, RHYTHM_MIN, flights, repeating_period, runs
+from ..applicability import ACTIVE_SPREAD, CONTACT_FRACTION, RHYTHM_MIN, flights, repeating_period, runs
 from ..errors import OptionError, RecordError
 from ..io import G, Record
 from .decimation import RECORD_RATE, decimate_record
@@ -47,8 +47,10 @@ HUM_WINDOW = 4.0
 HUM_HIGHPASS = 35.0
 """Cut-off (Hz) of the zero-phase high-pass applied before the hum fit: the bouncing band stays out."""
 
-ACTIVE_LEVEL = 0.03
-"""RMS of the 0.7-10 Hz force over 1 s, as a fraction of body weight, above which the person moves."""
+ACTIVE_LEVEL = ACTIVE_SPREAD
+"""RMS of the 0.7-10 Hz force over 1 s, as a fraction of body weight, above which the person moves: the applicability
+check's :data:`~smd_statespace.applicability.ACTIVE_SPREAD` (0.03), so that a bout kept here is not counted as no
+cycles there."""
 
 STEADY_SWING = 0.9
 """An end cycle of a bout is steady when its swing reaches this fraction of its reference (:func:`find_bouts`)."""
