@@ -46,23 +46,15 @@ KINDS = ("term_abs_u", "term_v_abs_v", "term_f_drift", "term_f_step", "cubic_sti
 def _sandwich_sd(fitted, position: int) -> float:
     """The cycle-clustered sandwich sd of the parameter at ``position``, with ``f_h`` and ``xi_h`` beside it and the
     other parameters profiled out (``search.information``'s rule for the person, applied to one more parameter)."""
-    from smd_statespace.person.score import profile_out
-    from smd_statespace.person.search import _cluster_scores, _hessian
+    from smd_statespace.person.search import _differencing, _hessian, _robust_core
 
     model, params = fitted.model, fitted.params
-    bounds = np.asarray(model.bounds)
-    steps = np.where(np.arange(params.size) < 2, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3 * model.scales)
-    free = (params - steps > bounds[:, 0]) & (params + steps < bounds[:, 1])
-    free[:2] = True
+    steps, free = _differencing(model, params)
     index = np.flatnonzero(free)
     if position not in index:
         return float("nan")
-    targets = [int(np.flatnonzero(index == p)[0]) for p in (0, 1, position)]
-    nuisance = [i for i in range(index.size) if i not in targets]
-    info, scores = profile_out(-_hessian(model, params, index, steps[index]), _cluster_scores(model, params, index),
-                               targets, nuisance, 1e-8)
-    bread = np.linalg.inv(info)
-    return float(np.sqrt((bread @ (scores.T @ scores) @ bread)[2, 2]))
+    keep = [int(np.flatnonzero(index == p)[0]) for p in (0, 1, position)]
+    return float(np.sqrt(_robust_core(model, params, index, -_hessian(model, params, index, steps[index]), keep)[2, 2]))
 
 
 def one(task) -> dict:

@@ -346,11 +346,8 @@ def information(model: RecordModel, params, cov_type="robust", threads=1) -> tup
         Parameters not at a bound.
     """
     params = np.asarray(params, dtype=float)
-    bounds = np.asarray(model.bounds)
-    n_person = len(PERSON)  # f_h, xi_h lead the parameters: always free, differenced relative to their size
-    steps = np.where(np.arange(params.size) < n_person, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3 * model.scales)
-    free = (params - steps > bounds[:, 0]) & (params + steps < bounds[:, 1])
-    free[:n_person] = True
+    n_person = len(PERSON)
+    steps, free = _differencing(model, params)
     index = np.flatnonzero(free)
     hess = _hessian(model, params, index, steps[index], threads)
     cov = np.full((params.size, params.size), np.nan)
@@ -376,18 +373,24 @@ def information(model: RecordModel, params, cov_type="robust", threads=1) -> tup
     return cov, free
 
 
-def _robust_core(model, params, index, info):
-    """Cycle-clustered sandwich covariance of ``(f_h, xi_h)`` with the other parameters profiled out.
+def _differencing(model: RecordModel, params) -> tuple:
+    """``(steps, free)``: the Hessian's difference steps and the parameters off their bounds by more than a step."""
+    bounds, n_person = np.asarray(model.bounds), len(PERSON)  # f_h, xi_h lead: always free, steps relative to size
+    steps = np.where(np.arange(params.size) < n_person, 1e-4 * np.maximum(np.abs(params), 0.05), 1e-3 * model.scales)
+    free = (params - steps > bounds[:, 0]) & (params + steps < bounds[:, 1])
+    free[:n_person] = True
+    return steps, free
 
-    Effective information ``I* = I_ff - I_fn I_nn^-1 I_nf`` and effective
-    scores ``s* = s_f - I_fn I_nn^-1 s_n`` summed per force cycle;
-    ``cov = I*^-1 (sum_j s*_j s*_j') I*^-1``.
-    """
+
+def _robust_core(model, params, index, info, keep=range(len(PERSON))):
+    """Cycle-clustered sandwich covariance of the parameters ``keep`` (positions in ``index``; default ``(f_h,
+    xi_h)``) with the others profiled out: effective information ``I* = I_ff - I_fn I_nn^-1 I_nf`` and effective
+    scores ``s* = s_f - I_fn I_nn^-1 s_n`` summed per force cycle; ``cov = I*^-1 (sum_j s*_j s*_j') I*^-1``."""
     from .score import profile_out
 
     per_cycle = _cluster_scores(model, params, index)
-    n_person = len(PERSON)
-    effective_info, effective_scores = profile_out(info, per_cycle, range(n_person), range(n_person, index.size), 1e-8)
+    others = [i for i in range(index.size) if i not in keep]
+    effective_info, effective_scores = profile_out(info, per_cycle, keep, others, 1e-8)
     bread = np.linalg.inv(effective_info)
     return bread @ (effective_scores.T @ effective_scores) @ bread
 
