@@ -55,7 +55,8 @@ Two numerical facts worth knowing, both measured on synthetic records:
 """
 
 from .cycles import MIN_FORCE_RANGE, PEAK_PROMINENCE, PEAK_SPACING, PERIOD_RATIO_LIMITS, SUPPORTED_FB, Cycle, find_cycles
-from .decimation import GUARD_BAND, RECORD_RATE, check_rate, decimate_record, decimation_note
+from .decimation import (GUARD_BAND, RATE_SLACK, RECORD_RATE, check_rate, decimate_record, decimation_factor,
+                         decimation_note)
 from .frontend import (ACTIVE_LEVEL, HUM_HIGHPASS, HUM_WINDOW, LINE_RATIO, MAINS, MAX_RAMP_CYCLES,
                        MIN_BOUT_CYCLES, STEADY_SWING, Bout, Bouts, FrontEnd, Hum, Span, find_bouts, front_end,
                        mains_hum, remove_hum, trim_record)
@@ -68,7 +69,9 @@ __all__ = [
     "RECORD_RATE",
     "check_rate",
     "decimate_record",
+    "decimation_factor",
     "decimation_note",
+    "RATE_SLACK",
     "GUARD_BAND",
     "MAX_RAMP_CYCLES",
     "Hum",

@@ -25,13 +25,13 @@ plate's zero``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import OptionError, RecordError
 from ..io import G, Record
-from .decimation import RECORD_RATE, check_rate, decimate_record, decimation_note
+from .decimation import RECORD_RATE, check_rate, decimate_record, decimation_factor, decimation_note
 from .frontend import Bouts, Hum, find_bouts, mains_hum, remove_hum, trim_record
 
 __all__ = ["ACROSS_LIMIT", "HUM_MARGIN", "MASS_TOLERANCE", "OFF_PLATE", "TURN_LIMIT", "WEIGHT_RATIO", "PreparedRecord",
@@ -105,7 +105,8 @@ class PreparedRecord:
 
 
 def safe_factor(fs: float, rate, hum: Hum | None) -> int:
-    """The decimation factor for a record at ``fs`` Hz: ``floor(fs / rate)``, raised while the new Nyquist is on the hum.
+    """The decimation factor for a record at ``fs`` Hz: ``floor(fs / rate)`` (:func:`decimation_factor`), raised while
+    the new Nyquist is on the hum.
 
     With hum at ``f`` Hz, the fitting rate's Nyquist frequency ``fs / (2 q)`` must lie at least
     :data:`HUM_MARGIN` away from every multiple of ``f``: at ``fs / q = 2 f`` (1000 Hz to 100 Hz with 50 Hz
@@ -119,9 +120,7 @@ def safe_factor(fs: float, rate, hum: Hum | None) -> int:
     >>> safe_factor(1000.0, 100.0, None), safe_factor(1000.0, 100.0, hum), safe_factor(1000.0, 200.0, hum)
     (10, 11, 6)
     """
-    if check_rate(rate) is None:
-        return 1
-    factor = int(math.floor(fs / rate + 1e-9))
+    factor = decimation_factor(fs, rate)
     if factor < 2 or hum is None or not hum.found:
         return max(factor, 1)
 
