@@ -18,7 +18,9 @@ function that can be inspected on its own:
    without gravity (phyphox's "Linear Acceleration" experiment).
 2. :func:`resample_uniform` puts the phone's irregular time stamps (jitter, dropped
    samples, duplicates, samples out of order) onto a uniform grid by linear
-   interpolation, and refuses a gap longer than :data:`MAX_GAP`.
+   interpolation, at their stamps or, when the record shows the samples were taken
+   on the phone's clock and stamped late or early, on that clock; it refuses a gap
+   longer than :data:`MAX_GAP`.
 3. :func:`vertical_acceleration` estimates the direction of gravity from the record
    itself (a zero-phase low-pass at :data:`GRAVITY_CUTOFF`), projects the three axes
    onto it and removes the sensor's own reading of gravity in that direction

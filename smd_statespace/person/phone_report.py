@@ -2,8 +2,8 @@
 
 A force plate samples on a clock that does not drift or stall, along an axis that does not turn.
 A phone does neither: it drops samples and bursts of them (the samples in a gap are left out of the
-likelihood, :data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`), stamps its samples late or early
-(the stamps are taken as the truth), and turns with the body (the vertical is a low-pass of the gravity it sees). When a phone
+likelihood, :data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`), samples at scattered instants or stamps
+its samples late or early (the reading tells which: ``clock["samples_at"]``), and turns with the body (the vertical is a low-pass of the gravity it sees). When a phone
 record leaves ``f_h`` or ``xi_h`` undetermined, or its innovations are heavy-tailed,
 :func:`phone_words` says which of these the record shows and how strongly, from what the reading
 measured (``record.extra["clock"]``, ``["geometry"]``), so that a user knows whether to record
@@ -40,9 +40,11 @@ def _clock_words(clock: dict) -> list:
                      "out of the likelihood, and the person is read across them)")
     jitter = float(clock.get("jitter_sd", 0.0) or 0.0)
     if fs > 0 and jitter * fs > JITTER_FRACTION:
+        how = ("read as samples taken on the clock and stamped late or early" if clock.get("samples_at") ==
+               "regular clock" else "read as samples taken at their stamps: if they were taken on time and stamped "
+               "late, every value is read at the wrong instant")
         words.append(f"time stamps scattered by {1e3 * jitter:.2g} ms about the phone's clock "
-                     f"({100 * jitter * fs:.0f} % of a sample: if the samples were taken on time and stamped late, "
-                     "every value is read at the wrong instant)")
+                     f"({100 * jitter * fs:.0f} % of a sample, {how})")
     return words
 
 

@@ -38,8 +38,8 @@ RATE_SLACK = 1e-3
 
 A phone's clock is measured, not nominal: set to 200 Hz, simulated phones measured 199.9996-200.0003 Hz (quartz
 clocks are good to about 1e-4). ``floor(199.9996 / 100)`` is 1, and such a phone record, about every other one,
-was fitted at 200 Hz with every sample (twice the samples and the noise of another rate; one simulated record's
-innovations had a kurtosis of 13.5 there against 4.2 at 100 Hz)."""
+was fitted at 200 Hz with every sample (twice the samples and the noise of another rate; on one simulated record,
+read alike, the innovations had a kurtosis of 13.5 there against 3.4 at 100 Hz)."""
 
 
 def decimation_factor(fs: float, rate) -> int:
