@@ -147,7 +147,7 @@ def reading_error(phone, record, anti_alias: bool) -> dict:
     fine_time, sensed = states["time"].to_numpy(), states["u_ddot"].to_numpy()
     if anti_alias:
         sensed = sensor_filter(sensed, phone.truth["phone"]["fs"], float(phone.person.truth["fs"]))
-    start = float(np.min(phone.time))  # the grid's first time (the record's time starts at 0 there)
+    start = record.extra["clock"]["start"]  # the grid's first time (the record's time starts at 0 there)
     error = record.force / record.mass - G - np.interp(record.time + start, fine_time, sensed)
     error = error[(record.time > 1.0) & (record.time < record.time[-1] - 1.0)]
     centred = error - error.mean()

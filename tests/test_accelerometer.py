@@ -261,7 +261,7 @@ def test_resample_repairs_an_irregular_clock():
     assert info["jitter_sd"] == pytest.approx(0.4e-3, rel=0.1)
     assert info["largest_gap"] < MAX_GAP
     np.testing.assert_allclose(np.diff(grid), 1 / info["fs"], rtol=1e-9)
-    assert grid[0] == np.min(time) and grid[-1] <= np.max(time)
+    assert grid[0] == info["start"] == np.min(time) and grid[-1] <= np.max(time)
     np.testing.assert_allclose(values[:, 3], 3.0 * grid - 1.0, atol=1e-9)
 
 
@@ -274,6 +274,7 @@ def test_samples_taken_on_time_but_stamped_late_or_early_are_read_on_the_regular
     stamps = rec.time + np.random.default_rng(6).normal(0.0, 1e-3, rec.time.size)  # in the file's order
     grid, values, info = resample_uniform(stamps, rec.acc)
     assert info["samples_at"] == "regular clock"
+    assert grid[0] == info["start"] == pytest.approx(rec.time[0], abs=1e-4)  # the first stamp is 1 ms off at random
     assert info["fs_nominal"] == pytest.approx(200.0, rel=1e-5)
     assert info["n_dropped"] == rec.n_dropped
     exact = np.column_stack([np.interp(grid, rec.time, rec.acc[:, k]) for k in range(3)])

@@ -397,7 +397,8 @@ def resample_uniform(time, acc, fs=None, *, max_gap: float = MAX_GAP, source: st
         stamps about the fitted uniform clock), ``samples_at`` (``"stamps"``: each
         sample read at its stamp; ``"regular clock"``: the samples, in the file's
         order, taken on the phone's regular clock and the stamps' scatter left out;
-        the module's "When were the samples taken?").
+        the module's "When were the samples taken?"), ``start`` (s, the grid's first
+        time on the stamps' scale: the first stamp, or the regular clock's first instant).
 
     Raises
     ------
@@ -440,5 +441,6 @@ def resample_uniform(time, acc, fs=None, *, max_gap: float = MAX_GAP, source: st
         "largest_gap_at": float(stamps[k]),
         "jitter_sd": jitter,
         "samples_at": samples_at,
+        "start": float(grid[0]),
     }
     return grid, (values[:, 0] if squeeze else values), info
