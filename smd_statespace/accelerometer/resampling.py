@@ -48,10 +48,12 @@ half the sensor's noise). The record says which: each sample is predicted by
 the straight line between its two neighbours, once at the stamps and once on a
 regular clock (the samples in the file's order, numbered with the ones dropped,
 :func:`_regular_clock`), and the clock with the smaller mean square error is
-taken when it is clearly smaller (:data:`CLOCK_MARGIN`). On simulated phones
-the regular clock was chosen on every record whose stamps scattered by 0.3-2 ms
-about regular samples and on none whose samples were taken at the scattered
-stamps (``info["samples_at"]``: ``"stamps"`` or ``"regular clock"``).
+taken when it is clearly smaller (:data:`CLOCK_MARGIN`), and tried only when
+the stamps scatter by less than a quarter interval (:data:`REGULAR_SCATTER`). On
+130 simulated phones (``benchmarks/phone_clock.py``) the regular clock was chosen
+on every record whose stamps scattered by 0.3-2 ms about regular samples and on
+none whose samples were taken at the scattered stamps (``info["samples_at"]``:
+``"stamps"`` or ``"regular clock"``).
 
 Why linear interpolation
 ------------------------
