@@ -77,13 +77,16 @@ def run_record(row: str, seed: np.random.SeedSequence) -> dict:
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
     """One line per row: the choices right, the largest rate error, the reading's errors (median, worst)."""
+    def spread(values) -> str:
+        return f"{values.median():.4f} / {values.max():.4f}"
+
     lines = []
     for row, group in frame.groupby("row", sort=False):
         lines.append({"row": row, "read at (expected)": group.right.iloc[0],
                       "chosen right": f"{int((group.chosen == group.right).sum())}/{len(group)}",
                       "largest \\|rate error\\|": float(group.rate_error.abs().max()),
-                      "reading error m/s^2, median / worst": f"{group.error.median():.4f} / {group.error.max():.4f}",
-                      "read at the stamps": f"{group.error_at_stamps.median():.4f} / {group.error_at_stamps.max():.4f}"})
+                      "reading error m/s^2, median / worst": spread(group.error),
+                      "read at the stamps": spread(group.error_at_stamps)})
     return pd.DataFrame(lines)
 
 
