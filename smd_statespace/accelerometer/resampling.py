@@ -261,6 +261,23 @@ def _regular_clock(time: np.ndarray, dt: float) -> tuple:
     return time.mean() + dt * centred, number, dt
 
 
+def _local_scatter(stamps: np.ndarray, number: np.ndarray, dt: float) -> float:
+    """The stamps' scatter (s, an sd) about the phone's clock where they are, not about one line through the record.
+
+    The stamps' residuals about the line (``stamps - dt number``) are differenced twice along the samples: a
+    white scatter of sd ``s`` gives second differences of sd ``sqrt(6) s``, taken robustly (1.4826 times their
+    median absolute deviation, so that a sample numbered wrong does not count). A clock whose rate drifts slowly
+    bends the residuals without scattering them: a real phyphox record of 300 s at 99.5 Hz, its intervals
+    10.046 ms in the first quarter and 10.045 in the last, lay up to 5 ms about one line (sd 2.1 ms, which was
+    reported as its scatter) and 0.0006 ms about its own clock.
+    """
+    residual = stamps - dt * number
+    if residual.size < 3:
+        return 0.0
+    second = np.diff(residual, 2)
+    return float(1.4826 * np.median(np.abs(second - np.median(second))) / np.sqrt(6.0))
+
+
 def _neighbour_error(instants: np.ndarray, values: np.ndarray) -> float:
     """Mean square error of each sample but the ends predicted by the straight line between its two neighbours,
     the samples taken at ``instants`` (s, increasing)."""
@@ -396,7 +413,7 @@ def resample_uniform(time, acc, fs=None, *, max_gap: float = MAX_GAP, source: st
         at the nominal rate: the span of the sample numbers minus the samples),
         ``largest_gap`` (s, the longest interval) and ``largest_gap_at`` (s, the
         time stamp it starts at), ``jitter_sd`` (s, standard deviation of the time
-        stamps about the fitted uniform clock), ``samples_at`` (``"stamps"``: each
+        stamps about the phone's clock where they are: :func:`_local_scatter`), ``samples_at`` (``"stamps"``: each
         sample read at its stamp; ``"regular clock"``: the samples, in the file's
         order, taken on the phone's regular clock and the stamps' scatter left out;
         the module's "When were the samples taken?"), ``start`` (s, the grid's first
@@ -423,7 +440,8 @@ def resample_uniform(time, acc, fs=None, *, max_gap: float = MAX_GAP, source: st
     stamps, merged = _merge_duplicates(time, acc2)
     steps, dt = _median_interval(stamps, source)
     k = _largest_gap(stamps, steps, max_gap, source)
-    dt, jitter, number = _fit_clock(stamps, _coherent_interval(stamps, dt))
+    dt, _, number = _fit_clock(stamps, _coherent_interval(stamps, dt))
+    jitter = _local_scatter(stamps, number, dt)
     instants, values, samples_at = stamps, merged, "stamps"
     regular = _regular_clock(time, dt) if jitter < REGULAR_SCATTER * dt else None
     if regular is not None and _neighbour_error(regular[0], acc2) < CLOCK_MARGIN * _neighbour_error(stamps, merged):
