@@ -410,6 +410,39 @@ def test_reads_a_single_vertical_channel(tmp_path, header, sign):
     assert relative_rms(a_v - truth, truth) < 0.03
 
 
+@pytest.mark.parametrize("names,scale,extra", [
+    (['"Time (s)"', '"X (m/s^2)"', '"Y (m/s^2)"', '"Z (m/s^2)"'], 1.0, ()),  # phyphox's export of a sensor
+    (["epoc (ms)", "timestamp (-0500)", "elapsed (s)", "x-axis (g)", "y-axis (g)", "z-axis (g)"], G, (
+        lambda t: f"{1573761902571 + 1000 * t:.0f}", lambda t: "2019-11-14T15:05:02.571")),  # MetaWear's
+    (["Time (ms)", "Accel_X (m/s^2)", "Accel_Y (m/s^2)", "Accel_Z (m/s^2)"], 1.0, ()),
+], ids=["phyphox-sensor", "metawear", "milliseconds"])
+def test_reads_headers_that_name_the_axes_and_their_units(tmp_path, names, scale, extra):
+    # real exports seen in public repositories: the time and three axes named with their units, other columns
+    # (an epoch, a date) not read; the units are the header's (g here read as g although --units says auto)
+    rec = synthetic(duration=4.0)
+    time = rec.time * (1000.0 if "ms" in names[0] and "epoc" not in names[0] else 1.0)
+    lines = [",".join(names)] + [",".join([*(f(t) for f in extra), f"{tt:.9g}", *(f"{v:.9g}" for v in a / scale)])
+                                 for t, tt, a in zip(rec.time, time, rec.acc)]
+    path = tmp_path / "export.csv"
+    path.write_text("\n".join(lines) + "\n")
+    record = read_accelerometer(path)
+    assert (record.format, record.units_read) == ("labelled", "g" if scale == G else "m/s^2")
+    np.testing.assert_allclose(record.time, rec.time, rtol=1e-8, atol=1e-9)
+    np.testing.assert_allclose(record.acc, rec.acc, rtol=1e-7)
+
+
+@pytest.mark.parametrize("header", ["Time (s),X (rad/s),Y (rad/s),Z (rad/s)", "Time (s),X (m/s^2),Y (m/s^2)",
+                                    "Time (s),X (m/s^2),Y (g),Z (m/s^2)"],
+                         ids=["gyroscope", "two-axes", "mixed-units"])
+def test_headers_that_name_no_acceleration_of_three_axes_are_refused(tmp_path, header):
+    rec = synthetic(duration=2.0)
+    width = header.count(",")
+    path = write_plain(tmp_path / "other.csv", header, rec.time, rec.acc[:, :width])
+    with pytest.raises(RecordError) as excinfo:
+        read_accelerometer(path)
+    assert_one_line(excinfo, str(path), "is not an accelerometer record", "accepted headers")
+
+
 # ---------------------------------------------------------------------------
 # Bad input: one line naming the file, column or option
 # ---------------------------------------------------------------------------
@@ -498,7 +531,7 @@ def test_units(tmp_path):
     assert_one_line(excinfo, "units=\"G's\"", "auto, m/s^2, g")
     with pytest.raises(OptionError) as excinfo:
         read_accelerometer(write_phyphox(tmp_path / "p.csv", rec.time, rec.acc), units="g")
-    assert_one_line(excinfo, "p.csv", "phyphox's header says m/s^2")
+    assert_one_line(excinfo, "p.csv", "units='g', but the header says m/s^2")
 
 
 def test_missing_and_empty_files(tmp_path):

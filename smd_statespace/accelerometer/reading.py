@@ -9,6 +9,7 @@ numbers (decimal commas too, with a semicolon or tab delimiter), decides the uni
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,7 +31,7 @@ __all__ = [
 UNITS = ("auto", "m/s^2", "g")
 """Values of ``units`` accepted by :func:`read_accelerometer`: ``"auto"`` decides from the data."""
 
-FORMATS = ("phyphox", "plain", "vertical")
+FORMATS = ("phyphox", "plain", "vertical", "labelled")
 """The file formats :func:`read_accelerometer` recognises from the header (see there)."""
 
 GRAVITY_TOLERANCE = 0.3
@@ -57,11 +58,18 @@ _PHYPHOX_LINEAR_AXES = tuple(f"Linear {name}" for name in _PHYPHOX_AXES)
 _PHYPHOX_ABSOLUTE = "Absolute acceleration (m/s^2)"
 _TIME_NAMES = ("time", "t")
 _DELIMITERS = (("tab", "\t"), ("semicolon", ";"), ("comma", ","))
+_LABELLED_TIME = {"time": None, "t": None, "elapsed": None}
+_TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+_ACCELERATION_UNITS = {"m/s^2": "m/s^2", "m/s²": "m/s^2", "m/s2": "m/s^2", "g": "g"}
+_LABELLED_AXIS = re.compile(r"^(?:acc(?:el(?:eration)?)?[\s_-]*)?([xyz])(?:[\s_-]*axis)?$")
+_NAME_AND_UNIT = re.compile(r"^(.*?)\s*\((.*)\)$")
 
 ACCEPTED_HEADERS = (
     '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)"'
     '[,"Absolute acceleration (m/s^2)"] (phyphox), time,ax,ay,az, time,acc or time,az '
-    "(any case; t for time; separated by commas, semicolons or tabs)"
+    "(any case; t for time; separated by commas, semicolons or tabs), or a time in s or ms and x, y, z axes "
+    'named with their unit, other columns left alone ("Time (s)","X (m/s^2)",... as phyphox exports a sensor; '
+    "elapsed (s),x-axis (g),... as MetaWear does; Accel_X (m/s^2))"
 )
 """The headers :func:`read_accelerometer` accepts, as its error messages list them."""
 
@@ -83,8 +91,9 @@ class AccelerometerRecord:
     units_read : str
         The units of the file: ``"m/s^2"`` or ``"g"`` (``acc`` is in m/s^2 either way).
     format : str
-        One of :data:`FORMATS`: ``"phyphox"``, ``"plain"`` (``time,ax,ay,az``) or
-        ``"vertical"`` (``time,acc`` or ``time,az``).
+        One of :data:`FORMATS`: ``"phyphox"``, ``"plain"`` (``time,ax,ay,az``),
+        ``"vertical"`` (``time,acc`` or ``time,az``) or ``"labelled"`` (the time and
+        the axes named with their units: :func:`read_accelerometer`).
     """
 
     time: np.ndarray
@@ -118,8 +127,37 @@ def _delimiter(path, first_line: str) -> str:
     raise RecordError(f"{path}: header {line!r} has a single column; accepted headers: {ACCEPTED_HEADERS}")
 
 
+def _name_and_unit(name: str) -> tuple:
+    """``(name, unit)`` of a header cell like ``"X (m/s^2)"``, both lower case (unit ``""`` when none)."""
+    match = _NAME_AND_UNIT.match(name.strip())
+    if match is None:
+        return name.strip().lower(), ""
+    return match.group(1).strip().lower(), match.group(2).strip().lower()
+
+
+def _labelled(names: list):
+    """``([time, x, y, z columns], units, seconds per time unit)`` of a header that names one time column in s or
+    ms (``time``, ``t``, ``elapsed``) and one x, y and z acceleration column each with one acceleration unit
+    (``X (m/s^2)``, ``Accel_X (m/s^2)``, ``x-axis (g)``), other columns left alone; None otherwise. An axis without
+    its unit is not taken for an acceleration (a gyroscope's or a position's would read as well)."""
+    times, axes, units = [], {}, set()
+    for name in names:
+        base, unit = _name_and_unit(name)
+        if base in _LABELLED_TIME and unit in _TIME_UNITS:
+            times.append((name, _TIME_UNITS[unit]))
+        axis = _LABELLED_AXIS.match(base)
+        if axis is not None and unit in _ACCELERATION_UNITS:
+            axes.setdefault(axis.group(1), []).append(name)
+            units.add(_ACCELERATION_UNITS[unit])
+    if len(times) != 1 or sorted(axes) != ["x", "y", "z"] or any(len(v) != 1 for v in axes.values()) \
+            or len(units) != 1:
+        return None
+    return [times[0][0], *(axes[axis][0] for axis in "xyz")], units.pop(), times[0][1]
+
+
 def _layout(path, header: list) -> tuple:
-    """``(format, [time column, acceleration columns...])`` from the header's names (exact spelling)."""
+    """``(format, [time column, acceleration columns...], units the header names or None, seconds per time
+    unit)`` from the header's names."""
     names = [name.strip() for name in header]
     lower = [name.lower() for name in names]
     if len(set(lower)) != len(lower):
@@ -134,14 +172,17 @@ def _layout(path, header: list) -> tuple:
         )
     if found == phyphox:
         columns = [_PHYPHOX_TIME, *_PHYPHOX_AXES]
-        return "phyphox", [names[position[name.lower()]] for name in columns]
+        return "phyphox", [names[position[name.lower()]] for name in columns], "m/s^2", 1.0
     time = [name for name in _TIME_NAMES if name in position]
     rest = set(lower) - set(time)
     if len(time) == 1:
         if rest == {"ax", "ay", "az"}:
-            return "plain", [names[position[name]] for name in (time[0], "ax", "ay", "az")]
+            return "plain", [names[position[name]] for name in (time[0], "ax", "ay", "az")], None, 1.0
         if rest in ({"acc"}, {"az"}):
-            return "vertical", [names[position[name]] for name in (time[0], *rest)]
+            return "vertical", [names[position[name]] for name in (time[0], *rest)], None, 1.0
+    labelled = _labelled(names)
+    if labelled is not None:
+        return ("labelled", *labelled)
     raise RecordError(f"{path}: header {','.join(names)!r} is not an accelerometer record; accepted headers: "
                       f"{ACCEPTED_HEADERS}")
 
@@ -158,12 +199,13 @@ def _gravity_level(acc: np.ndarray) -> float:
     return float(np.linalg.norm(acc.mean(axis=0)))
 
 
-def _units(path, units: str, level: float, fmt: str, acc: np.ndarray) -> str:
-    """The units of the file, from the option and the data's gravity level (in the file's units)."""
-    if fmt == "phyphox":
-        if units == "g":
-            raise OptionError(f"{path}: units='g', but phyphox's header says m/s^2; use units='auto' or 'm/s^2'")
-        return "m/s^2"
+def _units(path, units: str, level: float, named, acc: np.ndarray) -> str:
+    """The units of the file: those its header ``named``, else from the option and the data's gravity level (in
+    the file's units)."""
+    if named is not None:
+        if units not in ("auto", named):
+            raise OptionError(f"{path}: units={units!r}, but the header says {named}; use units='auto' or {named!r}")
+        return named
     if units != "auto":
         return units
     if abs(level - 1.0) <= GRAVITY_TOLERANCE:
@@ -235,7 +277,7 @@ def _check_gravity(path, acc: np.ndarray, units_read: str, fmt: str) -> None:
     whose orientation was not fixed."""
     _refuse_turning(path, acc, _gravity_level(acc), G)
     level = _gravity_level(acc) / G
-    if fmt != "phyphox" and units_read == "m/s^2" and abs(level * G - 1.0) <= GRAVITY_TOLERANCE:
+    if fmt not in ("phyphox", "labelled") and units_read == "m/s^2" and abs(level * G - 1.0) <= GRAVITY_TOLERANCE:
         raise RecordError(
             f"{path}: the mean acceleration has magnitude {level:.3g} g with units='m/s^2'; it looks like g: "
             "give units='g' or 'auto'"
@@ -269,6 +311,12 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
     ``time,acc`` or ``time,az``
         **vertical**: one channel along a vertical axis (up or down), with gravity,
         in m/s^2 or g.
+    ``"Time (s)","X (m/s^2)","Y (m/s^2)","Z (m/s^2)"``, ``elapsed (s),x-axis (g),y-axis (g),z-axis (g)``, ...
+        **labelled**: one time column in s or ms (``time``, ``t`` or ``elapsed``)
+        and one x, y and z acceleration column each, named with their unit
+        (``m/s^2`` or ``g``; ``X``, ``Accel_X``, ``Acceleration x``, ``x-axis``),
+        as phyphox exports a sensor's data and MetaWear sensors export theirs;
+        other columns (an epoch, a date) are not read. The units are the header's.
 
     Columns may be separated by commas, semicolons or tabs (the delimiter is
     taken from the header). With semicolons or tabs a decimal comma
@@ -280,8 +328,8 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
     path : str or path-like
         The CSV file.
     units : {"auto", "m/s^2", "g"}, default "auto"
-        Units of the acceleration columns. ``"auto"`` reads phyphox files as m/s^2
-        (their header says so) and decides for the others from the record's
+        Units of the acceleration columns. ``"auto"`` reads phyphox and labelled files
+        in the units their header names and decides for the others from the record's
         gravity level ``|mean(a)|``: within 1 +- :data:`GRAVITY_TOLERANCE` it is g,
         within 9.81 m/s^2 +- 30 % it is m/s^2, anything else is an error.
 
@@ -300,7 +348,7 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
         gravity level is below :data:`LINEAR_ACCELERATION_LIMIT` g: phyphox's
         "Linear Acceleration" experiment, or any gravity-removed export).
     OptionError
-        ``units`` is not one of :data:`UNITS`, or is ``"g"`` for a phyphox file.
+        ``units`` is not one of :data:`UNITS`, or differs from the units a header names.
 
     Notes
     -----
@@ -314,10 +362,11 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
     path = Path(path)
     source = os.fspath(path)
     header, body, delimiter = _read_rows(path)
-    fmt, columns = _layout(path, header)
+    fmt, columns, named, seconds = _layout(path, header)
     _check_rows(path, header, body, delimiter)
     time, acc = _read_columns(source, header, body, delimiter, columns)
-    units_read = _units(path, units, _gravity_level(acc), fmt, acc)
+    time = time * seconds
+    units_read = _units(path, units, _gravity_level(acc), named, acc)
     if units_read == "g":
         acc = acc * G
     _check_gravity(path, acc, units_read, fmt)
