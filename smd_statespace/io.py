@@ -10,6 +10,12 @@ force      N       vertical ground reaction force (GRF) of one person
 floor_acc  m/s^2   optional: vertical floor acceleration under the person
 ========== ======= ==================================================
 
+An OpenSim ground-reaction file is read too: a header block ending in a line
+``endheader``, then ``time`` and each plate's ``ground_force1_vx``,
+``ground_force1_vy``, ... (OpenSim's frame, y up; ``1_ground_force_vy`` as newer
+versions name them); ``force`` is then the sum of the plates' vertical columns
+(:data:`OPENSIM_VERTICAL`), the other columns are not read.
+
 The body mass is not in the file; it is given separately (``--mass KG`` on
 the command line). :func:`read_record` and :func:`make_record` check
 everything a later stage relies on and raise a :class:`~smd_statespace.errors.RecordError`
@@ -20,6 +26,7 @@ from __future__ import annotations
 
 import csv
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -50,6 +57,12 @@ four harmonics folded onto each other. A time column in milliseconds reads as a 
 
 REQUIRED_COLUMNS = ("time", "force")
 OPTIONAL_COLUMNS = ("floor_acc",)
+
+OPENSIM_VERTICAL = re.compile(r"^(?:\d+_)?ground_force\d*_vy$")
+"""An OpenSim ground-reaction file's vertical force columns (one per plate, N, y up), summed into ``force``."""
+
+HEADER_BLOCK_ROWS = 50
+"""Rows in which :func:`read_record` looks for OpenSim's ``endheader`` line (its header block has a handful)."""
 
 
 @dataclass(frozen=True)
@@ -266,7 +279,8 @@ def read_record(path, mass) -> Record:
     Parameters
     ----------
     path : str or path-like
-        CSV file with header ``time,force[,floor_acc]``.
+        CSV file with header ``time,force[,floor_acc]``, or an OpenSim ground-reaction
+        file (the module's description).
     mass : float
         Body mass (kg).
 
@@ -290,24 +304,36 @@ def read_record(path, mass) -> Record:
         return ","
 
     rows, _ = csv_rows(path, "a header time,force[,floor_acc]", comma)
-    header = [name.strip().lower() for name in rows[0]]
-    missing = [name for name in REQUIRED_COLUMNS if name not in header]
+    start = _header_row(rows)
+    header = [name.strip().lower() for name in rows[start]]
+    plates = [name for name in header if OPENSIM_VERTICAL.match(name)] if "force" not in header else ["force"]
+    missing = [name for name in REQUIRED_COLUMNS if name not in header and not (name == "force" and plates)]
     if missing:
         raise RecordError(
-            f"{path}: missing column '{missing[0]}'; the header is {','.join(rows[0])!r}, "
-            "expected time,force[,floor_acc]"
+            f"{path}: missing column '{missing[0]}'; the header is {','.join(rows[start])!r}"
+            f"{f' (line {start + 1}, after endheader)' if start else ''}, expected time,force[,floor_acc]"
+            f"{' or an OpenSim ground-reaction file (ground_force1_vy, ...)' if start else ''}"
         )
-    body = [row for row in rows[1:] if any(cell.strip() for cell in row)]
+    body = [row for row in rows[start + 1:] if any(cell.strip() for cell in row)]
     if not body:
         raise RecordError(f"{path}: header only, no data rows")
     for number, row in enumerate(body, start=1):
         if len(row) != len(header):
             raise RecordError(f"{path}: data row {number} has {len(row)} fields, the header has {len(header)}")
     columns = {name: np.array([row[i].strip() for row in body], dtype=object) for i, name in enumerate(header)}
-    floor = columns.get("floor_acc")
-    return make_record(
-        columns["time"], columns["force"], mass, floor_acc=floor, source=os.fspath(path)
-    )
+    source = os.fspath(path)
+    force = columns["force"] if plates == ["force"] else sum(numeric_column(columns[name], name, source)
+                                                               for name in plates)
+    return make_record(columns["time"], force, mass, floor_acc=columns.get("floor_acc"), source=source)
+
+
+def _header_row(rows) -> int:
+    """The index of the header row: 0, or the row after an ``endheader`` line in the first
+    :data:`HEADER_BLOCK_ROWS` (OpenSim's header block)."""
+    for index, row in enumerate(rows[:HEADER_BLOCK_ROWS]):
+        if row and row[0].strip().lower() == "endheader" and index + 1 < len(rows):
+            return index + 1
+    return 0
 
 
 def write_record(path, record: Record) -> None:

@@ -182,3 +182,34 @@ def test_a_time_column_in_milliseconds_is_refused_in_one_line_that_says_so(tmp_p
     assert main(["identify", str(path), "--mass", "70", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "divide it by 1000" in err and "Traceback" not in err
+
+
+def test_an_opensim_ground_reaction_file_is_read_as_the_plates_vertical_force(tmp_path):
+    """OpenSim's ground-reaction files (a header block ending in endheader; each plate's ground_force1_vx, _vy,
+    _vz, ..., y up) were refused as 'missing column time; the header is Squat Jump,,,...' (a real squat-jump export
+    of two plates). The force is the sum of the plates' vertical columns; the other columns are not read."""
+    t, force = good_rows()
+    share = 0.4 + 0.1 * np.sin(2 * np.pi * 0.5 * t)  # the person's weight shifting between the two plates
+    names = ["time", "ground_force1_vx", "ground_force1_vy", "ground_force1_vz", "ground_force1_px",
+             "ground_force2_vx", "ground_force2_vy", "ground_force2_vz", "ground_force2_px"]
+    preamble = ["Squat Jump" + "," * 8, "version=1" + "," * 8, f"nRows={t.size}" + "," * 8, "nColumns=9" + "," * 8,
+                "inDegrees=yes" + "," * 8, "endheader" + "," * 8, ",".join(names)]
+    rows = [",".join(f"{v:.9g}" for v in (ti, 4.2, fi * s, 53.4, 0.24, -2.2, fi * (1 - s), -53.8, 0.28))
+            for ti, fi, s in zip(t, force, share)]
+    record = read_record(write_csv(tmp_path / "grf.csv", "\n".join(preamble + rows) + "\n"), MASS)
+    np.testing.assert_allclose(record.time, t, atol=1e-12)
+    np.testing.assert_allclose(record.force, force, rtol=1e-8)
+    plain = read_record(write_csv(tmp_path / "plain.csv", "time,force\n" + "\n".join(
+        f"{ti:.9g},{fi:.9g}" for ti, fi in zip(t, force)) + "\n"), MASS)  # the same record in our own format
+    np.testing.assert_allclose(record.force, plain.force, rtol=1e-8)
+
+
+def test_a_header_block_without_vertical_force_columns_names_the_header_after_it(tmp_path):
+    t, force = good_rows(n=10)
+    text = "Trial,,\nendheader,,\ntime,fx,fz\n" + "\n".join(f"{ti},1.0,{fi}" for ti, fi in zip(t, force)) + "\n"
+    path = write_csv(tmp_path / "block.csv", text)
+    with pytest.raises(RecordError) as excinfo:
+        read_record(path, MASS)
+    message = str(excinfo.value)
+    assert "\n" not in message and "missing column 'force'" in message and "'time,fx,fz' (line 3, after endheader)" \
+        in message and "OpenSim ground-reaction file (ground_force1_vy" in message, message
