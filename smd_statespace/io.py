@@ -305,6 +305,8 @@ def read_record(path, mass) -> Record:
 
     rows, _ = csv_rows(path, "a header time,force[,floor_acc]", comma)
     start = _header_row(rows)
+    if start:  # the first line, a title, said nothing of the delimiter (OpenSim's .mot files are tab-separated)
+        _sniff_delimiter(path, ",".join(rows[start]))
     header = [name.strip().lower() for name in rows[start]]
     plates = [name for name in header if OPENSIM_VERTICAL.match(name)] if "force" not in header else ["force"]
     missing = [name for name in REQUIRED_COLUMNS if name not in header and not (name == "force" and plates)]

@@ -213,3 +213,11 @@ def test_a_header_block_without_vertical_force_columns_names_the_header_after_it
     message = str(excinfo.value)
     assert "\n" not in message and "missing column 'force'" in message and "'time,fx,fz' (line 3, after endheader)" \
         in message and "OpenSim ground-reaction file (ground_force1_vy" in message, message
+
+
+def test_a_tab_separated_opensim_file_is_refused_naming_the_tabs(tmp_path):
+    t, force = good_rows(n=10)
+    text = "Trial\nendheader\ntime\tground_force1_vy\n" + "\n".join(f"{ti}\t{fi}" for ti, fi in zip(t, force))
+    with pytest.raises(RecordError, match=r"header 'time\\tground_force1_vy' is tab-separated; records must be "
+                                          r"comma-separated"):
+        read_record(write_csv(tmp_path / "grf.mot", text + "\n"), MASS)
