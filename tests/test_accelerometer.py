@@ -431,6 +431,27 @@ def test_reads_headers_that_name_the_axes_and_their_units(tmp_path, names, scale
     np.testing.assert_allclose(record.acc, rec.acc, rtol=1e-7)
 
 
+def test_reads_sensor_loggers_export_with_its_axes_in_reverse(tmp_path):
+    # the Sensor Logger app: an epoch in ns without a unit ("time"), seconds_elapsed, and the axes z, y, x named
+    # ACCELEROMETER Z (m/s²); its "Accelerometer" files seen in public repositories had no gravity and are refused
+    rec = synthetic(duration=4.0)
+    lines = ["time,seconds_elapsed,ACCELEROMETER Z (m/s²),ACCELEROMETER Y (m/s²),ACCELEROMETER X (m/s²)"] + [
+        f"{1700000000000000000 + int(t * 1e9)},{t:.9g},{a[2]:.9g},{a[1]:.9g},{a[0]:.9g}"
+        for t, a in zip(rec.time, rec.acc)]
+    path = tmp_path / "Accelerometer.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    record = read_accelerometer(path)
+    assert (record.format, record.units_read) == ("labelled", "m/s^2")
+    np.testing.assert_allclose(record.time, rec.time, rtol=1e-8, atol=1e-9)
+    np.testing.assert_allclose(record.acc, rec.acc, rtol=1e-7)
+    linear = tmp_path / "linear.csv"
+    bounce = 2.0 * np.sin(2 * np.pi * FB * rec.time)  # the body's acceleration alone, without gravity
+    rows = [f"{int(t * 1e9)},{t:.9g},{z:.9g},0.1,0.0" for t, z in zip(rec.time, bounce)]
+    linear.write_text("\n".join([lines[0]] + rows) + "\n", encoding="utf-8")
+    with pytest.raises(RecordError, match="never see gravity"):
+        read_accelerometer(linear)
+
+
 @pytest.mark.parametrize("header", ["Time (s),X (rad/s),Y (rad/s),Z (rad/s)", "Time (s),X (m/s^2),Y (m/s^2)",
                                     "Time (s),X (m/s^2),Y (g),Z (m/s^2)"],
                          ids=["gyroscope", "two-axes", "mixed-units"])

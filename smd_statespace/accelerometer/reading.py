@@ -60,8 +60,9 @@ _TIME_NAMES = ("time", "t")
 _DELIMITERS = (("tab", "\t"), ("semicolon", ";"), ("comma", ","))
 _LABELLED_TIME = ("time", "t", "elapsed")
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+_SECONDS_NAMES = ("seconds_elapsed",)  # Sensor Logger's (its "time" is an epoch in ns, without a unit)
 _ACCELERATION_UNITS = {"m/s^2": "m/s^2", "m/s²": "m/s^2", "m/s2": "m/s^2", "g": "g"}
-_LABELLED_AXIS = re.compile(r"^(?:acc(?:el(?:eration)?)?[\s_-]*)?([xyz])(?:[\s_-]*axis)?$")
+_LABELLED_AXIS = re.compile(r"^(?:acc(?:el(?:eration|erometer)?)?[\s_-]*)?([xyz])(?:[\s_-]*axis)?$")
 _NAME_AND_UNIT = re.compile(r"^(.*?)\s*\((.*)\)$")
 
 ACCEPTED_HEADERS = (
@@ -69,7 +70,8 @@ ACCEPTED_HEADERS = (
     '[,"Absolute acceleration (m/s^2)"] (phyphox), time,ax,ay,az, time,acc or time,az '
     "(any case; t for time; separated by commas, semicolons or tabs), or a time in s or ms and x, y, z axes "
     'named with their unit, other columns left alone ("Time (s)","X (m/s^2)",... as phyphox exports a sensor; '
-    "elapsed (s),x-axis (g),... as MetaWear does; Accel_X (m/s^2))"
+    "elapsed (s),x-axis (g),... as MetaWear does; seconds_elapsed,ACCELEROMETER X (m/s²),... as Sensor Logger "
+    "does; Accel_X (m/s^2))"
 )
 """The headers :func:`read_accelerometer` accepts, as its error messages list them."""
 
@@ -137,14 +139,17 @@ def _name_and_unit(name: str) -> tuple:
 
 def _labelled(names: list):
     """``([time, x, y, z columns], units, seconds per time unit)`` of a header that names one time column in s or
-    ms (``time``, ``t``, ``elapsed``) and one x, y and z acceleration column each with one acceleration unit
-    (``X (m/s^2)``, ``Accel_X (m/s^2)``, ``x-axis (g)``), other columns left alone; None otherwise. An axis without
-    its unit is not taken for an acceleration (a gyroscope's or a position's would read as well)."""
+    ms (``time``, ``t``, ``elapsed``; or ``seconds_elapsed``) and one x, y and z acceleration column each with one
+    acceleration unit (``X (m/s^2)``, ``Accel_X (m/s^2)``, ``x-axis (g)``, ``ACCELEROMETER X (m/s²)``), other
+    columns left alone; None otherwise. An axis without its unit is not taken for an acceleration (a gyroscope's or
+    a position's would read as well)."""
     times, axes, units = [], {}, set()
     for name in names:
         base, unit = _name_and_unit(name)
         if base in _LABELLED_TIME and unit in _TIME_UNITS:
             times.append((name, _TIME_UNITS[unit]))
+        elif base in _SECONDS_NAMES and not unit:
+            times.append((name, 1.0))
         axis = _LABELLED_AXIS.match(base)
         if axis is not None and unit in _ACCELERATION_UNITS:
             axes.setdefault(axis.group(1), []).append(name)
@@ -315,7 +320,8 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
         **labelled**: one time column in s or ms (``time``, ``t`` or ``elapsed``)
         and one x, y and z acceleration column each, named with their unit
         (``m/s^2`` or ``g``; ``X``, ``Accel_X``, ``Acceleration x``, ``x-axis``),
-        as phyphox exports a sensor's data and MetaWear sensors export theirs;
+        as phyphox exports a sensor's data, MetaWear sensors export theirs and the
+        Sensor Logger app does (``seconds_elapsed``, ``ACCELEROMETER X (m/s²)``);
         other columns (an epoch, a date) are not read. The units are the header's.
 
     Columns may be separated by commas, semicolons or tabs (the delimiter is
