@@ -51,11 +51,16 @@ ROWS = {
 (:data:`~smd_statespace.accelerometer.resampling.REGULAR_SCATTER`): they are read at the stamps."""
 
 
+def on_grid(grid, times, acc) -> np.ndarray:
+    """The axes ``acc`` (T, k), taken at ``times`` (s, in any order), linearly interpolated onto ``grid``."""
+    order = np.argsort(times, kind="stable")
+    return np.column_stack([np.interp(grid, times[order], acc[order, k]) for k in range(acc.shape[1])])
+
+
 def reading_error(grid, values, instants, acc) -> float:
     """RMS (m/s^2) of ``values`` on ``grid`` against the three axes ``acc`` interpolated at their true ``instants``,
     the first and last second left out."""
-    order = np.argsort(instants)
-    exact = np.column_stack([np.interp(grid, instants[order], acc[order, k]) for k in range(acc.shape[1])])
+    exact = on_grid(grid, instants, acc)
     inside = (grid > grid[0] + 1.0) & (grid < grid[-1] - 1.0)
     return float(np.sqrt(np.mean((values - exact)[inside] ** 2)))
 
@@ -67,8 +72,7 @@ def run_record(row: str, seed: np.random.SeedSequence) -> dict:
                            seed=int(seed.generate_state(1)[0]), **options)
     instants = phone.instants if phone.instants is not None else phone.time
     grid, values, info = resample_uniform(phone.time, phone.acc)
-    order = np.argsort(phone.time, kind="stable")  # read at the stamps, for comparison
-    at_stamps = np.column_stack([np.interp(grid, phone.time[order], phone.acc[order, k]) for k in range(3)])
+    at_stamps = on_grid(grid, phone.time, phone.acc)  # read at the stamps, for comparison
     return {"row": row, "right": right, "chosen": info["samples_at"],
             "rate_error": info["fs_nominal"] / phone.truth["phone"]["fs"] - 1.0,
             "error": reading_error(grid, values, instants, phone.acc),

@@ -183,13 +183,13 @@ def _check_arrays(time, acc, source: str) -> tuple:
 
 
 def _fit_clock(stamps: np.ndarray, dt: float) -> tuple:
-    """The phone's clock: ``(interval, jitter sd, sample numbers)`` from a line through the stamps.
+    """The phone's clock: ``(interval, sample numbers)`` from a line through the stamps.
 
     The stamps are numbered ``round((t - t0 - offset) / dt)``, dropped samples and
     all, and a least-squares line through stamps against numbers gives the
     interval. The numbering is right while the drift of the current ``dt`` over
     the stretch, plus the jitter, stays within half an interval; so it starts on
-    the first 64 intervals with the median ``dt`` and doubles the stretch with
+    the first 64 intervals with the given ``dt`` (:func:`_coherent_interval`'s) and doubles the stretch with
     each refined ``dt`` until it is the whole record (the slope of a line through
     ``M`` samples of jitter ``sd`` is good to ``sqrt(12) sd / M^1.5``, so the drift
     over the doubled stretch shrinks as ``1 / sqrt(M)``). The offset is the
@@ -213,8 +213,7 @@ def _fit_clock(stamps: np.ndarray, dt: float) -> tuple:
             number = np.rint(used / dt)
             centred = number - number.mean()
         if used.size == elapsed.size:
-            residual = used - used.mean() - dt * centred
-            return dt, float(np.std(residual)), number
+            return dt, number
         span *= 2.0
 
 
@@ -440,7 +439,7 @@ def resample_uniform(time, acc, fs=None, *, max_gap: float = MAX_GAP, source: st
     stamps, merged = _merge_duplicates(time, acc2)
     steps, dt = _median_interval(stamps, source)
     k = _largest_gap(stamps, steps, max_gap, source)
-    dt, _, number = _fit_clock(stamps, _coherent_interval(stamps, dt))
+    dt, number = _fit_clock(stamps, _coherent_interval(stamps, dt))
     jitter = _local_scatter(stamps, number, dt)
     instants, values, samples_at = stamps, merged, "stamps"
     regular = _regular_clock(time, dt) if jitter < REGULAR_SCATTER * dt else None
