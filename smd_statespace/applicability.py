@@ -224,10 +224,13 @@ def _contact(time, weight_fraction, dt, words=_PLATE_WORDS) -> Finding | None:
     if starts.size == 0:
         return None
     total = float(np.sum(stops - starts) * dt)
+    ends = starts[0] == 0 or stops[-1] == len(time)  # the plate empty at the record's start or end
+    how = ("stepping on or off, walking across, jumping, running" if ends and words is _PLATE_WORDS
+           else "jumping, running, hopping")
     return Finding("contact_lost", True,
                    f"{words['force']} falls below {CONTACT_FRACTION:.0%} of body weight {starts.size} times "
                    f"({total:.2f} s in all: {_times(time, starts, stops)}): {words['leaves']} "
-                   "(jumping, running, hopping); the SMD model assumes continuous contact")
+                   f"({how}); the SMD model assumes continuous contact")
 
 
 def _saturation(time, force, weight, words=_PLATE_WORDS) -> Finding | None:
@@ -420,12 +423,14 @@ def check_bouncing(record: Record) -> BouncingCheck:
     check.period, check.rhythm = period, rhythm
     duration = float(time[-1] - time[0] + dt)
     if not np.isfinite(period) or not rhythm >= RHYTHM_MIN:
+        spread = float(np.std(fraction[fraction > CONTACT_FRACTION])) if (fraction > CONTACT_FRACTION).any() else 0.0
+        what = (f"the sd of {words['force']} is {spread:.1%} of body weight: standing (or swaying) still, not bouncing"
+                if spread < ACTIVE_SPREAD else "a single event (a jump, a squat, stepping on or off) or noise")
         check.findings.append(Finding(
             "not_rhythmic", True,
             f"no repeating force pattern in {duration:.1f} s (autocorrelation at most "
             f"{0.0 if not np.isfinite(rhythm) else rhythm:.2f} at lags of {PERIOD_RANGE[0]:g}-{PERIOD_RANGE[1]:g} s, "
-            f"bouncing gives more than {RHYTHM_MIN:g}): a single event (a jump, a squat, stepping on or off) "
-            "or noise"))
+            f"bouncing gives more than {RHYTHM_MIN:g}): {what}"))
         return check
     active = _active(time, fraction, period)
     check.active_seconds = float(active.sum() * dt)

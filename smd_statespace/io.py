@@ -10,11 +10,13 @@ force      N       vertical ground reaction force (GRF) of one person
 floor_acc  m/s^2   optional: vertical floor acceleration under the person
 ========== ======= ==================================================
 
-An OpenSim ground-reaction file is read too: a header block ending in a line
-``endheader``, then ``time`` and each plate's ``ground_force1_vx``,
-``ground_force1_vy``, ... (OpenSim's frame, y up; ``1_ground_force_vy`` as newer
-versions name them); ``force`` is then the sum of the plates' vertical columns
-(:data:`OPENSIM_VERTICAL`), the other columns are not read.
+A force plate's export as lab software writes it is read too (:mod:`smd_statespace.plate_exports`):
+a block of settings above the header, a row of units under it, commas, semicolons or tabs, decimal
+commas, a time column in s or ms or the rows counted at the rate the block names (Vicon Nexus,
+Qualisys), each plate's vertical force (``Fz``, ``FZ1``, ``FORCE_Z``, OpenSim's
+``ground_force1_vy``, ...) summed into ``force``, turned to point up where it is negative under
+the load; and a C3D file's force platforms, with the ezc3d package. The reading is said in
+``record.extra["reading"]``.
 
 The body mass is not in the file; it is given separately (``--mass KG`` on
 the command line). :func:`read_record` and :func:`make_record` check
@@ -26,14 +28,14 @@ from __future__ import annotations
 
 import csv
 import os
-import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .errors import MassError, RecordError
+from .plate_exports import c3d_force, decode_rows, find_layout
 
 if TYPE_CHECKING:  # pandas is imported where it is used: `import smd_statespace` needs numpy only
     import pandas as pd
@@ -57,13 +59,6 @@ four harmonics folded onto each other. A time column in milliseconds reads as a 
 
 REQUIRED_COLUMNS = ("time", "force")
 OPTIONAL_COLUMNS = ("floor_acc",)
-
-OPENSIM_VERTICAL = re.compile(r"^(?:\d+_)?ground_force\d*_vy$")
-"""An OpenSim ground-reaction file's vertical force columns (one per plate, N, y up), summed into ``force``."""
-
-HEADER_BLOCK_ROWS = 50
-"""Rows in which :func:`read_record` looks for OpenSim's ``endheader`` line (its header block has a handful)."""
-
 
 @dataclass(frozen=True)
 class Record:
@@ -235,18 +230,6 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
     return Record(time=time, force=force, mass=mass, floor_acc=floor_acc, source=source)
 
 
-def _sniff_delimiter(path: Path, first_line: str) -> None:
-    """Reject files that are not comma-separated, naming the delimiter found."""
-    if "," in first_line:
-        return
-    for name, delimiter in (("semicolon", ";"), ("tab", "\t"), ("space", " "), ("'|'", "|")):
-        if delimiter in first_line.strip():
-            raise RecordError(
-                f"{path}: header {first_line.strip()!r} is {name}-separated; records must be comma-separated CSV "
-                "with columns time,force[,floor_acc]"
-            )
-
-
 def csv_rows(path: Path, expected: str, delimiter_of) -> tuple:
     """``(rows, delimiter)`` of a CSV file, or a one-line :class:`RecordError`.
 
@@ -273,69 +256,80 @@ def csv_rows(path: Path, expected: str, delimiter_of) -> tuple:
     return rows, delimiter
 
 
-def read_record(path, mass) -> Record:
+def read_record(path, mass, *, fs=None, force_columns=None) -> Record:
     """Read a CSV record and check it (see the module docstring for the format).
 
     Parameters
     ----------
     path : str or path-like
-        CSV file with header ``time,force[,floor_acc]``, or an OpenSim ground-reaction
-        file (the module's description).
+        CSV file with header ``time,force[,floor_acc]``, or a force plate's export
+        (:mod:`smd_statespace.plate_exports`: a block of settings above the header, a row
+        of units, each plate's vertical force, commas, semicolons or tabs, decimal commas,
+        OpenSim's ground-reaction files; a ``.c3d`` file with the ezc3d package).
     mass : float
         Body mass (kg).
+    fs : float, optional
+        An export's sampling rate (Hz), for one without a time column or a rate above its
+        header: the time is then its rows counted at ``fs``.
+    force_columns : sequence of str or int, optional
+        An export's vertical force columns, by name or number (1: the first), summed; for a
+        table without a header, or whose columns are named otherwise.
 
     Returns
     -------
     Record
+        An export's reading is said in words in ``record.extra["reading"]``.
 
     Raises
     ------
     RecordError
-        The file is missing, unreadable, empty, not comma-separated, lacks a
-        column or holds bad values.
+        The file is missing, unreadable, empty, lacks a column or holds bad values.
     MassError
         The mass is not plausible.
     """
-    path = Path(path)
+    path, source = Path(path), os.fspath(path)
     check_mass(mass)
+    if path.suffix.lower() == ".c3d":
+        time, force, notes = c3d_force(path)
+    else:
+        rows, delimiter = decode_rows(path)
+        header = [name.strip().lower() for name in rows[0]] if rows else []
+        if delimiter == "," and "time" in header and "force" in header and fs is None and force_columns is None:
+            return _read_plain(path, rows, header, mass)  # this library's own format, read strictly
+        time, force, notes = _read_export(rows, delimiter, source, fs, force_columns)
+    loaded = np.abs(force) > CONTACT_FRACTION * float(np.max(np.abs(force)))
+    if loaded.any() and float(np.mean(force[loaded])) < 0.0:
+        force = -force
+        notes.append("the vertical force is negative under the load (the force on the plate with z up, as Vicon "
+                     "Nexus gives it, or a plate whose z axis points down): read with its sign turned")
+    return replace(make_record(time, force, mass, source=source), extra={"reading": notes})
 
-    def comma(path, first_line):
-        _sniff_delimiter(path, first_line)
-        return ","
 
-    rows, _ = csv_rows(path, "a header time,force[,floor_acc]", comma)
-    start = _header_row(rows)
-    if start:  # the first line, a title, said nothing of the delimiter (OpenSim's .mot files are tab-separated)
-        _sniff_delimiter(path, ",".join(rows[start]))
-    header = [name.strip().lower() for name in rows[start]]
-    plates = [name for name in header if OPENSIM_VERTICAL.match(name)] if "force" not in header else ["force"]
-    missing = [name for name in REQUIRED_COLUMNS if name not in header and not (name == "force" and plates)]
-    if missing:
-        raise RecordError(
-            f"{path}: missing column '{missing[0]}'; the header is {','.join(rows[start])!r}"
-            f"{f' (line {start + 1}, after endheader)' if start else ''}, expected time,force[,floor_acc]"
-            f"{' or an OpenSim ground-reaction file (ground_force1_vy, ...)' if start else ''}"
-        )
-    body = [row for row in rows[start + 1:] if any(cell.strip() for cell in row)]
+def _read_export(rows: list, delimiter, source: str, fs, force_columns) -> tuple:
+    """``(time, force, notes)`` of a text export's ``rows`` (:func:`~smd_statespace.plate_exports.find_layout`)."""
+    layout = find_layout(rows, delimiter, source, fs=fs, force_columns=force_columns)
+
+    def column(index):
+        cells = np.array([row[index].strip() if index < len(row) else "" for row in layout.body], dtype=object)
+        return numeric_column(cells, layout.header[index], source)
+
+    force = layout.force_scale * sum(column(index) for index in layout.forces)
+    time = (layout.time_scale * column(layout.time) if layout.time is not None
+            else np.arange(len(layout.body)) / layout.rate)
+    return time, force, list(layout.notes)
+
+
+def _read_plain(path: Path, rows: list, header: list, mass) -> Record:
+    """A record in this library's own format (``time,force[,floor_acc]``, commas), every row checked."""
+    body = [row for row in rows[1:] if any(cell.strip() for cell in row)]
     if not body:
         raise RecordError(f"{path}: header only, no data rows")
     for number, row in enumerate(body, start=1):
         if len(row) != len(header):
             raise RecordError(f"{path}: data row {number} has {len(row)} fields, the header has {len(header)}")
     columns = {name: np.array([row[i].strip() for row in body], dtype=object) for i, name in enumerate(header)}
-    source = os.fspath(path)
-    force = columns["force"] if plates == ["force"] else sum(numeric_column(columns[name], name, source)
-                                                               for name in plates)
-    return make_record(columns["time"], force, mass, floor_acc=columns.get("floor_acc"), source=source)
-
-
-def _header_row(rows) -> int:
-    """The index of the header row: 0, or the row after an ``endheader`` line in the first
-    :data:`HEADER_BLOCK_ROWS` (OpenSim's header block)."""
-    for index, row in enumerate(rows[:HEADER_BLOCK_ROWS]):
-        if row and row[0].strip().lower() == "endheader" and index + 1 < len(rows):
-            return index + 1
-    return 0
+    return make_record(columns["time"], columns["force"], mass, floor_acc=columns.get("floor_acc"),
+                       source=os.fspath(path))
 
 
 def write_record(path, record: Record) -> None:

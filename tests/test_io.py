@@ -84,10 +84,8 @@ def test_structural_problems(tmp_path):
         read_record(write_csv(tmp_path / "empty.csv", ""), MASS)
     with pytest.raises(RecordError, match="header only"):
         read_record(write_csv(tmp_path / "header.csv", "time,force\n"), MASS)
-    with pytest.raises(RecordError, match="semicolon-separated"):
-        read_record(write_csv(tmp_path / "semi.csv", csv_text(t, force).replace(",", ";")), MASS)
     with pytest.raises(RecordError, match="missing column 'force'"):
-        read_record(write_csv(tmp_path / "cols.csv", csv_text(t, force).replace("force", "grf", 1)), MASS)
+        read_record(write_csv(tmp_path / "cols.csv", csv_text(t, force).replace("force", "load", 1)), MASS)
     with pytest.raises(RecordError, match="data row 3 has 3 fields"):
         lines = csv_text(t, force).splitlines()
         lines[3] += ",1"
@@ -202,22 +200,3 @@ def test_an_opensim_ground_reaction_file_is_read_as_the_plates_vertical_force(tm
     plain = read_record(write_csv(tmp_path / "plain.csv", "time,force\n" + "\n".join(
         f"{ti:.9g},{fi:.9g}" for ti, fi in zip(t, force)) + "\n"), MASS)  # the same record in our own format
     np.testing.assert_allclose(record.force, plain.force, rtol=1e-8)
-
-
-def test_a_header_block_without_vertical_force_columns_names_the_header_after_it(tmp_path):
-    t, force = good_rows(n=10)
-    text = "Trial,,\nendheader,,\ntime,fx,fz\n" + "\n".join(f"{ti},1.0,{fi}" for ti, fi in zip(t, force)) + "\n"
-    path = write_csv(tmp_path / "block.csv", text)
-    with pytest.raises(RecordError) as excinfo:
-        read_record(path, MASS)
-    message = str(excinfo.value)
-    assert "\n" not in message and "missing column 'force'" in message and "'time,fx,fz' (line 3, after endheader)" \
-        in message and "OpenSim ground-reaction file (ground_force1_vy" in message, message
-
-
-def test_a_tab_separated_opensim_file_is_refused_naming_the_tabs(tmp_path):
-    t, force = good_rows(n=10)
-    text = "Trial\nendheader\ntime\tground_force1_vy\n" + "\n".join(f"{ti}\t{fi}" for ti, fi in zip(t, force))
-    with pytest.raises(RecordError, match=r"header 'time\\tground_force1_vy' is tab-separated; records must be "
-                                          r"comma-separated"):
-        read_record(write_csv(tmp_path / "grf.mot", text + "\n"), MASS)

@@ -113,8 +113,7 @@ class AccelerometerRecord:
 def _delimiter(path, first_line: str) -> str:
     """The header's delimiter (tab, semicolon or comma), or a :class:`RecordError` naming what was found.
 
-    :func:`smd_statespace.io._sniff_delimiter` insists on commas (a GRF record is
-    written by this library); phyphox also exports with semicolons and tabs.
+    phyphox exports with commas, semicolons and tabs.
     """
     line = first_line.strip()
     for _, delimiter in _DELIMITERS:

@@ -199,12 +199,41 @@ def rate_of(args):
 
 
 def add_record_arguments(parser, accelerometer=False):
-    """``REC.csv --mass KG``: the record to identify (``accelerometer``: also ``--accelerometer``, ``--units``)."""
-    parser.add_argument("record", metavar="REC.csv", help="record with columns time,force[,floor_acc]")
+    """``REC.csv --mass KG``: the record to identify (``accelerometer``: also ``--accelerometer``, ``--units``), and
+    how to read a plate's export (:func:`add_export_arguments`)."""
+    parser.add_argument("record", metavar="REC.csv", help="record with columns time,force[,floor_acc], or a force "
+                        "plate's export (Vicon Nexus, Kistler BioWare, Qualisys, OpenSim, C3D, ...)")
     parser.add_argument("--mass", required=not accelerometer, type=float, metavar="KG",
                         help="body mass M_h (kg)" + ("; optional with --accelerometer" if accelerometer else ""))
+    add_export_arguments(parser)
     if accelerometer:
         add_accelerometer_arguments(parser)
+
+
+def add_export_arguments(parser):
+    """``--fs`` and ``--force-columns``: how to read a force plate's export that does not say it all itself."""
+    parser.add_argument("--fs", type=float, metavar="HZ",
+                        help="a plate export's sampling rate, for one without a time column or a rate above its "
+                             "header (AMTI NetForce's text files): its rows are counted at HZ")
+    parser.add_argument("--force-columns", metavar="NAME,...",
+                        help="a plate export's vertical force columns, by name or number (1: the first), summed "
+                             "(default: the columns named as a plate's vertical force: Fz, FZ1, Force_Z, ...)")
+
+
+def reading_options(args) -> dict:
+    """``fs`` and ``force_columns`` of :func:`~smd_statespace.io.read_record` from ``--fs`` and ``--force-columns``,
+    or a one-line :class:`OptionError`."""
+    fs, columns = getattr(args, "fs", None), getattr(args, "force_columns", None)
+    if fs is not None and not (math.isfinite(fs) and fs > 0):
+        raise OptionError(f"--fs {fs:g}: a sampling rate must be a positive number of Hz")
+    if columns is not None:
+        columns = [name.strip() for name in columns.split(",")]
+        if not all(columns):
+            raise OptionError(f"--force-columns {args.force_columns!r}: expected names or numbers separated by commas")
+    if (fs is not None or columns is not None) and getattr(args, "accelerometer", False):
+        raise OptionError(f"{'--fs' if fs is not None else '--force-columns'} reads a force plate's export, not a "
+                          "phone's (--accelerometer)")
+    return {"fs": fs, "force_columns": columns}
 
 
 def add_accelerometer_arguments(parser):
@@ -246,13 +275,14 @@ def read_person_record(args):
 
     if args.units is not None and not args.accelerometer:
         raise OptionError("--units applies to an accelerometer record (--accelerometer)")
+    options = reading_options(args)
     if args.accelerometer:
         from ..accelerometer import accelerometer_record
 
         return accelerometer_record(args.record, args.mass, units=args.units or "auto")
     if args.mass is None:
         raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
-    return read_record(args.record, args.mass)
+    return read_record(args.record, args.mass, **options)
 
 
 def add_check_argument(parser):
@@ -319,16 +349,16 @@ def estimator_options(name: str, args) -> dict:
 def prepare_record(args):
     """Read, check, decimate (``--rate``) and preprocess ``args.record``; returns ``(Record, Preprocessed)``.
 
-    The decimation is said on standard output in a ``note:`` line.
+    How an export was read and the decimation are said on standard output in ``note:`` lines.
     """
     from ..io import read_record
     from ..signals import decimate_record, decimation_note, preprocess
 
-    record = read_record(args.record, args.mass)
+    record = read_record(args.record, args.mass, **reading_options(args))
     checked(record, args)
     measured_rate = record.fs
     record, factor, _ = decimate_record(record, rate_of(args))
-    for note in decimation_note(measured_rate, record, factor, rate_of(args)):
+    for note in (*record.extra.get("reading", ()), *decimation_note(measured_rate, record, factor, rate_of(args))):
         print(f"note: {note}")
     return record, preprocess(record)
 

@@ -7,7 +7,7 @@ import pandas as pd
 from ..errors import OptionError
 from ..estimators import ESTIMATORS
 from .common import (add_model_arguments, add_rate_argument, add_record_arguments, add_run_arguments, build_model,
-                     load_truth, out_dir, prepare_record, rate_of, truth_values)
+                     load_truth, out_dir, prepare_record, rate_of, reading_options, truth_values)
 from ..identify.plausibility import plausible_cycles
 from .identify import identify
 
@@ -168,7 +168,7 @@ def run_compare(args) -> int:
             # the record as read, as identify fits it: the front end needs the measured rate (the mains hum is
             # found and subtracted there, and the fitting rate chosen off its multiples); the per-cycle rows
             # take the record decimated to --rate
-            person = identify_person(read_record(args.record, args.mass), n_harmonics=args.harmonics,
+            person = identify_person(read_record(args.record, args.mass, **reading_options(args)), n_harmonics=args.harmonics,
                                      check=not args.ignore_checks, rate=rate_of(args),
                                      progress=not args.quiet)
             person_seconds = time.perf_counter() - started

@@ -14,10 +14,11 @@ from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError, SMDInputError
 from ..identify.plausibility import plausible_cycles
-from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_fade_argument,
-                     add_model_arguments, add_noise_floor_argument, add_rate_argument,
+from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_export_arguments,
+                     add_fade_argument, add_model_arguments, add_noise_floor_argument, add_rate_argument,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
-                     load_truth, out_dir, prepare_record, rate_of, read_person_record, truth_values)
+                     load_truth, out_dir, prepare_record, rate_of, read_person_record, reading_options,
+                     truth_values)
 
 
 SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
@@ -40,11 +41,13 @@ def add_identify(subparsers):
                      "none did."),
     )
     parser.add_argument("record", metavar="REC", nargs="?",
-                        help="a record CSV (time,force[,floor_acc]), a folder of them, or a quoted glob "
+                        help="a record CSV (time,force[,floor_acc]) or a force plate's export (Vicon Nexus, Kistler "
+                             "BioWare, Qualisys, OpenSim, C3D, ...), a folder of CSV files, or a quoted glob "
                              "('data/*.csv'); may be omitted with --manifest")
     parser.add_argument("--mass", type=float, metavar="KG",
                         help="body mass M_h (kg); with many records, the mass of those the manifest does not list; "
                              "optional with --accelerometer (K_h, C_h need it)")
+    add_export_arguments(parser)
     add_accelerometer_arguments(parser)
     parser.add_argument("--manifest", metavar="FILE",
                         help="CSV with columns file,mass: one body mass per record (files relative to it)")
@@ -205,7 +208,7 @@ def run_batch_identify(args) -> int:
     directory = out_dir(args.out)
     model = build_model(args)
     records = collect_records(args.record, args.mass, args.manifest, accelerometer=args.accelerometer,
-                              units=args.units or "auto")
+                              units=args.units or "auto", reading=reading_options(args))
     options = dict(max_passes=args.max_passes, seed=args.seed, rate=rate_of(args),
                    **estimator_options(args.estimator, args))
     if args.no_floor:

@@ -72,7 +72,8 @@ class BatchRecord:
 
     ``sensor`` is ``"plate"`` (a force record, :func:`~smd_statespace.io.read_record`) or
     ``"accelerometer"`` (a phone's record, :func:`~smd_statespace.accelerometer.accelerometer_record`,
-    read in ``units``); an accelerometer's ``mass`` may be None (then K_h, C_h are not given).
+    read in ``units``); an accelerometer's ``mass`` may be None (then K_h, C_h are not given). ``fs`` and
+    ``force_columns`` say how to read a plate's export (:func:`~smd_statespace.io.read_record`).
     """
 
     path: Path
@@ -80,6 +81,8 @@ class BatchRecord:
     name: str
     sensor: str = "plate"
     units: str = "auto"
+    fs: float | None = None
+    force_columns: tuple | None = None
 
     def read(self):
         """The record as the person model reads it (:class:`~smd_statespace.io.Record`)."""
@@ -89,7 +92,7 @@ class BatchRecord:
             return accelerometer_record(self.path, self.mass, units=self.units)
         from ..io import read_record
 
-        return read_record(self.path, self.mass)
+        return read_record(self.path, self.mass, fs=self.fs, force_columns=self.force_columns)
 
     @property
     def key(self) -> int:
@@ -188,7 +191,8 @@ def read_manifest(path) -> list[BatchRecord]:
     return records
 
 
-def collect_records(source, mass=None, manifest=None, accelerometer=False, units="auto") -> list[BatchRecord]:
+def collect_records(source, mass=None, manifest=None, accelerometer=False, units="auto",
+                    reading=None) -> list[BatchRecord]:
     """The records of a batch, in a fixed order.
 
     Parameters
@@ -205,6 +209,9 @@ def collect_records(source, mass=None, manifest=None, accelerometer=False, units
         The records are phones' (:mod:`smd_statespace.accelerometer`): the mass
         may be left out, and ``units`` (``"auto"``, ``"g"``, ``"m/s^2"``) says
         how to read them.
+    reading : dict, optional
+        ``fs`` and ``force_columns`` of every plate's export
+        (:func:`~smd_statespace.io.read_record`).
 
     Returns
     -------
@@ -213,7 +220,10 @@ def collect_records(source, mass=None, manifest=None, accelerometer=False, units
     records = _collect(source, mass, manifest, accelerometer)
     if accelerometer:
         records = [replace(r, sensor="accelerometer", units=units) for r in records]
-    return records
+    reading = {key: value for key, value in (reading or {}).items() if value is not None}
+    if "force_columns" in reading:
+        reading["force_columns"] = tuple(reading["force_columns"])
+    return [replace(r, **reading) for r in records]
 
 
 def _collect(source, mass, manifest, accelerometer) -> list[BatchRecord]:
@@ -305,7 +315,10 @@ def _settings(records, model, estimator, runner_options) -> dict:
     return {"version": __version__, "command": "identify", "model": repr(model), "estimator": str(estimator),
             "options": {k: v for k, v in sorted(runner_options.items())},
             "records": [{"name": r.name, "mass": r.mass, **({"sensor": r.sensor, "units": r.units}
-                                                             if r.sensor != "plate" else {})} for r in records]}
+                                                             if r.sensor != "plate" else {}),
+                         **({"fs": r.fs} if r.fs is not None else {}),
+                         **({"force_columns": list(r.force_columns)} if r.force_columns is not None else {})}
+                        for r in records]}
 
 
 def _check_settings(sidecar: Path, settings: dict, resume: bool, parts: Path):

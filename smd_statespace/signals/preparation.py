@@ -193,15 +193,16 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
     if span is None:
         _refuse_a_loose_phone(record, None)
         decimated, factor, moved = decimate_record(record, rate, extra)
-        return PreparedRecord(decimated, record, None, factor, notes=_rate_notes(record, decimated, factor, rate),
-                              extra=moved)
+        notes = [*record.extra.get("reading", ()), *_rate_notes(record, decimated, factor, rate)]
+        return PreparedRecord(decimated, record, None, factor, notes=notes, extra=moved)
     if span != "auto":
         trim_record(record, span)  # a malformed span, or one outside the record: one line before any work
         span = (float(span[0]), float(span[1]))
     hum = mains_hum(record)
     clean = remove_hum(record, hum)
     bouts = find_bouts(clean) if span == "auto" else None
-    notes, warnings = ([hum.describe() + ", subtracted"] if hum.found else []), []
+    notes = [*record.extra.get("reading", ()), *([hum.describe() + ", subtracted"] if hum.found else [])]
+    warnings = []
     trimmed = True
     if span == "auto":
         _refuse_what_is_not_one_person(bouts, record)
