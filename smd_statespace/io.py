@@ -289,6 +289,7 @@ def read_record(path, mass, *, fs=None, force_columns=None) -> Record:
     """
     path, source = Path(path), os.fspath(path)
     check_mass(mass)
+    floor_acc = None
     if path.suffix.lower() == ".c3d":
         time, force, notes = c3d_force(path)
     else:
@@ -296,17 +297,18 @@ def read_record(path, mass, *, fs=None, force_columns=None) -> Record:
         header = [name.strip().lower() for name in rows[0]] if rows else []
         if delimiter == "," and "time" in header and "force" in header and fs is None and force_columns is None:
             return _read_plain(path, rows, header, mass)  # this library's own format, read strictly
-        time, force, notes = _read_export(rows, delimiter, source, fs, force_columns)
+        time, force, notes, floor_acc = _read_export(rows, delimiter, source, fs, force_columns)
     loaded = np.abs(force) > CONTACT_FRACTION * float(np.max(np.abs(force)))
     if loaded.any() and float(np.mean(force[loaded])) < 0.0:
         force = -force
         notes.append("the vertical force is negative under the load (the force on the plate with z up, as Vicon "
                      "Nexus gives it, or a plate whose z axis points down): read with its sign turned")
-    return replace(make_record(time, force, mass, source=source), extra={"reading": notes})
+    return replace(make_record(time, force, mass, floor_acc=floor_acc, source=source), extra={"reading": notes})
 
 
 def _read_export(rows: list, delimiter, source: str, fs, force_columns) -> tuple:
-    """``(time, force, notes)`` of a text export's ``rows`` (:func:`~smd_statespace.plate_exports.find_layout`)."""
+    """``(time, force, notes, floor_acc)`` of a text export's ``rows``
+    (:func:`~smd_statespace.plate_exports.find_layout`; ``floor_acc`` a column of that name, or None)."""
     layout = find_layout(rows, delimiter, source, fs=fs, force_columns=force_columns)
 
     def column(index):
@@ -316,7 +318,9 @@ def _read_export(rows: list, delimiter, source: str, fs, force_columns) -> tuple
     force = layout.force_scale * sum(column(index) for index in layout.forces)
     time = (layout.time_scale * column(layout.time) if layout.time is not None
             else np.arange(len(layout.body)) / layout.rate)
-    return time, force, list(layout.notes)
+    named = [name.strip().lower() for name in layout.header]
+    floor_acc = column(named.index("floor_acc")) if "floor_acc" in named else None
+    return time, force, list(layout.notes), floor_acc
 
 
 def _read_plain(path: Path, rows: list, header: list, mass) -> Record:

@@ -47,6 +47,10 @@ VERTICAL = (
 )
 """Names (lower case, without their unit, ``._-:/`` read as spaces) of a plate's vertical force column."""
 
+SIDES = re.compile(r"^(?:left|right|combined|total|sum)(?: ?\d+)?$")
+"""The columns of a jump plate that measures the vertical force alone, per side and in all (``Left (N)``,
+``Right (N)``, ``Combined (N)``): vertical forces when they name a force's unit."""
+
 TOTAL = re.compile(r"\b(?:total|combined|net|sum)\b")
 """A vertical force column named as the plates' total, taken alone when there is one."""
 
@@ -202,8 +206,11 @@ def _rate(block: list) -> float | None:
     return None
 
 
-def _vertical(base: str) -> bool:
-    return any(pattern.match(base) for pattern in VERTICAL)
+def _vertical(base: str, unit: str) -> bool:
+    """Whether a column of this name and unit is a plate's vertical force: a name :data:`VERTICAL` knows, or a
+    vertical-only plate's ``Left``, ``Right``, ``Combined`` with a force's unit (``Left (N)``)."""
+    return any(pattern.match(base) for pattern in VERTICAL) or (SIDES.match(base) is not None and unit != ""
+                                                                  and unit in FORCE_UNITS)
 
 
 def _software(block: list, header: list) -> str:
@@ -316,7 +323,7 @@ def _force_columns(header: list, names: list, times: list, force_columns, source
                 raise RecordError(f"{source}: --force-columns {column!r} is not a column; {where}")
             chosen += [i for i in found if i not in chosen]
         return chosen
-    forces = [i for i, (base, unit) in enumerate(names) if _vertical(base) and i not in times]
+    forces = [i for i, (base, unit) in enumerate(names) if _vertical(base, unit) and i not in times]
     forces = [i for i in forces if names[i][1] in FORCE_UNITS] or forces
     totals = [i for i in forces if TOTAL.search(names[i][0])]
     if len(totals) == 1:

@@ -75,15 +75,29 @@ def test_a_european_export_with_decimal_commas_a_title_and_time_in_ms_reads_in_s
     assert "time from the rows counted at 1000 Hz" in record.extra["reading"][0]  # 'Zeit' is not a time it knows
 
 
+def test_a_jump_plate_of_two_sides_and_their_total_reads_the_total_alone(tmp_path):
+    """Vertical-only plates export each side and their sum (Left (N), Right (N), Combined (N)): the sum is the
+    force, not the sum of all three."""
+    t, force, share = bouncing(n=1000)
+    rows = [f"{tk:.3f},{f * s:.4f},{f * (1 - s):.4f},{f:.4f}" for tk, f, s in zip(t, force, share)]
+    record = read_record(write(tmp_path / "jump.csv", ["Time (s),Left (N),Right (N),Combined (N)", *rows]), MASS)
+    np.testing.assert_allclose(record.force, force, atol=1e-4)
+    assert "force from 'Combined (N)' (column 4)" in record.extra["reading"][0]
+    two = read_record(write(tmp_path / "sides.csv", ["Time (s),Left (N),Right (N)",
+                                                       *(row.rsplit(",", 1)[0] for row in rows)]), MASS)
+    np.testing.assert_allclose(two.force, force, atol=2e-4)
+
+
 def test_a_tab_separated_opensim_file_and_our_format_with_semicolons_read_the_same(tmp_path):
     t, force, _ = bouncing(n=400, fs=100.0)
     mot = ["Trial", "nRows=400", "endheader", "time\tground_force1_vy\tground_force1_vx",
            *(f"{tk:.2f}\t{f:.6f}\t0.5" for tk, f in zip(t, force))]
-    semicolons = ["time;force", *(f"{tk:.2f};{f:.6f}" for tk, f in zip(t, force))]
+    semicolons = ["time;force;floor_acc", *(f"{tk:.2f};{f:.6f};{0.01 * tk:.4f}" for tk, f in zip(t, force))]
     for record in (read_record(write(tmp_path / "grf.mot", mot), MASS),
                    read_record(write(tmp_path / "semi.csv", semicolons), MASS)):
         np.testing.assert_allclose(record.force, force, atol=1e-6)
         np.testing.assert_allclose(record.time, t, atol=1e-12)
+    np.testing.assert_allclose(record.floor_acc, 0.01 * t, atol=1e-9)  # this library's own columns, semicolons
 
 
 @pytest.mark.parametrize("lines,expected", [
