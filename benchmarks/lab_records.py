@@ -57,6 +57,10 @@ Rows
     person's ``f_b`` to the same fraction of the bout). Measured: whether ``result.warnings`` names the
     change, a warning that starts with :data:`CHANGE_WARNING`; on the stationary rows the same warning is a
     false alarm.
+``zero``
+    The ``lab`` row's record ``k`` (the same person, settings and streams) with its plate's zero drifting
+    otherwise than as a cubic (:data:`ZERO_SHAPES`, by turns): settling as a plate warms up, wandering (a
+    random walk smoothed over 2 s), or jumping in 2-4 steps (a cable knocked; held out).
 ``held_out``
     Combinations not used for tuning (:data:`HELD_OUT_RANGES`, marked held out in the output): 500 Hz with
     60 Hz hum at the top of LAB_RANGES' amplitudes, the ``"smooth"`` variation with ``tire`` 0.2-0.35,
@@ -112,11 +116,16 @@ from result_csv import append_row, open_csv  # noqa: E402  (beside this script: 
 
 from smd_statespace.person.noise_floor import NOISE_FLOOR  # noqa: E402
 
-ROWS = ("lab", "twin", "clean", "change", "held_out")
+ROWS = ("lab", "twin", "clean", "change", "held_out", "zero")
 """The benchmark's rows, in the order of the tables."""
 
-GROUP = {"lab": 0, "twin": 0, "clean": 0, "change": 1, "held_out": 2}
-"""Seed group of each row: ``lab``, ``twin`` and ``clean`` share their seeds (record ``k`` of all is one person)."""
+GROUP = {"lab": 0, "twin": 0, "clean": 0, "change": 1, "held_out": 2, "zero": 0}
+"""Seed group of each row: ``lab``, ``twin``, ``clean`` and ``zero`` share their seeds (record ``k`` of all is one
+person)."""
+
+ZERO_SHAPES = ("settling", "walk", "steps")
+"""The plate's zero of row ``zero``'s record ``k``: ``ZERO_SHAPES[k % 3]`` (``steps`` held out: not used to choose
+the drift's basis)."""
 
 PEOPLE = ("standard", "lab")
 """``--people``: the established clean-record population (``person_accuracy.py``'s) or LabRanges'."""
@@ -190,7 +199,8 @@ LAB_RANGES, CHANGE_RANGES, HELD_OUT_RANGES = _ranges()
 COLUMNS = (
     "seed", "people", "row", "record", "spawn_key", "held_out",
     # settings
-    "fs", "variation", "hum_frequency", "hum_n", "hum_variation", "drift_n", "sway_n", "noise_n", "tire", "slow",
+    "fs", "variation", "hum_frequency", "hum_n", "hum_variation", "drift_n", "drift_shape", "sway_n", "noise_n", "tire",
+    "slow",
     "stand_before", "stand_after", "bout", "ramp_up", "ramp_down", "mass", "f_b", "fb_variation", "coef_variation",
     "change_kind", "f_h_change", "xi_h_change", "change_time",
     # truth
@@ -256,6 +266,8 @@ def settings_of(row: str, seed: int, k: int, people: str = "standard"):
     person = draw_standard_person(person_seed(seed, k))
     if row in ("lab", "twin", "clean"):
         settings = draw_lab_settings(draw, LAB_RANGES, **STATIONARY)
+    elif row == "zero":  # the lab record's draws; only its zero's shape differs
+        settings = draw_lab_settings(draw, LAB_RANGES, **STATIONARY, drift_shape=ZERO_SHAPES[k % len(ZERO_SHAPES)])
     elif row == "change":
         kind = CHANGE_KINDS[(k // 2) % 2] if standard else CHANGE_KINDS[k % 2]
         settings = draw_lab_settings(draw, CHANGE_RANGES, change=kind)
@@ -303,6 +315,7 @@ def _settings_columns(s: dict) -> dict:
     return {
         "fs": s["fs"], "variation": s["variation"], "hum_frequency": s["hum_frequency"] if hum else "",
         "hum_n": "/".join(f"{a:.2f}" for a in hum), "hum_variation": s["hum_variation"], "drift_n": s["drift"],
+        "drift_shape": s.get("drift_shape", "cubic"),
         "sway_n": s["sway"], "noise_n": s["noise"], "tire": s["tire"], "slow": s["slow"],
         "stand_before": s["stand_before"], "stand_after": s["stand_after"], "bout": s["bout"],
         "ramp_up": s["ramp_up"], "ramp_down": s["ramp_down"], "mass": s["mass"], "f_b": s["f_b"],
@@ -465,7 +478,8 @@ def _table(header, body) -> list:
 
 
 PAIRS = (("lab", "twin", "their clean twins"), ("lab", "clean", "the established clean records of the same people"),
-         ("twin", "clean", "the established clean records of the same people"))
+         ("twin", "clean", "the established clean records of the same people"),
+         ("zero", "lab", "the same lab records with the zero drifting as a cubic"))
 """Rows compared record by record: ``(row, reference, the reference in words)``."""
 
 
@@ -520,7 +534,7 @@ def target_lines(frame: pd.DataFrame, rows) -> list:
         named = _share(int(change["change_named"].astype(bool).sum()), len(change))
         lines.append(f"- a change of 8-20 % named: {named} (target >= {TARGETS['named']:g} %)")
     alarms = []
-    for row in ("lab", "twin", "clean", "held_out"):
+    for row in ("lab", "twin", "clean", "held_out", "zero"):
         ok = frame[(frame["row"] == row) & (frame["error"] == "")]
         if row in rows and len(ok):
             alarms.append(f"{row} {_share(int(ok['change_named'].astype(bool).sum()), len(ok))}")
@@ -551,6 +565,10 @@ def span_lines(frame: pd.DataFrame) -> list:
 
 def summary_lines(frame: pd.DataFrame, rows) -> list:
     body = [row_summary(frame, row) for row in rows if (frame["row"] == row).any()]
+    if "zero" in rows and "drift_shape" in frame:  # the zero row by the zero's shape ("steps" held out)
+        body += [[f"zero: {shape}{' (held out)' if shape == 'steps' else ''}", *row_summary(
+            frame[(frame["row"] != "zero") | (frame["drift_shape"] == shape)], "zero")[1:]] for shape in ZERO_SHAPES
+                 if ((frame["row"] == "zero") & (frame["drift_shape"] == shape)).any()]
     lines = _table(HEADER, body) + target_lines(frame, rows)
     for name, other, words in PAIRS:
         if {name, other} <= set(rows):

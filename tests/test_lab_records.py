@@ -116,6 +116,29 @@ def test_standing_is_body_weight_plus_drift_and_the_person_comes_to_rest():
     assert np.std(residual) == pytest.approx(1.5, rel=0.05)
 
 
+@pytest.mark.parametrize("shape", ["settling", "walk", "steps"])
+def test_the_zero_drifts_in_other_shapes_than_a_cubic_and_leaves_the_person_alone(shape):
+    """A settling zero (1 - exp(-t / tau), tau 5-15 s), a wandering one (a walk smoothed over 2 s) and one that
+    steps 2-4 times: 0 at the start, reaching the size given, not a cubic, and the person's force unchanged."""
+    cubic = simulate_lab_record(drift=20.0, seed=4, **SHORT)
+    lab = simulate_lab_record(drift=20.0, drift_shape=shape, seed=4, **SHORT)
+    drift, time = lab.states["drift"].to_numpy(), lab.record.time
+    assert drift[0] == 0 and np.abs(drift).max() == pytest.approx(20.0) and lab.truth["drift"]["shape"] == shape
+    if shape != "settling":  # (over 11 s a settling zero is close to a cubic)
+        assert np.abs(drift - np.polyval(np.polyfit(time, drift, 3), time)).max() > 1.0  # not a cubic
+    assert np.array_equal(lab.states["u_ddot"], cubic.states["u_ddot"])
+    jumps = np.abs(np.diff(drift))
+    if shape == "steps":
+        assert 2 <= np.count_nonzero(jumps > 1e-9) <= 4
+    else:  # continuous: no sample moves by more than a few hundredths of the size
+        assert jumps.max() < 0.05 * 20.0
+    if shape == "settling":
+        rest = drift[time > 0.8 * time[-1]]
+        assert np.ptp(rest) < 0.4 * 20.0 and np.all(np.sign(drift[1:]) == np.sign(drift[-1]))
+    with pytest.raises(OptionError, match="drift_shape must be one of 'cubic', 'settling', 'walk', 'steps'"):
+        simulate_lab_record(drift_shape="sine", seed=4, **SHORT)
+
+
 def test_the_hum_is_read_back_from_the_spectrum_and_the_sway_is_slow():
     lab = simulate_lab_record(hum=(6.0, 0.0, 2.5), hum_frequency=50, sway=3.0, noise=1.0, seed=5, **SHORT)
     fs, force = lab.truth["fs"], lab.record.force
@@ -174,6 +197,9 @@ def test_typical_settings_cover_the_ranges_and_can_hold_combinations_out():
     held = [draw_lab_settings(seed, steps, f_b=2.0) for seed in range(10)]
     assert all(s["change"] == "step" and s["variation"] == "smooth" and s["f_b"] == 2.0 for s in held)
     assert draw_lab_settings(3, mass=80.0)["f_h"] == draw_lab_settings(3)["f_h"]  # fixing one moves no other
+    shapes = [draw_lab_settings(seed, LabRanges(drift_shape=("settling", "walk"))) for seed in range(10)]
+    assert {s["drift_shape"] for s in shapes} == {"settling", "walk"} and {s["drift_shape"] for s in drawn} == {"cubic"}
+    assert [s["f_h"] for s in shapes] == [s["f_h"] for s in drawn[:10]]  # the shape is drawn after the others
     with pytest.raises(OptionError, match="unknown setting 'weight'"):
         draw_lab_settings(1, weight=3)
     lab = simulate_typical_lab_record(6, bout=4.0, stand_before=1.0, stand_after=1.0, fs=500.0)

@@ -25,6 +25,8 @@ LAB_OPTIONS = (("stand", ("stand_before", "stand_after"), _numbers, "S[,S]",
                ("hum-variation", "hum_variation", _nonnegative, "FRAC",
                 "slow relative modulation of the hum's amplitude, 0-1 (default 0)"),
                ("drift", "drift", _nonnegative, "N", "largest excursion of the plate's drifting zero (default 10)"),
+               ("drift-shape", "drift_shape", str, "cubic|settling|walk|steps",
+                "the drifting zero's shape: a cubic of time (default), settling, a wandering walk or steps"),
                ("plate-noise", "noise", _nonnegative, "N", "white noise sd of the plate (default 1)"),
                ("tire", "tire", _nonnegative, "FRAC", "fraction of the BLFs lost over the bout, 0-0.9 (default 0)"),
                ("slow", "slow", _nonnegative, "FRAC", "fraction of f_b lost over the bout, 0-0.5 (default 0)"),
@@ -301,7 +303,7 @@ def _simulate_lab(args, out, truth) -> int:
     return 0
 
 
-PLATE_ONLY = ("hum", "hum-amplitude", "hum-variation", "drift", "plate-noise", "fs", "typical")
+PLATE_ONLY = ("hum", "hum-amplitude", "hum-variation", "drift", "drift-shape", "plate-noise", "fs", "typical")
 """Options of ``simulate --lab`` that a phone's record of the trial (``--lab --accelerometer``) does not take."""
 
 

@@ -19,8 +19,9 @@ force and every kink of the schedule:
   over the bout (``change="drift"``) or at once at ``change_time`` (``"step"``);
 - while standing ``S = 0`` and the person is at rest (``u = u' = u'' = 0``): the force is ``M_h g`` plus
   the extras. ``sway``: sinusoids in :data:`SWAY_BAND` (N RMS), faded out as the person bounces; ``hum``:
-  the mains frequency and its harmonics, optionally slowly modulated; ``drift``: a random cubic (Legendre)
-  polynomial of time, 0 at ``t = 0``, reaching ``+-drift`` N; ``e``: white noise of sd ``noise`` N.
+  the mains frequency and its harmonics, optionally slowly modulated; ``drift``: the plate's zero, 0 at
+  ``t = 0``, reaching ``+-drift`` N, a random cubic (Legendre) polynomial of time or another of
+  ``drift_shape`` (:mod:`.plate_extras`); ``e``: white noise of sd ``noise`` N.
 
 One :class:`numpy.random.SeedSequence` spawns independent streams (:data:`STREAMS`): the same seed gives the
 same record; other hum leaves the person unchanged.
@@ -38,6 +39,7 @@ from ..io import G, check_mass, make_record
 from ..model import c_h, equations, k_h
 from .dynamics import ATOL, RTOL, _CycleForce, _number, _vector
 from .force_shape import DEFAULT_BLF, default_phases
+from .plate_extras import DRIFT_SHAPES, SWAY_BAND, drift_path, hum_force, sway_force
 from .generators import _normals
 from .settings import _resolve_seed
 from .synthetic import SyntheticRecord
@@ -52,18 +54,6 @@ LAB_VARIATIONS = ("jumps", "smooth", "matern")
 
 LAB_CHANGES = ("drift", "step")
 """How ``f_h`` and ``xi_h`` change over the bout: linearly over it, or at once at ``change_time``."""
-
-SWAY_BAND = (0.1, 1.5)
-"""Frequencies (Hz) of a standing person's sway: :data:`SWAY_COMPONENTS` sinusoids drawn uniformly in it."""
-
-SWAY_COMPONENTS = 8
-"""Sinusoids in the sway force."""
-
-HUM_MODULATION_BAND = (0.02, 0.2)
-"""Frequencies (Hz) of the slow sinusoidal modulation of the hum's amplitude (``hum_variation``)."""
-
-DRIFT_DEGREE = 3
-"""Degree of the random (Legendre) polynomial of the plate's drifting zero."""
 
 FS_RANGE = (200.0, 10000.0)
 """Accepted sampling rates (Hz) of a lab record."""
@@ -216,46 +206,6 @@ def _integrate(schedule, pieces, time):
 
 
 # ---------------------------------------------------------------------------
-# the plate's extras: sway, hum, drift
-
-
-def _sway(rng, time, rms, envelope):
-    """A standing person's sway force (N): sinusoids in :data:`SWAY_BAND`, RMS ``rms``, faded by ``envelope``."""
-    frequencies = rng.uniform(*SWAY_BAND, SWAY_COMPONENTS)
-    weights = rng.rayleigh(1.0, SWAY_COMPONENTS)
-    phases = rng.uniform(0.0, 2.0 * np.pi, SWAY_COMPONENTS)
-    weights = rms * weights / np.sqrt(0.5 * np.sum(weights**2))  # RMS of a sum of sinusoids
-    sway = weights @ np.cos(2.0 * np.pi * np.outer(frequencies, time) + phases[:, None])
-    truth = {"rms_n": rms, "band_hz": list(SWAY_BAND), "frequencies_hz": frequencies.tolist(),
-             "amplitudes_n": weights.tolist(), "phases_rad": phases.tolist()}
-    return sway * (1.0 - envelope), truth
-
-
-def _hum(rng, time, frequency, amplitudes, variation):
-    """Mains hum (N): harmonics ``k frequency`` of ``amplitudes``, amplitude modulated by ``variation``."""
-    phases = rng.uniform(0.0, 2.0 * np.pi, amplitudes.size)
-    f_mod, phase_mod = rng.uniform(*HUM_MODULATION_BAND), rng.uniform(0.0, 2.0 * np.pi)
-    modulation = 1.0 + variation * np.sin(2.0 * np.pi * f_mod * time + phase_mod)
-    orders = np.arange(1, amplitudes.size + 1)
-    hum = modulation * (amplitudes @ np.cos(2.0 * np.pi * frequency * np.outer(orders, time) + phases[:, None]))
-    truth = {"frequency_hz": frequency, "amplitudes_n": amplitudes.tolist(), "phases_rad": phases.tolist(),
-             "variation": variation, "modulation_hz": float(f_mod)}
-    return hum, truth
-
-
-def _drift(rng, time, size):
-    """The plate's drifting zero (N): a random Legendre polynomial, 0 at ``t = 0``, ``max |drift| = size``."""
-    x = 2.0 * time / time[-1] - 1.0
-    coefficients = np.concatenate([[0.0], rng.standard_normal(DRIFT_DEGREE)])
-    path = np.polynomial.legendre.legval(x, coefficients)
-    path = path - path[0]
-    peak = np.abs(path).max()
-    drift = size * path / peak if peak > 0 else np.zeros_like(time)
-    return drift, {"max_abs_n": size, "degree": DRIFT_DEGREE, "start_n": float(drift[0]),
-                   "end_n": float(drift[-1]), "min_n": float(drift.min()), "max_n": float(drift.max())}
-
-
-# ---------------------------------------------------------------------------
 # checks, seed, truth
 
 
@@ -281,6 +231,9 @@ def _check_lab(s):
     if s["variation"] not in LAB_VARIATIONS:
         raise OptionError(f"{where}: variation must be one of {', '.join(map(repr, LAB_VARIATIONS))}, "
                           f"got {s['variation']!r}")
+    if s["drift_shape"] not in DRIFT_SHAPES:
+        raise OptionError(f"{where}: drift_shape must be one of {', '.join(map(repr, DRIFT_SHAPES))}, "
+                          f"got {s['drift_shape']!r}")
     if s["change"] not in LAB_CHANGES:
         raise OptionError(f"{where}: change must be one of {', '.join(map(repr, LAB_CHANGES))}, got {s['change']!r}")
     if not FS_RANGE[0] <= s["fs"] <= FS_RANGE[1]:
@@ -377,7 +330,8 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
                         fb_variation=0.02, coef_variation=0.10, fs=1000.0, stand_before=4.0, stand_after=4.0,
                         bout=30.0, ramp_up=2.0, ramp_down=2.0, sway=2.0, hum_frequency=50, hum=(5.0, 0.0, 2.0),
                         hum_variation=0.0, drift=10.0, noise=1.0, tire=0.0, slow=0.0, f_h_change=0.0,
-                        xi_h_change=0.0, change="drift", change_time=None, seed=None) -> SyntheticRecord:
+                        xi_h_change=0.0, change="drift", change_time=None, drift_shape="cubic",
+                        seed=None) -> SyntheticRecord:
     """Simulate a lab's force-plate export of one trial: standing, bouncing, standing, with the plate's artefacts.
 
     The person is the SMD of Eq. 2 (the module docstring gives every term); the GRF is Eq. 3 plus sway, hum,
@@ -410,6 +364,8 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
         ... (N; empty for none); their relative slow modulation, 0-1.
     drift, noise : float
         Largest excursion of the plate's drifting zero (N); white noise sd (N).
+    drift_shape : {"cubic", "settling", "walk", "steps"}
+        The drifting zero's shape (:func:`~smd_statespace.simulation.plate_extras.drift_path`).
     tire, slow : float
         Fractions of every BLF (0-0.9) and of ``f_b`` (0-0.5) lost linearly over the bout.
     f_h_change, xi_h_change, change, change_time : float, float, {"drift", "step"}, float
@@ -454,9 +410,9 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
         raise OptionError(f"simulate_lab_record: the GRF falls to {person.min():.1f} N: the person would leave the "
                           "plate; lower blf or move f_h away from a harmonic of f_b")
     envelope = np.vectorize(schedule.envelope, otypes=[float])(time)
-    sway_n, sway_truth = _sway(rngs["sway"], time, s["sway"], envelope)
-    hum_n, hum_truth = _hum(rngs["hum"], time, float(s["hum_frequency"]), s["hum"], s["hum_variation"])
-    drift_n, drift_truth = _drift(rngs["drift"], time, s["drift"])
+    sway_n, sway_truth = sway_force(rngs["sway"], time, s["sway"], envelope)
+    hum_n, hum_truth = hum_force(rngs["hum"], time, float(s["hum_frequency"]), s["hum"], s["hum_variation"])
+    drift_n, drift_truth = drift_path(rngs["drift"], time, s["drift"], s["drift_shape"])
     drift_truth.update(at_bouncing_start_n=float(np.interp(schedule.t_on, time, drift_n)),
                        at_bouncing_end_n=float(np.interp(schedule.t_off, time, drift_n)))
     force = person + sway_n + hum_n + drift_n + s["noise"] * rngs["noise"].standard_normal(time.size)
@@ -505,6 +461,7 @@ class LabRanges:
     hum: tuple = ((0.0, 20.0), (0.0, 5.0), (0.0, 10.0))
     hum_variation: tuple = (0.0, 0.3)
     drift: tuple = (1.0, 30.0)
+    drift_shape: tuple = ("cubic",)  # drawn after every other setting, and only where there is a choice
     noise: tuple = (0.2, 4.0)
     tire: tuple = (0.0, 0.3)
     slow: tuple = (0.0, 0.08)
@@ -538,6 +495,7 @@ def _draw_once(rng, r):
     kind, signs = pick(r.change), rng.choice([-1.0, 1.0], 2)
     changes = (signs[0] * uniform(r.f_h_change), signs[1] * uniform(r.xi_h_change))
     fraction = uniform(r.step_at)
+    s.update(drift_shape=r.drift_shape[0])  # the others are drawn once the draw is taken (draw_lab_settings)
     s.update(change="step" if kind == "step" else "drift", change_time=None,
              f_h_change=0.0 if kind == "none" else changes[0], xi_h_change=0.0 if kind == "none" else changes[1])
     return s, fraction
@@ -582,6 +540,8 @@ def draw_lab_settings(seed=None, ranges=LAB_RANGES, **fixed) -> dict:
         if s["change"] == "step" and "change_time" not in fixed:
             s["change_time"] = s["stand_before"] + s["ramp_up"] / s["f_b"] + fraction * s["bout"]
         if _peak_g(s) <= ranges.max_peak_g:
+            if len(ranges.drift_shape) > 1 and "drift_shape" not in fixed:  # after the rest: their draws stay
+                s["drift_shape"] = ranges.drift_shape[int(rng.integers(len(ranges.drift_shape)))]
             return s
     raise OptionError(f"draw_lab_settings: 200 draws all make a GRF peak above {ranges.max_peak_g:g} body "
                       "weights; widen the ranges of f_h or xi_h or narrow blf's")
