@@ -43,29 +43,36 @@ from .search import COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choo
 from .threads import one_blas_thread, record_cores, search_threads, thread_map
 from .timing import TIMING_METHODS, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "zero_drift", "identify_person",
-           "fit_model",
-           "person_result", "profile_interval", "honest_intervals", "undetermined_interval"]
+__all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "ZERO_DRIFT_MAX_DEGREE", "zero_drift",
+           "identify_person", "fit_model", "person_result", "profile_interval", "honest_intervals",
+           "undetermined_interval"]
 
 UNMEASURED_SHARE = 0.02
 """A fitted sample whose value the decimation's low-pass drew more than this share from samples inside a gap of a
 phone's clock (:data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`) is left out of the likelihood."""
 
-ZERO_DRIFT_SECONDS = 10.0
+ZERO_DRIFT_SECONDS = 2.0
 """Span (s) per degree of the polynomial drift of the measurement's zero fitted with a lab-shaped record's person.
 
 A plate's zero that drifts slowly over the record (a few to tens of N) is a slow term of the measured
-``GRF / M_h - g`` that the person does not feel: Legendre polynomials of degree 1 to ``ceil(T / 10 s)``
-(at least 2) over the fitted span ``T``, each with an unknown coefficient concentrated out with the template
-(no search dimension), beside the constant offset. Added when the front end left standing parts out
-(:attr:`~smd_statespace.signals.PreparedRecord.trimmed`); a record bouncing end to end is fitted as before.
+``GRF / M_h - g`` that the person does not feel: Legendre polynomials of degree 1 to ``ceil(T / 2 s)``
+(at least 2, at most :data:`ZERO_DRIFT_MAX_DEGREE`) over the fitted span ``T``, each with an unknown coefficient
+concentrated out with the template (no search dimension), beside the constant offset. Added when the front end
+left standing parts out (:attr:`~smd_statespace.signals.PreparedRecord.trimmed`); a record bouncing end to end
+is fitted as before. Bouncing is at 1.2 Hz or faster; a degree every 2 s follows a zero that moves within 4 s.
 
-Measured on lab records of the ``smooth`` generator (their fits are the ones a drift moves; ``jumps`` records
-moved by under 1 %), three people, drifts of 20-25 N: a cubic (the generator's own), ``f_h`` +120/+54/+72 %
-with degree 2, +11/-16/+6 % with degree 3; a thermal settling ``25 (1 - exp(-t / 8 s))`` N, +110/+71 % with
-degree 2, +12/+51 % with one degree per 10 s (cosines up to 0.1 Hz: +14/+64 %). A random walk smoothed over
-2 s was left at +24/+78 % by every basis: a drift that wanders that fast needs a state of its own.
+Until 2026-11-30 one degree per 10 s: measured on lab records of the ``smooth`` generator, three people, drifts of
+20-25 N, a cubic (the generator's own) left ``f_h`` at +11/-16/+6 %, a settling ``25 (1 - exp(-t / 8 s))`` N at
++12/+51 %, and a random walk smoothed over 2 s at +24/+78 % (degree 2: +120/+54/+72 % on the cubic). On the
+``zero`` row of ``benchmarks/lab_records.py`` (the lab row's 40 records with a settling, wandering or stepping
+zero of 1-30 N; seeds 4601, 4602) one degree per 2 s determined ``f_h`` on 15/38 and 9/40 records instead of 7/38
+and 5/40, the wandering zero's worst error fell from 46-51 % to 14-22 %, every interval covering; the lab row itself
+(a cubic zero) lost one determined answer of 38-40 on each seed (docs/lab-records.md). It costs about 15 % more
+time on such a record.
 """
+
+ZERO_DRIFT_MAX_DEGREE = 30
+"""Highest degree of the zero's drift (a span over 60 s gets one degree per ``T / 30``): unmeasured beyond."""
 
 MIN_CYCLES = 8
 """Fewest force cycles for the record-level model (the cycle-to-cycle spread needs several)."""
@@ -352,17 +359,20 @@ def _floor_note(result) -> str:
 def zero_drift(time) -> list:
     """Regressors of a slowly drifting zero of the measurement: Legendre polynomials in time.
 
-    Degree 1 to ``ceil(T / ZERO_DRIFT_SECONDS)`` (at least 2) over the span ``T``; measurement-only
-    (``dynamic=False``): the plate's zero moves the measured acceleration, not the person.
+    Degree 1 to ``ceil(T / ZERO_DRIFT_SECONDS)`` (at least 2, at most :data:`ZERO_DRIFT_MAX_DEGREE`) over the
+    span ``T``; measurement-only (``dynamic=False``): the plate's zero moves the measured acceleration, not the
+    person.
 
     Examples
     --------
-    >>> [r.name for r in zero_drift(np.linspace(4.0, 34.0, 7))]
-    ['zero_drift_1', 'zero_drift_2', 'zero_drift_3']
+    >>> [r.name for r in zero_drift(np.linspace(4.0, 34.0, 7))][-2:]
+    ['zero_drift_14', 'zero_drift_15']
+    >>> len(zero_drift(np.linspace(0.0, 2.0, 7)))
+    2
     """
     time = np.asarray(time, dtype=float)
     span = max(time[-1] - time[0], 1e-12)
-    degree = max(2, int(np.ceil(span / ZERO_DRIFT_SECONDS - 1e-9)))
+    degree = min(ZERO_DRIFT_MAX_DEGREE, max(2, int(np.ceil(span / ZERO_DRIFT_SECONDS - 1e-9))))
     scaled = 2.0 * (time - time[0]) / span - 1.0
     return [Regressor(f"zero_drift_{k}", np.polynomial.legendre.Legendre.basis(k)(scaled), "m/s^2", dynamic=False)
             for k in range(1, degree + 1)]

@@ -291,27 +291,35 @@ def _stretched(model: RecordModel, x, trial, filtered, low, high) -> tuple:
     return trial, filtered, tried
 
 
-def _hessian(model: RecordModel, params, index, steps, threads=1):
+def _hessian(model: RecordModel, params, index, steps, threads=1, central=False):
     """Observed information's Hessian: forward differences of the exact gradient (:func:`score.score`).
 
     ``len(index) + 1`` derivative passes, where differencing the likelihood
     itself needed ``2 k^2`` likelihoods and was noisier; the result is
     symmetrised. Returns the Hessian over ``index`` (the other parameters
-    held). Central differences (``2 len(index)`` passes, up to 2026-11-26)
-    gave the same standard errors of ``f_h`` and ``xi_h`` within 1.3e-4 of
-    their size on nine fitted 30 s records (three generators, both variation
-    models) in 55-60 % of the time. The passes run in up to ``threads`` threads.
+    held). Central differences (``central=True``: ``2 len(index)`` passes, the
+    default up to 2026-11-26) gave the same standard errors of ``f_h`` and
+    ``xi_h`` within 1.3e-4 of their size on nine fitted 30 s records (three
+    generators, both variation models) in 55-60 % of the time; they cancel the
+    gradient's own rounding where a forward step does not (:func:`information`
+    falls back on them). The passes run in up to ``threads`` threads.
     """
     from .score import score
 
-    def gradient(column):  # the columns' passes do not depend on each other: in threads
+    def gradient(shift):  # the columns' passes do not depend on each other: in threads
+        column, sign = shift
         point = params.copy()
         if column >= 0:
-            point[index[column]] += steps[column]
+            point[index[column]] += sign * steps[column]
         return score(model, point)["gradient"][index]
 
-    base, *shifted = thread_map(gradient, range(-1, index.size), threads)
-    hess = (np.column_stack(shifted) - base[:, None]) / np.asarray(steps)[None, :]
+    if central:
+        plus, minus = (thread_map(gradient, [(column, sign) for column in range(index.size)], threads)
+                       for sign in (1.0, -1.0))
+        hess = (np.column_stack(plus) - np.column_stack(minus)) / (2.0 * np.asarray(steps)[None, :])
+    else:
+        base, *shifted = thread_map(gradient, [(column, 1.0) for column in range(-1, index.size)], threads)
+        hess = (np.column_stack(shifted) - base[:, None]) / np.asarray(steps)[None, :]
     return 0.5 * (hess + hess.T)
 
 
@@ -350,6 +358,8 @@ def information(model: RecordModel, params, cov_type="robust", threads=1) -> tup
     steps, free = _differencing(model, params)
     index = np.flatnonzero(free)
     hess = _hessian(model, params, index, steps[index], threads)
+    if np.any(np.linalg.eigvalsh(-hess[:n_person, :n_person]) <= 0):  # a forward step's rounding, or no curvature
+        hess = _hessian(model, params, index, steps[index], threads, central=True)
     cov = np.full((params.size, params.size), np.nan)
     w, v = np.linalg.eigh(-hess)
     if np.any(w <= 0):
