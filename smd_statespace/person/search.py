@@ -292,34 +292,23 @@ def _stretched(model: RecordModel, x, trial, filtered, low, high) -> tuple:
 
 
 def _hessian(model: RecordModel, params, index, steps, threads=1, central=False):
-    """Observed information's Hessian: forward differences of the exact gradient (:func:`score.score`).
-
-    ``len(index) + 1`` derivative passes, where differencing the likelihood
-    itself needed ``2 k^2`` likelihoods and was noisier; the result is
-    symmetrised. Returns the Hessian over ``index`` (the other parameters
-    held). Central differences (``central=True``: ``2 len(index)`` passes, the
-    default up to 2026-11-26) gave the same standard errors of ``f_h`` and
-    ``xi_h`` within 1.3e-4 of their size on nine fitted 30 s records (three
-    generators, both variation models) in 55-60 % of the time; they cancel the
-    gradient's own rounding where a forward step does not (:func:`information`
-    falls back on them). The passes run in up to ``threads`` threads.
-    """
+    """Observed information's Hessian over ``index`` (the other parameters held), symmetrised: forward differences
+    of the exact gradient (:func:`score.score`; ``len(index) + 1`` passes, in up to ``threads`` threads), or
+    central ones (``2 len(index)``, the default up to 2026-11-26: the same sds of ``f_h`` and ``xi_h`` within 1.3e-4
+    of their size on nine 30 s records), which cancel the gradient's own rounding (:func:`information`)."""
     from .score import score
 
-    def gradient(shift):  # the columns' passes do not depend on each other: in threads
-        column, sign = shift
+    def gradient(shift):  # the passes do not depend on each other: in threads
         point = params.copy()
-        if column >= 0:
-            point[index[column]] += sign * steps[column]
+        if shift[0] >= 0:
+            point[index[shift[0]]] += shift[1] * steps[shift[0]]
         return score(model, point)["gradient"][index]
 
-    if central:
-        plus, minus = (thread_map(gradient, [(column, sign) for column in range(index.size)], threads)
-                       for sign in (1.0, -1.0))
-        hess = (np.column_stack(plus) - np.column_stack(minus)) / (2.0 * np.asarray(steps)[None, :])
-    else:
-        base, *shifted = thread_map(gradient, [(column, 1.0) for column in range(-1, index.size)], threads)
-        hess = (np.column_stack(shifted) - base[:, None]) / np.asarray(steps)[None, :]
+    shifts = [(column, 1.0) for column in range(index.size)]
+    shifts += [(column, -1.0) for column in range(index.size)] if central else [(-1, 0.0)]
+    passes = thread_map(gradient, shifts, threads)
+    minus = np.column_stack(passes[index.size:]) if central else passes[-1][:, None]
+    hess = (np.column_stack(passes[:index.size]) - minus) / ((2.0 if central else 1.0) * np.asarray(steps)[None, :])
     return 0.5 * (hess + hess.T)
 
 
