@@ -120,6 +120,22 @@ def test_the_person_of_a_lab_record_is_found_where_the_whole_record_misleads(lab
     assert person.change is not None and person.change["changed"] == []  # one person from end to end
 
 
+@pytest.mark.slow
+def test_a_zero_that_wanders_is_followed_by_a_denser_drift_and_a_slow_one_is_not(lab, lab_person):
+    """The person is first fitted with the slow drift of the zero (a degree per 10 s); a likelihood-ratio test at it
+    asks whether a degree every 2 s fits better. A zero that wanders (a random walk smoothed over 2 s, 25 N) is
+    fitted again with it, and a note says so; the lab fixture's slow cubic zero is not."""
+    wandering = simulate_lab_record(**PERSON, bout=16.0, hum=(5.0, 0.0, 2.0), drift=25.0, drift_shape="walk", seed=5)
+    person = identify_person(wandering.record)
+    said = [note for note in person.notes if note.startswith("the plate's zero moves faster than a slow drift")]
+    assert len(said) == 1 and "fitted again with its drift of a degree every 2 s" in said[0]
+    drift_names = [r.name for r in person.model.regressors if r.name.startswith("zero_drift")]
+    assert len(drift_names) >= 8  # a fitted span of about 16 s, a degree every 2 s
+    truth = wandering.truth["f_h"]
+    assert person.intervals["f_h"][0] <= truth <= person.intervals["f_h"][1]
+    assert not any("moves faster" in note for note in lab_person.notes)
+
+
 def half(start, end, f_h, f_h_sd, xi_h=0.3, xi_h_sd=0.03):
     """A half's summary as change_test gives it (90 % intervals)."""
     return {"start": start, "end": end, "f_h": f_h, "f_h_sd": f_h_sd, "f_h_low": f_h - 1.645 * f_h_sd,

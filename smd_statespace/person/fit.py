@@ -43,7 +43,8 @@ from .search import COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choo
 from .threads import one_blas_thread, record_cores, search_threads, thread_map
 from .timing import TIMING_METHODS, estimate_timing
 
-__all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "ZERO_DRIFT_MAX_DEGREE", "zero_drift",
+__all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "ZERO_DRIFT_MAX_DEGREE",
+           "ZERO_WANDERS_SECONDS", "ZERO_WANDERS_ALPHA", "zero_drift",
            "identify_person", "fit_model", "person_result", "profile_interval", "honest_intervals",
            "undetermined_interval"]
 
@@ -51,25 +52,39 @@ UNMEASURED_SHARE = 0.02
 """A fitted sample whose value the decimation's low-pass drew more than this share from samples inside a gap of a
 phone's clock (:data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`) is left out of the likelihood."""
 
-ZERO_DRIFT_SECONDS = 2.0
-"""Span (s) per degree of the polynomial drift of the measurement's zero fitted with a lab-shaped record's person.
+ZERO_DRIFT_SECONDS = 10.0
+"""Span (s) per degree of the polynomial drift of the measurement's zero first fitted with a lab-shaped record's
+person.
 
 A plate's zero that drifts slowly over the record (a few to tens of N) is a slow term of the measured
-``GRF / M_h - g`` that the person does not feel: Legendre polynomials of degree 1 to ``ceil(T / 2 s)``
+``GRF / M_h - g`` that the person does not feel: Legendre polynomials of degree 1 to ``ceil(T / 10 s)``
 (at least 2, at most :data:`ZERO_DRIFT_MAX_DEGREE`) over the fitted span ``T``, each with an unknown coefficient
 concentrated out with the template (no search dimension), beside the constant offset. Added when the front end
 left standing parts out (:attr:`~smd_statespace.signals.PreparedRecord.trimmed`); a record bouncing end to end
-is fitted as before. Bouncing is at 1.2 Hz or faster; a degree every 2 s follows a zero that moves within 4 s.
+is fitted as before. Where the zero moves faster (:data:`ZERO_WANDERS_SECONDS`) the person is fitted again.
 
-Until 2026-11-30 one degree per 10 s: measured on lab records of the ``smooth`` generator, three people, drifts of
-20-25 N, a cubic (the generator's own) left ``f_h`` at +11/-16/+6 %, a settling ``25 (1 - exp(-t / 8 s))`` N at
-+12/+51 %, and a random walk smoothed over 2 s at +24/+78 % (degree 2: +120/+54/+72 % on the cubic). On the
-``zero`` row of ``benchmarks/lab_records.py`` (the lab row's 40 records with a settling, wandering or stepping
-zero of 1-30 N; seeds 4601, 4602) one degree per 2 s determined ``f_h`` on 15/38 and 9/40 records instead of 7/38
-and 5/40, the wandering zero's worst error fell from 46-51 % to 14-22 %, every interval covering; the lab row itself
-(a cubic zero) lost one determined answer of 38-40 on each seed (docs/lab-records.md). It costs about 15 % more
-time on such a record.
+Measured on lab records of the ``smooth`` generator, three people, drifts of 20-25 N: a cubic (the generator's
+own) left ``f_h`` at +11/-16/+6 %, a settling ``25 (1 - exp(-t / 8 s))`` N at +12/+51 %, and a random walk smoothed
+over 2 s at +24/+78 % (degree 2: +120/+54/+72 % on the cubic).
 """
+
+ZERO_WANDERS_SECONDS = 2.0
+"""Span (s) per degree of the zero's drift where it moves faster than :data:`ZERO_DRIFT_SECONDS` follows.
+
+At the person fitted with the slow drift, the likelihood with a degree every 2 s (one filter pass: the
+coefficients are concentrated out) is compared with it; where the ratio is significant at
+:data:`ZERO_WANDERS_ALPHA` (chi-squared on the extra degrees), the person is fitted again with the dense drift
+and a note says so. Bouncing is at 1.2 Hz or faster; a degree every 2 s follows a zero that moves within 4 s.
+On the ``zero`` row of ``benchmarks/lab_records.py`` (the lab row's 40 records with a settling, wandering or
+stepping zero of 1-30 N; seeds 4601, 4602) the dense drift on every record determined ``f_h`` on 15/38 and 9/40
+records instead of 7/38 and 5/40 and the wandering zero's worst error fell from 46-51 % to 14-22 %, every interval
+covering; but on the lab row (a cubic zero) it lost one determined answer of 38-40 on each seed and cost 15-25 %
+more time. Tested so, 14/38 and 10/40 of the zero row are determined, every interval covering, and the lab row
+keeps its 19/38 and 12/40, 36/38 and 39/40 of its answers unchanged (docs/lab-records.md).
+"""
+
+ZERO_WANDERS_ALPHA = 0.01
+"""Level of the likelihood-ratio test of :data:`ZERO_WANDERS_SECONDS`' drift against the slow one."""
 
 ZERO_DRIFT_MAX_DEGREE = 30
 """Highest degree of the zero's drift (a span over 60 s gets one degree per ``T / 30``): unmeasured beyond."""
@@ -257,8 +272,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     record_warnings = _applicable(record, prepared, check)
     measured_force, record = record.force, prepared.record  # the force as read seeds the noise floor's draw
     regressors = [replace(r, values=v) for r, v in zip(regressors, prepared.extra)]
-    if prepared.trimmed:
-        regressors += zero_drift(record.time)
+    zero = tuple(zero_drift(record.time)) if prepared.trimmed else ()
     faded = fading(fade, prepared.trimmed, timing)
     y, floor_notes = raise_to_floor(record.force / record.mass - G, observed, record.fs, noise_floor,  # Eq. 3
                                     seed_from=measured_force)
@@ -274,31 +288,26 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     all_regressors = (offset,) + tuple(regressors)
     names = AUTO_VARIATIONS if variation == "auto" else (variation,)
 
-    def model_for(timing_, variation_, template):
+    def model_for(timing_, variation_, template, zero_=None):
         return RecordModel(record.time, y, timing_, n_harmonics, variation_, process_noise, drift=drift,
-                           regressors=all_regressors, phase_template=template, observed=observed, fade=faded)
+                           regressors=all_regressors + (zero if zero_ is None else zero_), phase_template=template,
+                           observed=observed, fade=faded)
 
     if cov_type not in COV_TYPES:
         raise OptionError(f"cov_type {cov_type!r} is not one of: {', '.join(COV_TYPES)}")
     steps = len(names) * (1 + (TIMING_ITERATIONS + 1 if timing == "model" else 0)) + (2 if timing == "model" else 1)
     steps += 1 if check_change else 0  # the halves' fits
     with tqdm(total=steps, desc="identify (record)", unit="fit", disable=not progress, leave=False) as bar:
+        model, fitted, comparison = _search(model_for, cycle_timing, names, timing, bar.update, threads)
+        if zero:  # a lab-shaped record: does its zero move faster than the slow drift follows?
+            denser = tuple(zero_drift(record.time, ZERO_WANDERS_SECONDS))
+            said = _zero_wanders(model, fitted, model_for(model.timing, model.variation, model.phase_template, denser))
+            if said:
+                bar.total += steps - 1
+                zero = denser
+                model, fitted, comparison = _search(model_for, cycle_timing, names, timing, bar.update, threads)
+                notes.append(said)
         step = bar.update
-        # every variation model is fitted at the first cycle timing and compared by AIC there; with
-        # timing="model" each then re-places the cycle starts with its own fit, and the choice is made again
-        fits = thread_map(lambda name: _fitted(model_for(cycle_timing, name, None), timing == "model"), names, threads)
-        step(len(names))
-        comparison = [comparison_row(m, f, "first") for m, f in fits]
-        # a fit with f_h or xi_h on its search bound has not estimated them (a variation model that is
-        # too flexible lets the person's resonance imitate a missing effect): it wins only if all do
-        eligible = [i for i, row in enumerate(comparison) if not row.on_bound] or list(range(len(fits)))
-        best = min(eligible, key=lambda i: comparison[i].aic)
-        model, fitted = fits[best]
-        if timing == "model":
-            suspect = {row.variation for row in comparison if row.on_bound}  # at the first timing
-            model, fitted, refined = choose_with_own_timing(model_for, cycle_timing, fits, best, step, suspect,
-                                                            threads)
-            comparison += refined
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                            "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
@@ -316,6 +325,43 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         if len(given) > len(effects_asked):  # the record brought its floor
             result.notes.append(_floor_note(result))
     return result
+
+
+def _search(model_for, cycle_timing, names, timing: str, step, threads: int) -> tuple:
+    """``(model, fit, comparison rows)``: every variation model of ``names`` fitted at the first cycle timing and
+    compared by AIC there; with ``timing="model"`` each then re-places the cycle starts with its own fit, and the
+    choice is made again (:func:`~smd_statespace.person.search.choose_with_own_timing`)."""
+    fits = thread_map(lambda name: _fitted(model_for(cycle_timing, name, None), timing == "model"), names, threads)
+    step(len(names))
+    comparison = [comparison_row(m, f, "first") for m, f in fits]
+    # a fit with f_h or xi_h on its search bound has not estimated them (a variation model that is
+    # too flexible lets the person's resonance imitate a missing effect): it wins only if all do
+    eligible = [i for i, row in enumerate(comparison) if not row.on_bound] or list(range(len(fits)))
+    best = min(eligible, key=lambda i: comparison[i].aic)
+    model, fitted = fits[best]
+    if timing == "model":
+        suspect = {row.variation for row in comparison if row.on_bound}  # at the first timing
+        model, fitted, refined = choose_with_own_timing(model_for, cycle_timing, fits, best, step, suspect, threads)
+        comparison += refined
+    return model, fitted, comparison
+
+
+def _zero_wanders(model, fitted, denser) -> str:
+    """The note of a zero that moves faster than the slow drift follows, or "": the likelihood ratio of ``denser``
+    (the same model with :data:`ZERO_WANDERS_SECONDS`' drift) at ``fitted``'s parameters, chi-squared on the extra
+    degrees (:data:`ZERO_WANDERS_ALPHA`)."""
+    from scipy.stats import chi2
+
+    extra = len(denser.regressors) - len(model.regressors)
+    if extra <= 0:  # a span so short that the slow drift has as many degrees
+        return ""
+    ratio = 2.0 * (denser.loglike(fitted["params"]) - model.loglike(fitted["params"]))
+    p_value = float(chi2.sf(ratio, extra)) if np.isfinite(ratio) else 1.0
+    if p_value >= ZERO_WANDERS_ALPHA:
+        return ""
+    return (f"the plate's zero moves faster than a slow drift follows (likelihood ratio {ratio:.1f} on {extra} "
+            f"degrees, p {p_value:.2g}): the person was fitted again with its drift of a degree every "
+            f"{ZERO_WANDERS_SECONDS:g} s")
 
 
 def _changed_in_time(result, threads: int):
@@ -356,23 +402,22 @@ def _floor_note(result) -> str:
             "model of the fit without it); --no-floor (measured_floor=False) leaves it out")
 
 
-def zero_drift(time) -> list:
+def zero_drift(time, seconds=ZERO_DRIFT_SECONDS) -> list:
     """Regressors of a slowly drifting zero of the measurement: Legendre polynomials in time.
 
-    Degree 1 to ``ceil(T / ZERO_DRIFT_SECONDS)`` (at least 2, at most :data:`ZERO_DRIFT_MAX_DEGREE`) over the
-    span ``T``; measurement-only (``dynamic=False``): the plate's zero moves the measured acceleration, not the
-    person.
+    Degree 1 to ``ceil(T / seconds)`` (at least 2, at most :data:`ZERO_DRIFT_MAX_DEGREE`) over the span ``T``;
+    measurement-only (``dynamic=False``): the plate's zero moves the measured acceleration, not the person.
 
     Examples
     --------
-    >>> [r.name for r in zero_drift(np.linspace(4.0, 34.0, 7))][-2:]
-    ['zero_drift_14', 'zero_drift_15']
-    >>> len(zero_drift(np.linspace(0.0, 2.0, 7)))
-    2
+    >>> [r.name for r in zero_drift(np.linspace(4.0, 34.0, 7))]
+    ['zero_drift_1', 'zero_drift_2', 'zero_drift_3']
+    >>> [r.name for r in zero_drift(np.linspace(4.0, 34.0, 7), ZERO_WANDERS_SECONDS)][-1]
+    'zero_drift_15'
     """
     time = np.asarray(time, dtype=float)
     span = max(time[-1] - time[0], 1e-12)
-    degree = min(ZERO_DRIFT_MAX_DEGREE, max(2, int(np.ceil(span / ZERO_DRIFT_SECONDS - 1e-9))))
+    degree = min(ZERO_DRIFT_MAX_DEGREE, max(2, int(np.ceil(span / seconds - 1e-9))))
     scaled = 2.0 * (time - time[0]) / span - 1.0
     return [Regressor(f"zero_drift_{k}", np.polynomial.legendre.Legendre.basis(k)(scaled), "m/s^2", dynamic=False)
             for k in range(1, degree + 1)]
