@@ -53,6 +53,19 @@ def test_records_from_folder_glob_and_manifest(records):
     assert len({r.part for r in by_folder}) == 4
 
 
+def test_a_folder_of_plate_exports_is_a_batch_of_them(tmp_path):
+    """A lab's folder of exports (Qualisys' .tsv, BioWare's .txt, C3D): every file of a record's suffix, not the
+    others."""
+    for name in ("b.tsv", "a.txt", "c.C3D", "notes.md", "d.csv"):
+        (tmp_path / name).write_text("x")
+    (tmp_path / "sub.csv").mkdir()
+    assert [r.name for r in collect_records(tmp_path, mass=70)] == ["a.txt", "b.tsv", "c.C3D", "d.csv"]
+    (tmp_path / "only").mkdir()
+    (tmp_path / "only" / "notes.md").write_text("x")
+    with pytest.raises(RecordError, match=r"no record files \(\*\.csv, \*\.tsv, \*\.txt, \*\.c3d"):
+        collect_records(tmp_path / "only", mass=70)
+
+
 @pytest.mark.parametrize("text,message", [
     ("file,weight\na.csv,60\n", "missing column 'mass'"),
     ("file,mass\n", "no records listed"),

@@ -42,7 +42,7 @@ def add_identify(subparsers):
     )
     parser.add_argument("record", metavar="REC", nargs="?",
                         help="a record CSV (time,force[,floor_acc]) or a force plate's export (Vicon Nexus, Kistler "
-                             "BioWare, Qualisys, OpenSim, C3D, ...), a folder of CSV files, or a quoted glob "
+                             "BioWare, Qualisys, OpenSim, C3D, ...), a folder of them, or a quoted glob "
                              "('data/*.csv'); may be omitted with --manifest")
     parser.add_argument("--mass", type=float, metavar="KG",
                         help="body mass M_h (kg); with many records, the mass of those the manifest does not list; "

@@ -62,6 +62,10 @@ one row per record (the person) instead of one per cycle."""
 __all__ = ["BatchRecord", "BatchSummary", "collect_records", "read_manifest", "record_key", "run_batch",
            "atomic_write_csv"]
 
+RECORD_SUFFIXES = (".csv", ".tsv", ".txt", ".c3d", ".mot", ".sto")
+"""The files of a folder taken as its records: this library's CSV and a plate's exports
+(:func:`~smd_statespace.io.read_record`: Qualisys' ``.tsv``, BioWare's and AMTI's ``.txt``, C3D, OpenSim's)."""
+
 MANIFEST_COLUMNS = ("file", "mass")
 """Columns of a manifest: the record's CSV (relative to the manifest's folder, or absolute) and its body mass (kg)."""
 
@@ -198,8 +202,8 @@ def collect_records(source, mass=None, manifest=None, accelerometer=False, units
     Parameters
     ----------
     source : str or path, optional
-        A folder (every ``*.csv`` in it, sorted by name, except the
-        manifest), a glob pattern (``"data/*/rec*.csv"``) or one file. May be
+        A folder (every file of :data:`RECORD_SUFFIXES` in it, sorted by name,
+        except the manifest), a glob pattern (``"data/*/rec*.csv"``) or one file. May be
         None with a manifest, which then lists the records.
     mass : float, optional
         Body mass (kg) of every record; needed unless a manifest gives them.
@@ -234,8 +238,8 @@ def _collect(source, mass, manifest, accelerometer) -> list[BatchRecord]:
         return listed
     text = str(source)
     if Path(text).is_dir():
-        paths = sorted(p for p in Path(text).glob("*.csv")
-                       if manifest is None or p.resolve() != Path(manifest).resolve())
+        paths = sorted(p for p in Path(text).iterdir() if p.is_file() and p.suffix.lower() in RECORD_SUFFIXES
+                       and (manifest is None or p.resolve() != Path(manifest).resolve()))
         base = Path(text)
         where = f"folder {text}"
     else:
@@ -243,7 +247,7 @@ def _collect(source, mass, manifest, accelerometer) -> list[BatchRecord]:
         base = None
         where = f"pattern {text!r}" if glob.has_magic(text) else text
     if not paths:
-        raise RecordError(f"{where}: no record files (*.csv) found")
+        raise RecordError(f"{where}: no record files ({', '.join('*' + x for x in RECORD_SUFFIXES)}) found")
     names = [str(p.relative_to(base)) if base is not None else str(p) for p in paths]
     if listed is None:
         if mass is None and not accelerometer:
