@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import MassError, RecordError
-from .plate_exports import c3d_force, decode_rows, find_layout
+from .plate_exports import c3d_force, check_file, decode_rows, find_layout
 
 if TYPE_CHECKING:  # pandas is imported where it is used: `import smd_statespace` needs numpy only
     import pandas as pd
@@ -237,10 +237,7 @@ def csv_rows(path: Path, expected: str, delimiter_of) -> tuple:
     header should be) for an empty file. ``delimiter_of(path, first_line)`` returns the delimiter or
     raises :class:`RecordError` naming the one found.
     """
-    if not path.exists():
-        raise RecordError(f"{path}: no such file")
-    if path.is_dir():
-        raise RecordError(f"{path}: is a directory, expected a CSV file")
+    check_file(path)
     try:
         with open(path, newline="", encoding="utf-8-sig") as handle:
             first_line = handle.readline()

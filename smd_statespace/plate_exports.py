@@ -35,7 +35,8 @@ import numpy as np
 
 from .errors import RecordError
 
-__all__ = ["ExportLayout", "decode_rows", "find_layout", "c3d_force", "VERTICAL", "FORCE_UNITS", "TIME_UNITS"]
+__all__ = ["ExportLayout", "check_file", "decode_rows", "find_layout", "split_name", "c3d_force", "VERTICAL",
+           "FORCE_UNITS", "TIME_UNITS"]
 
 VERTICAL = (
     re.compile(r"^(?:(?:fp|force ?plate|plate|platform|left|right|l|r|total|combined|net|force) ?\d* )*"
@@ -111,14 +112,20 @@ class ExportLayout:
     notes: list = field(default_factory=list)
 
 
+def check_file(path: Path, expected: str = "a CSV file") -> None:
+    """A one-line :class:`RecordError` when ``path`` does not exist or is a directory (``expected``: what it should
+    be, for the message)."""
+    if not path.exists():
+        raise RecordError(f"{path}: no such file")
+    if path.is_dir():
+        raise RecordError(f"{path}: is a directory, expected {expected}")
+
+
 def decode_rows(path: Path) -> tuple:
     """``(rows, delimiter)`` of a text export: UTF-8, UTF-16 (with its byte order mark) or Windows' code page 1252;
     comma-, semicolon-, tab- or space-separated (the delimiter of most of its first lines; a tab before a semicolon
     before a comma, which may be a decimal comma); ``delimiter`` None for spaces."""
-    if not path.exists():
-        raise RecordError(f"{path}: no such file")
-    if path.is_dir():
-        raise RecordError(f"{path}: is a directory, expected a CSV file")
+    check_file(path)
     try:
         data = path.read_bytes()
     except OSError as exc:
@@ -361,8 +368,7 @@ def c3d_force(path: Path) -> tuple:
     except ImportError:
         raise RecordError(f"{path}: a C3D file is read with the ezc3d package: pip install ezc3d (or "
                           "'smd_statespace[c3d]'), or export the plates' forces as text (CSV)") from None
-    if not path.is_file():
-        raise RecordError(f"{path}: no such file" if not path.exists() else f"{path}: is a directory, expected a file")
+    check_file(path, "a file")
     try:
         c3d = ezc3d.c3d(str(path), extract_forceplat_data=True)
     except Exception as exc:  # ezc3d raises plain RuntimeErrors and IndexErrors on files it cannot parse

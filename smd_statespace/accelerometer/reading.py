@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import OptionError, RecordError
 from ..io import G, csv_rows, numeric_column
+from ..plate_exports import split_name
 
 __all__ = [
     "UNITS",
@@ -60,10 +61,9 @@ _TIME_NAMES = ("time", "t")
 _DELIMITERS = (("tab", "\t"), ("semicolon", ";"), ("comma", ","))
 _LABELLED_TIME = ("time", "t", "elapsed")
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3}
-_SECONDS_NAMES = ("seconds_elapsed",)  # Sensor Logger's (its "time" is an epoch in ns, without a unit)
+_SECONDS_NAMES = ("seconds elapsed",)  # Sensor Logger's (its "time" is an epoch in ns, without a unit)
 _ACCELERATION_UNITS = {"m/s^2": "m/s^2", "m/s²": "m/s^2", "m/s2": "m/s^2", "g": "g"}
 _LABELLED_AXIS = re.compile(r"^(?:acc(?:el(?:eration|erometer)?)?[\s_-]*)?([xyz])(?:[\s_-]*axis)?$")
-_NAME_AND_UNIT = re.compile(r"^(.*?)\s*\((.*)\)$")
 
 ACCEPTED_HEADERS = (
     '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)"'
@@ -128,14 +128,6 @@ def _delimiter(path, first_line: str) -> str:
     raise RecordError(f"{path}: header {line!r} has a single column; accepted headers: {ACCEPTED_HEADERS}")
 
 
-def _name_and_unit(name: str) -> tuple:
-    """``(name, unit)`` of a header cell like ``"X (m/s^2)"``, both lower case (unit ``""`` when none)."""
-    match = _NAME_AND_UNIT.match(name.strip())
-    if match is None:
-        return name.strip().lower(), ""
-    return match.group(1).strip().lower(), match.group(2).strip().lower()
-
-
 def _labelled(names: list):
     """``([time, x, y, z columns], units, seconds per time unit)`` of a header that names one time column in s or
     ms (``time``, ``t``, ``elapsed``; or ``seconds_elapsed``) and one x, y and z acceleration column each with one
@@ -144,7 +136,7 @@ def _labelled(names: list):
     a position's would read as well)."""
     times, axes, units = [], {}, set()
     for name in names:
-        base, unit = _name_and_unit(name)
+        base, unit = split_name(name)  # lower case, "_-./:" read as spaces
         if base in _LABELLED_TIME and unit in _TIME_UNITS:
             times.append((name, _TIME_UNITS[unit]))
         elif base in _SECONDS_NAMES and not unit:

@@ -168,7 +168,8 @@ def run_compare(args) -> int:
             # the record as read, as identify fits it: the front end needs the measured rate (the mains hum is
             # found and subtracted there, and the fitting rate chosen off its multiples); the per-cycle rows
             # take the record decimated to --rate
-            person = identify_person(read_record(args.record, args.mass, **reading_options(args)), n_harmonics=args.harmonics,
+            as_read = read_record(args.record, args.mass, **reading_options(args))
+            person = identify_person(as_read, n_harmonics=args.harmonics,
                                      check=not args.ignore_checks, rate=rate_of(args),
                                      progress=not args.quiet)
             person_seconds = time.perf_counter() - started

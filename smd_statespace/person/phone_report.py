@@ -4,8 +4,8 @@ A force plate samples on a clock that does not drift or stall, along an axis tha
 A phone does neither: it drops samples and bursts of them (the samples in a gap are left out of the
 likelihood, :data:`~smd_statespace.accelerometer.record.GAP_SAMPLES`), samples at scattered instants or stamps
 its samples late or early (the reading tells which: ``clock["samples_at"]``), and turns with the body (the
-vertical is a low-pass of the gravity it sees). When a phone record leaves ``f_h`` or ``xi_h`` undetermined, or its innovations are heavy-tailed,
-:func:`phone_words` says which of these the record shows and how strongly, from what the reading
+vertical is a low-pass of the gravity it sees). When a phone record leaves ``f_h`` or ``xi_h`` undetermined, or
+its innovations are heavy-tailed, :func:`phone_words` says which of these the record shows and how strongly, from what the reading
 measured (``record.extra["clock"]``, ``["geometry"]``), so that a user knows whether to record
 again (and how) or whether the person is what the record leaves open.
 """
