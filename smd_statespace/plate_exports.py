@@ -42,8 +42,9 @@ VERTICAL = (
     re.compile(r"^(?:(?:fp|force ?plate|plate|platform|left|right|l|r|total|combined|net|force) ?\d* )*"
                r"(?:force )?f ?z ?\d*$"),
     re.compile(r"^(?:(?:fp|plate|left|right|total|combined|net) ?\d* )*(?:force|grf) ?z ?\d*$"),
-    re.compile(r"^(?:(?:left|right|total|combined|net) )?(?:vertical (?:ground reaction )?force|fvert|vgrf|grf|force)"
-               r"(?: ?\d+)?$"),
+    re.compile(r"^(?:(?:left|right|total|combined|net) )?(?:grf|force)(?: ?\d+)?$"),
+    re.compile(r"^(?:[a-z]+ ?\d* )*(?:vertical (?:ground reaction )?force|fvert|f vert|fvertical|vgrf|vertical grf)"
+               r"(?: ?\d+)?$"),  # a name that says vertical: any qualifier before it (dominant, paretic, ...)
     re.compile(r"^(?:\d+ )?ground force ?\d* vy$"),  # OpenSim's frame: y up
 )
 """Names (lower case, without their unit, ``._-:/`` read as spaces) of a plate's vertical force column."""
@@ -279,13 +280,14 @@ def find_layout(rows: list, delimiter: str | None, source: str, fs: float | None
     if not times and rate is None:
         raise RecordError(f"{source}: missing column 'time' (in s or ms), and no sampling rate above the header; "
                           f"{where}; give the rate with --fs HZ (fs=HZ)")
-    forces = _force_columns(header, names, times, force_columns, source, where)
+    groups = _groups(rows, header_at, len(header), decimal_comma)
+    forces = _force_columns(header, names, times, force_columns, source, where, groups)
     units = {names[i][1] for i in forces}
     if len(units) > 1 or not units <= set(FORCE_UNITS):
         raise RecordError(f"{source}: vertical force columns in {', '.join(sorted(repr(u) for u in units))}; "
                           f"expected N, kN, lbf or kgf ({where})")
     time_unit = names[times[0]][1] if times else "s"
-    notes = _notes(_software(block, header), header, times, rate, forces, header_at, bool(fs))
+    notes = _notes(_software(block, header), header, times, rate, forces, header_at, bool(fs), groups)
     return ExportLayout(header, header_at + 1, body, times[0] if times else None, TIME_UNITS[time_unit], rate,
                         forces, FORCE_UNITS[units.pop()], notes)
 
@@ -311,14 +313,32 @@ def _header(rows: list, start: int, source: str, force_columns) -> tuple:
                                for i, name in enumerate(header)]
 
 
+def _groups(rows: list, header_at: int, width: int, decimal_comma: bool) -> list:
+    """Each column's group, from a row of group names right above the header (a Vicon Nexus export names its
+    devices there, ``FP1 - Force``, ``Combined Force``, over each device's first column): the name last written at
+    or left of the column; all "" when the row above is not such a row (its first cell written, or a
+    number in it)."""
+    above = rows[header_at - 1] if header_at >= 1 else []
+    cells = [cell.strip() for cell in above]
+    if not cells or cells[0] or not any(cells) or any(_number(cell, decimal_comma) for cell in cells if cell):
+        return [""] * width
+    groups, current = [], ""
+    for i in range(width):
+        current = cells[i] if i < len(cells) and cells[i] else current
+        groups.append(current)
+    return groups
+
+
 def _column_number(column) -> int | None:
     """``column`` as a 1-based column number, or None when it is a name."""
     text = str(column).strip()
     return int(text) if text.isdigit() and int(text) >= 1 else None
 
 
-def _force_columns(header: list, names: list, times: list, force_columns, source: str, where: str) -> list:
-    """The indices of the vertical force columns: those given, else those :data:`VERTICAL` names (a total alone)."""
+def _force_columns(header: list, names: list, times: list, force_columns, source: str, where: str,
+                   groups: list) -> list:
+    """The indices of the vertical force columns: those given, else those :data:`VERTICAL` names (a total alone:
+    named so, or under a group named so, ``groups``)."""
     if force_columns is not None:
         chosen = []
         for column in force_columns:
@@ -332,7 +352,7 @@ def _force_columns(header: list, names: list, times: list, force_columns, source
         return chosen
     forces = [i for i, (base, unit) in enumerate(names) if _vertical(base, unit) and i not in times]
     forces = [i for i in forces if names[i][1] in FORCE_UNITS] or forces
-    totals = [i for i in forces if TOTAL.search(names[i][0])]
+    totals = [i for i in forces if TOTAL.search(names[i][0]) or TOTAL.search(groups[i].lower())]
     if len(totals) == 1:
         return totals
     if not forces:
@@ -341,13 +361,15 @@ def _force_columns(header: list, names: list, times: list, force_columns, source
     return forces
 
 
-def _notes(software: str, header: list, times: list, rate, forces: list, header_at: int, given: bool) -> list:
+def _notes(software: str, header: list, times: list, rate, forces: list, header_at: int, given: bool,
+           groups: list) -> list:
     """The reading in words."""
     what = f"a {software} export" if software else "an export"
     what += f", header on line {header_at + 1}" if header_at >= 0 else ", without a header"
     time = f"time from '{header[times[0]]}'" if times else \
         f"time from the rows counted at {rate:g} Hz{' (as given)' if given else ''}"
-    columns = ", ".join(f"column {i + 1}" if header_at < 0 else f"'{header[i]}' (column {i + 1})" for i in forces)
+    columns = ", ".join(f"column {i + 1}" if header_at < 0 else
+                        f"'{header[i]}' (column {i + 1}{', ' + groups[i] if groups[i] else ''})" for i in forces)
     force = f"force the sum of {len(forces)} plates' vertical columns {columns}" if len(forces) > 1 else \
         f"force from {columns}"
     return [f"read as {what}: {time}, {force}"]

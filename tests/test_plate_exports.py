@@ -42,7 +42,34 @@ def test_a_vicon_nexus_devices_block_of_two_plates_reads_as_their_upward_sum(tmp
     np.testing.assert_allclose(record.time, t, atol=1e-12)
     notes = " ".join(record.extra["reading"])
     assert "Vicon Nexus export, header on line 4" in notes and "rows counted at 1000 Hz" in notes
-    assert "sum of 2 plates' vertical columns 'Fz' (column 5), 'Fz' (column 11)" in notes and "sign turned" in notes
+    assert ("sum of 2 plates' vertical columns 'Fz' (column 5, Force Plate 1 - Force), 'Fz' (column 11, Force Plate 2 "
+            "- Force)") in notes and "sign turned" in notes
+
+
+def test_a_nexus_export_with_its_plates_combined_reads_the_combined_force_alone(tmp_path):
+    """Nexus names each device on the row above the header; a 'Combined Force' device repeats the plates' sum as
+    plain 'Fz' (a real export summed all three: twice the force). The raw channels (V) are not forces."""
+    t, force, share = bouncing(n=1500)
+    names = ",,FP_links - Force,,,FP_links - Raw,,FP_rechts - Force,,,Combined Force,,"
+    rows = [f"{k // 10 + 1},{k % 10},3.1,-2.0,{-f * s:.6f},0.1,0.2,-1.5,2.2,{-f * (1 - s):.6f},1.6,0.2,{-f:.6f}"
+            for k, (f, s) in enumerate(zip(force, share))]
+    lines = ["Devices", "1000", names, "Frame,Sub Frame,Fx,Fy,Fz,FZ1,FZ2,Fx,Fy,Fz,Fx,Fy,Fz",
+             ",,N,N,N,V,V,N,N,N,N,N,N", *rows]
+    record = read_record(write(tmp_path / "squat.csv", lines), MASS)
+    np.testing.assert_allclose(record.force, force, atol=2e-6)
+    assert "force from 'Fz' (column 13, Combined Force)" in record.extra["reading"][0]
+
+
+def test_vertical_force_columns_qualified_by_side_or_limb_are_summed_and_horizontal_ones_left(tmp_path):
+    """A balance lab's two plates, one per foot: 'dominant Fvert (N)' and 'non-dominant Fvert (N)' (tab-separated,
+    beside the anterior-posterior force and centre of pressure)."""
+    t, force, share = bouncing(n=500, fs=100.0)
+    rows = [f"{tk:.6f}\t-1.8\t{f * s:.6f}\t0.22\t1.6\t{f * (1 - s):.6f}\t0.21" for tk, f, s in zip(t, force, share)]
+    header = "time (s)\tdominant Fap (N)\tdominant Fvert (N)\tdominant CPap (m)\tnon-dominant Fap (N)\t" \
+             "non-dominant Fvert (N)\tnon-dominant CPap (m)"
+    record = read_record(write(tmp_path / "Control 0 trial 0.txt", [header, *rows]), MASS)
+    np.testing.assert_allclose(record.force, force, atol=1e-5)
+    assert "'dominant Fvert (N)' (column 3), 'non-dominant Fvert (N)' (column 6)" in record.extra["reading"][0]
 
 
 def test_a_qualisys_tsv_reads_its_time_and_force_z(tmp_path):
