@@ -253,7 +253,7 @@ def csv_rows(path: Path, expected: str, delimiter_of) -> tuple:
     return rows, delimiter
 
 
-def read_record(path, mass, *, fs=None, force_columns=None) -> Record:
+def read_record(path, mass=None, *, fs=None, force_columns=None) -> Record:
     """Read a CSV record and check it (see the module docstring for the format).
 
     Parameters
@@ -263,8 +263,11 @@ def read_record(path, mass, *, fs=None, force_columns=None) -> Record:
         (:mod:`smd_statespace.plate_exports`: a block of settings above the header, a row
         of units, each plate's vertical force, commas, semicolons or tabs, decimal commas,
         OpenSim's ground-reaction files; a ``.c3d`` file with the ezc3d package).
-    mass : float
-        Body mass (kg).
+    mass : float, optional
+        Body mass (kg). None: the plate weighs the person; the record then carries a provisional mass (its
+        loaded force's median over ``g``) and ``extra["weigh"]``, and
+        :func:`~smd_statespace.signals.weighing.weigh_record` (which ``identify_person`` and the front end call)
+        takes the mass from its standing parts or its whole bouncing cycles.
     fs : float, optional
         An export's sampling rate (Hz), for one without a time column or a rate above its
         header: the time is then its rows counted at ``fs``.
@@ -285,7 +288,8 @@ def read_record(path, mass, *, fs=None, force_columns=None) -> Record:
         The mass is not plausible.
     """
     path, source = Path(path), os.fspath(path)
-    check_mass(mass)
+    if mass is not None:
+        check_mass(mass)
     floor_acc = None
     if path.suffix.lower() == ".c3d":
         time, force, notes = c3d_force(path)
@@ -300,7 +304,27 @@ def read_record(path, mass, *, fs=None, force_columns=None) -> Record:
         force = -force
         notes.append("the vertical force is negative under the load (the force on the plate with z up, as Vicon "
                      "Nexus gives it, or a plate whose z axis points down): read with its sign turned")
-    return replace(make_record(time, force, mass, floor_acc=floor_acc, source=source), extra={"reading": notes})
+    given = mass is not None
+    mass = mass if given else provisional_mass(force, source)
+    return replace(make_record(time, force, mass, floor_acc=floor_acc, source=source),
+                   extra={"reading": notes, "weigh": not given})
+
+
+def provisional_mass(force, source: str) -> float:
+    """The mass (kg) a record read without one carries until the plate weighs the person
+    (:func:`~smd_statespace.signals.weighing.weigh_record`): the median of its loaded force (above
+    :data:`CONTACT_FRACTION` of its largest) over ``g``; a :class:`MassError` naming the reading when that is no
+    person's weight."""
+    force = np.asarray(force, dtype=float)
+    finite = force[np.isfinite(force)]
+    loaded = finite[np.abs(finite) > CONTACT_FRACTION * float(np.max(np.abs(finite)))] if finite.size else finite
+    level = float(np.median(loaded)) if loaded.size else float("nan")
+    lo, hi = MASS_RANGE
+    if not (np.isfinite(level) and lo <= level / G <= hi):
+        raise MassError(f"{source}: no body mass given, and the plate's force (median {level:.4g} N = "
+                        f"{level / G:.4g} kg at g) is no person's weight ({lo:g}-{hi:g} kg); give it with --mass KG "
+                        "(mass=KG), and check the force's units (N)")
+    return level / G
 
 
 def _read_export(rows: list, delimiter, source: str, fs, force_columns) -> tuple:
@@ -321,7 +345,8 @@ def _read_export(rows: list, delimiter, source: str, fs, force_columns) -> tuple
 
 
 def _read_plain(path: Path, rows: list, header: list, mass) -> Record:
-    """A record in this library's own format (``time,force[,floor_acc]``, commas), every row checked."""
+    """A record in this library's own format (``time,force[,floor_acc]``, commas), every row checked; ``mass``
+    None: a provisional one, to be weighed (:func:`read_record`)."""
     body = [row for row in rows[1:] if any(cell.strip() for cell in row)]
     if not body:
         raise RecordError(f"{path}: header only, no data rows")
@@ -329,8 +354,13 @@ def _read_plain(path: Path, rows: list, header: list, mass) -> Record:
         if len(row) != len(header):
             raise RecordError(f"{path}: data row {number} has {len(row)} fields, the header has {len(header)}")
     columns = {name: np.array([row[i].strip() for row in body], dtype=object) for i, name in enumerate(header)}
-    return make_record(columns["time"], columns["force"], mass, floor_acc=columns.get("floor_acc"),
-                       source=os.fspath(path))
+    source = os.fspath(path)
+    if mass is None:
+        record = make_record(columns["time"], columns["force"], provisional_mass(
+            numeric_column(columns["force"], "force", source), source), floor_acc=columns.get("floor_acc"),
+            source=source)
+        return replace(record, extra={"weigh": True})
+    return make_record(columns["time"], columns["force"], mass, floor_acc=columns.get("floor_acc"), source=source)
 
 
 def write_record(path, record: Record) -> None:

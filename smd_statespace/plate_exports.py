@@ -60,6 +60,9 @@ FORCE_UNITS = {"": 1.0, "n": 1.0, "newton": 1.0, "newtons": 1.0, "kn": 1000.0, "
                "kgf": 9.80665}
 """Multipliers to N of the units a vertical force column may name (none: N)."""
 
+ACCELERATION_UNITS = {"m/s^2", "m/s2", "m/s²", "g", "m s^-2"}
+"""Units of a column that holds an acceleration (a phone's export read as a plate's: said so)."""
+
 TIME_UNITS = {"": 1.0, "s": 1.0, "sec": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3}
 """Multipliers to s of the units a time column may name (none: s)."""
 
@@ -356,8 +359,13 @@ def _force_columns(header: list, names: list, times: list, force_columns, source
     if len(totals) == 1:
         return totals
     if not forces:
+        accelerations = [header[i] for i, (base, unit) in enumerate(names) if unit in ACCELERATION_UNITS
+                         or base.startswith(("acc", "linear acc"))]
+        hint = (f"; it holds accelerations ({', '.join(repr(a) for a in accelerations[:3])}): a phone's or "
+                "accelerometer's record is read with --accelerometer") if accelerations else \
+            "; name them with --force-columns NAME,NAME"
         raise RecordError(f"{source}: missing column 'force' (or each plate's vertical force: Fz, FZ1, FORCE_Z, "
-                          f"'Fz (N)', ground_force1_vy, ...); {where}; name them with --force-columns NAME,NAME")
+                          f"'Fz (N)', ground_force1_vy, ...); {where}{hint}")
     return forces
 
 

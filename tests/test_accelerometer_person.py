@@ -105,7 +105,9 @@ def test_identify_and_diagnose_an_accelerometer_from_the_command_line(phones, tm
 @pytest.mark.parametrize("arguments, message", [
     (["identify", "{phone}", "--accelerometer", "--estimator", "ekf"], "--accelerometer works with the record-level"),
     (["identify", "{phone}", "--units", "g", "--mass", "70"], "--units applies to an accelerometer record"),
-    (["identify", "{phone}"], "--mass KG is needed"),
+    (["identify", "{phone}"], "it holds accelerations ('Acceleration x (m/s^2)', 'Acceleration y (m/s^2)', "
+                              "'Acceleration z (m/s^2)'): a phone's or accelerometer's record is read with "
+                              "--accelerometer"),
     (["diagnose", "{phone}", "--accelerometer", "--estimator", "ekf"], "--accelerometer works with the record-level"),
     (["simulate", "--out", "{out}", "--mass", "70", "--fb", "2", "--fh", "2.6", "--xi", "0.3", "--duration", "5",
       "--tilt", "10"], "--tilt applies to a phone's record"),

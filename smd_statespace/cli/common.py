@@ -103,9 +103,9 @@ def load_record(path, mass):
     """A user's record and, if ``<stem>_truth.json`` lies beside it (``simulate`` writes one), its truth."""
     from ..io import read_record
 
-    if mass is None:
-        raise OptionError(f"--record {path}: give the body mass with --mass KG")
-    record = read_record(path, mass)
+    from ..signals.weighing import weigh_record
+
+    record = weigh_record(read_record(path, mass))  # no --mass: the plate weighs the person
     beside = Path(path).with_name(f"{Path(path).stem}_truth.json")
     if not beside.is_file():
         return record, None
@@ -198,13 +198,17 @@ def rate_of(args):
     return args.rate or None
 
 
+MASS_HELP = ("body mass M_h (kg); without it a force plate's record weighs the person: the mean force while "
+             "standing still before (or after) bouncing, else over the whole bouncing cycles, over g")
+
+
 def add_record_arguments(parser, accelerometer=False):
     """``REC.csv --mass KG``: the record to identify (``accelerometer``: also ``--accelerometer``, ``--units``), and
     how to read a plate's export (:func:`add_export_arguments`)."""
     parser.add_argument("record", metavar="REC.csv", help="record with columns time,force[,floor_acc], or a force "
                         "plate's export (Vicon Nexus, Kistler BioWare, Qualisys, OpenSim, C3D, ...)")
-    parser.add_argument("--mass", required=not accelerometer, type=float, metavar="KG",
-                        help="body mass M_h (kg)" + ("; optional with --accelerometer" if accelerometer else ""))
+    parser.add_argument("--mass", type=float, metavar="KG", help=MASS_HELP + (
+        "; optional with --accelerometer (K_h, C_h need it)" if accelerometer else ""))
     add_export_arguments(parser)
     if accelerometer:
         add_accelerometer_arguments(parser)
@@ -280,9 +284,9 @@ def read_person_record(args):
         from ..accelerometer import accelerometer_record
 
         return accelerometer_record(args.record, args.mass, units=args.units or "auto")
-    if args.mass is None:
-        raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
-    return read_record(args.record, args.mass, **options)
+    from ..signals.weighing import weigh_record
+
+    return weigh_record(read_record(args.record, args.mass, **options))  # no --mass: the plate weighs the person
 
 
 def add_check_argument(parser):
@@ -353,8 +357,9 @@ def prepare_record(args):
     """
     from ..io import read_record
     from ..signals import decimate_record, decimation_note, preprocess
+    from ..signals.weighing import weigh_record
 
-    record = read_record(args.record, args.mass, **reading_options(args))
+    record = weigh_record(read_record(args.record, args.mass, **reading_options(args)))
     checked(record, args)
     measured_rate = record.fs
     record, factor, _ = decimate_record(record, rate_of(args))

@@ -37,7 +37,9 @@ def add_demo(subparsers):
                         help=f"directory for the figure (default ./{DEMO_OUT})")
     parser.add_argument("--record", metavar="CSV",
                         help="your own record (time,force[,floor_acc]) instead of the built-in sample; needs --mass")
-    parser.add_argument("--mass", type=float, metavar="KG", help="body mass (kg) of --record")
+    parser.add_argument("--mass", type=float, metavar="KG",
+                        help="body mass (kg) of --record; without it the plate weighs the person (--record's standing "
+                             "before bouncing, else its whole cycles)")
     return parser
 
 

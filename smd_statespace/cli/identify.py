@@ -14,7 +14,7 @@ from .. import __version__
 from ..estimators import ESTIMATORS
 from ..errors import OptionError, SMDInputError
 from ..identify.plausibility import plausible_cycles
-from .common import (FADE_CHOICES, PROG, _count, add_accelerometer_arguments, add_export_arguments,
+from .common import (FADE_CHOICES, MASS_HELP, PROG, _count, add_accelerometer_arguments, add_export_arguments,
                      add_fade_argument, add_model_arguments, add_noise_floor_argument, add_rate_argument,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
                      load_truth, out_dir, prepare_record, rate_of, read_person_record, reading_options,
@@ -45,7 +45,7 @@ def add_identify(subparsers):
                              "BioWare, Qualisys, OpenSim, C3D, ...), a folder of them, or a quoted glob "
                              "('data/*.csv'); may be omitted with --manifest")
     parser.add_argument("--mass", type=float, metavar="KG",
-                        help="body mass M_h (kg); with many records, the mass of those the manifest does not list; "
+                        help=MASS_HELP + "; with many records, the mass of those the manifest does not list; "
                              "optional with --accelerometer (K_h, C_h need it)")
     add_export_arguments(parser)
     add_accelerometer_arguments(parser)
@@ -273,8 +273,6 @@ def run_identify(args) -> int:
     check_record_level_options(args, floor)
     if is_batch(args):
         return run_batch_identify(args)
-    if args.mass is None and not args.accelerometer:
-        raise OptionError("--mass KG is needed (or --manifest FILE with columns file,mass)")
     if args.estimator == "record":
         return run_person(args)
     directory = out_dir(args.out)

@@ -250,10 +250,7 @@ def _collect(source, mass, manifest, accelerometer) -> list[BatchRecord]:
         raise RecordError(f"{where}: no record files ({', '.join('*' + x for x in RECORD_SUFFIXES)}) found")
     names = [str(p.relative_to(base)) if base is not None else str(p) for p in paths]
     if listed is None:
-        if mass is None and not accelerometer:
-            raise OptionError("--mass KG (the same for every record) or --manifest FILE (file,mass per record) "
-                              "is needed")
-        value = None if mass is None else check_mass(mass)
+        value = None if mass is None else check_mass(mass)  # None: each plate's record weighs its person
         return [BatchRecord(p, value, n) for p, n in zip(paths, names)]
     by_file = {r.path.resolve(): r for r in listed}
     records = []
@@ -288,10 +285,13 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
     """
     from ..applicability import check_bouncing
     from ..signals import RECORD_RATE
+    from ..signals.weighing import weigh_record
     from .runner import CycleRunner
 
+    mass = record.mass
     try:
-        measured = record.read()
+        measured = weigh_record(record.read())  # no mass given: the plate weighs the person
+        mass = measured.mass if record.sensor != "accelerometer" else mass
         if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row
             from ..person import identify_person
             from ..person.noise_floor import NOISE_FLOOR
@@ -311,7 +311,7 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
     except (ArithmeticError, np.linalg.LinAlgError) as exc:  # numerical failure outside a filter: contained
         table = pd.DataFrame([{"status": "failed", "reason": f"{type(exc).__name__}: {exc}"}])
     table.insert(0, "record", record.name)
-    table.insert(1, "mass", record.mass)
+    table.insert(1, "mass", mass)
     return table
 
 

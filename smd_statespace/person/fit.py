@@ -30,6 +30,7 @@ from ..errors import CycleError, OptionError, RecordError, SMDInputError
 from ..io import G, Record
 from ..progress import tqdm
 from ..signals import RECORD_RATE, prepare_record
+from ..signals.weighing import weigh_record
 # the steps below identify_person (the names of __all__ were defined here up to 2026-11-27, and stay importable)
 from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
@@ -261,6 +262,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     effects_asked = tuple(effects)
     given = record_effects(record, effects_asked, measured_floor)
     effects = check_effects(given, record)  # bad specs and missing columns fail before any fit
+    record = weigh_record(record)  # read without a mass: the plate weighs the person
     if variation != "auto" and variation not in VARIATIONS:
         raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
     if intervals not in INTERVAL_METHODS:

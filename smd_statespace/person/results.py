@@ -471,11 +471,12 @@ class PersonResult(RecordChecks):
         """The command line's record arguments for this result's record: ``REC --mass KG`` or, for an
         accelerometer's, ``REC --accelerometer`` (with ``--mass`` when it was given). ``record``, ``mass``:
         as the user gave them (default: the record's source and mass)."""
+        weighed = mass is None and self.record.extra.get("weighed")  # weighed on the plate: again so, as given
         record = self.record.source if record is None else record
         mass = self.record.mass if mass is None else mass
         if self.record.extra.get("sensor") == "accelerometer":
             return f"{shlex.quote(str(record))} --accelerometer" + (f" --mass {mass:g}" if self.mass_known else "")
-        return f"{shlex.quote(str(record))} --mass {mass:g}"
+        return shlex.quote(str(record)) + ("" if weighed else f" --mass {mass:g}")
 
     @property
     def mass_known(self) -> bool:

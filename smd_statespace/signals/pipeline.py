@@ -12,6 +12,7 @@ from ..errors import MassError, OptionError, RecordError
 from ..io import Record
 from .cycles import SUPPORTED_FB, Cycle, find_cycles
 from .filters import com_acceleration, motion
+from .weighing import weigh_record
 
 __all__ = ["OBSERVATION_CHANNELS", "Preprocessed", "preprocess"]
 
@@ -296,6 +297,7 @@ def preprocess(record: Record, cutoff=0.5, fb_range=SUPPORTED_FB, *, order=4, pa
     OptionError
         An invalid option, or a record too short for the filter.
     """
+    record = weigh_record(record)  # read without a mass: the plate weighs the person
     source = record.source
     edge_margin = _check_edge_margin(edge_margin)
     time = np.asarray(record.time, dtype=float)
