@@ -174,13 +174,21 @@ def _noise_floor(text):
                                          "(e.g. 0.01 for 1 % BW; 0 fits the record as measured)") from None
 
 
-def add_span_argument(parser):
-    """``--span START:END|auto|all``: the part of the record the person is identified from."""
-    parser.add_argument("--span", type=_span, default="auto", metavar="START:END",
+def add_span_argument(parser, each=False):
+    """``--span START:END|auto|all`` (``each``: also ``each``, every bout): the part of the record the person is
+    identified from."""
+    parser.add_argument("--span", type=_span_or_each if each else _span, default="auto", metavar="START:END",
                         help="record estimator: the part of the record to identify the person from, in s on the "
                              "record's time axis (e.g. 4.5:33); auto (default) finds the steady bouncing of a lab's "
                              "export (standing before and after, ramps, mains hum) and says what it kept; all: the "
-                             "whole record as it is")
+                             "whole record as it is" + ("; each: every bout of bouncing, a person each (a session "
+                                                        "at several tempos: DIR/bouts.csv, person_bouts.png and "
+                                                        "DIR/bout_N/)" if each else ""))
+
+
+def _span_or_each(text):
+    """argparse type of ``identify --span``: :func:`_span`'s, or ``each``."""
+    return "each" if str(text).strip().lower() == "each" else _span(text)
 
 
 def _span(text):

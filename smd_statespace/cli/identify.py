@@ -76,7 +76,7 @@ def add_identify(subparsers):
                              "person's model; by default the person rides it (Eq. 2 relative to the floor, a known "
                              "input, no unknown added)")
     add_rate_argument(parser)
-    add_span_argument(parser)
+    add_span_argument(parser, each=True)
     add_noise_floor_argument(parser)
     add_fade_argument(parser)
     add_model_arguments(parser)
@@ -237,7 +237,8 @@ def run_batch_identify(args) -> int:
 
 
 def run_person(args) -> int:
-    """``identify --estimator record``: the person from the whole record; person.json, results.csv, figures."""
+    """``identify --estimator record``: the person from the whole record; person.json, results.csv, figures
+    (``--span each``: a person per bout, :func:`run_bouts`)."""
     from ..person import identify_person
     from ..person.extend import check_effects
     from .person_output import write_person
@@ -247,21 +248,59 @@ def run_person(args) -> int:
     check_effects(effects, record)  # a column the record lacks (floor_acc): one line, nothing written
     truth = truth_values(load_truth(args.truth))  # a bad --truth fails before the fit, not after
     directory = out_dir(args.out)
+    fit_options = dict(n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
+                       intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args),
+                       progress=not args.quiet, effects=effects, measured_floor=not args.no_floor,
+                       noise_floor=args.noise_floor, fade=FADE_CHOICES[args.fade])
+    options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
+               "harmonics": args.harmonics, "rate": rate_of(args), "span": args.span,
+               "noise_floor": args.noise_floor, "fade": args.fade, "effects": [e.spec for e in effects]}
+    if args.span == "each":
+        return run_bouts(record, directory, fit_options, options, truth)
     started = time.perf_counter()
-    result = identify_person(record, n_harmonics=args.harmonics, variation=args.variation, timing=args.timing,
-                             intervals=args.intervals, check=not args.ignore_checks, rate=rate_of(args),
-                             progress=not args.quiet, effects=effects, measured_floor=not args.no_floor,
-                             span=args.span, noise_floor=args.noise_floor, fade=FADE_CHOICES[args.fade])
+    result = identify_person(record, span=args.span, **fit_options)
     seconds = time.perf_counter() - started
     print(f"{record.source}: record-level model ({seconds:.1f} s)")
     print(result.summary(verbose=args.verbose))
-    options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
-               "harmonics": args.harmonics, "rate": rate_of(args), "span": args.span,
-               "noise_floor": args.noise_floor, "fade": args.fade,
-               "effects": [e.spec for e in result.effects]}
+    options["effects"] = [e.spec for e in result.effects]
     written = write_person(directory, result, options, truth=truth)
     print("wrote " + ", ".join(str(path) for path in written))
     return 0
+
+
+def run_bouts(record, directory, fit_options: dict, options: dict, truth) -> int:
+    """``identify REC --span each``: a person per bout of bouncing (:func:`~smd_statespace.person.identify_bouts`);
+    DIR/bouts.csv (one row per bout), DIR/person_bouts.png (each against its ``f_b``) and each bout's files in
+    DIR/bout_N/. 1 when some bout could not be identified (each named on stderr), else 0."""
+    import sys
+
+    from ..person import identify_bouts
+    from ..plotting.people import plot_people
+    from .person_output import atomic_write_text, write_person
+
+    started = time.perf_counter()
+    answers = identify_bouts(record, **fit_options)
+    print(f"{record.source}: {len(answers)} bouts of bouncing, a person each ({time.perf_counter() - started:.1f} s)")
+    written = [directory / "bouts.csv", directory / "run.json"]
+    for answer in answers:
+        print(answer.line())
+        if answer.result is not None:
+            written += write_person(out_dir(directory / f"bout_{answer.number}"), answer.result, options,
+                                    truth=truth)[:1]
+    table = pd.DataFrame([answer.row() for answer in answers])
+    table.to_csv(written[0], index=False)
+    atomic_write_text(written[1], json.dumps({"version": __version__, "command": "identify", "estimator": "record",
+                                              "record": str(record.source), "options": options,
+                                              "bouts": [[a.start, a.end] for a in answers]}, indent=2))
+    if (table["status"] == "ok").any():
+        written.append(directory / "person_bouts.png")
+        plot_people(table, written[-1], title=f"{record.source}: a person per bout of bouncing "
+                                              f"({int((table['status'] == 'ok').sum())} of {len(table)} identified)")
+    for answer in answers:
+        if answer.result is None:
+            print(f"{PROG}: error: {record.source}: {answer.name}: {answer.error}", file=sys.stderr)
+    print("wrote " + ", ".join(str(path) for path in written) + " and each bout's figures beside its person.json")
+    return 1 if any(answer.result is None for answer in answers) else 0
 
 
 def run_identify(args) -> int:

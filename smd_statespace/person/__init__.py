@@ -7,24 +7,27 @@ likelihood. Modules: :mod:`.timing` (force-cycle boundaries), :mod:`.dynamics`
 (the state-space model), :mod:`.kalman` (the compiled likelihood), :mod:`.score`
 (its exact gradient), :mod:`.statespace` (the statsmodels twin), :mod:`.fit`
 (:func:`identify_person`), :mod:`.extend` (the person with effects added),
-:mod:`.diagnose` (which effect is missing), :mod:`.results` (:class:`PersonResult`).
+:mod:`.diagnose` (which effect is missing), :mod:`.results` (:class:`PersonResult`), :mod:`.bouts` (a person
+per bout of a session: :func:`identify_bouts`).
 """
 
 from importlib import import_module
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the names as tools that read the source see them (the reference, type checkers)
+    from .bouts import BoutAnswer, identify_bouts
     from .fit import identify_person
     from .model import RecordModel, Regressor
     from .results import PersonResult
     from .search import FitError
     from .timing import CycleTiming, estimate_timing
 
-__all__ = ["identify_person", "PersonResult", "RecordModel", "Regressor", "CycleTiming", "estimate_timing",
+__all__ = ["identify_person", "identify_bouts", "BoutAnswer", "PersonResult", "RecordModel", "Regressor", "CycleTiming", "estimate_timing",
            "FitError"]
 
-_HOMES = {"identify_person": ".fit", "FitError": ".search", "RecordModel": ".model", "Regressor": ".model",
-          "PersonResult": ".results", "CycleTiming": ".timing", "estimate_timing": ".timing"}
+_HOMES = {"identify_person": ".fit", "identify_bouts": ".bouts", "BoutAnswer": ".bouts", "FitError": ".search",
+          "RecordModel": ".model", "Regressor": ".model", "PersonResult": ".results", "CycleTiming": ".timing",
+          "estimate_timing": ".timing"}
 """The module each public name comes from. They are imported when first asked for (PEP 562), so that importing
 one light module of the package (the command line's parser reads :mod:`.noise_floor`'s defaults) does not load
 the fit, scipy.stats and numba's compiled passes (about 1.7 s)."""

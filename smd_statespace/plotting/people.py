@@ -35,7 +35,7 @@ def _error_bars(ok: pd.DataFrame, name: str) -> tuple[np.ndarray, str]:
     return np.vstack([sd, sd]), "±1 sd"
 
 
-def plot_people(table: pd.DataFrame, path=None, names=("f_h", "xi_h", "blf_1", "blf_2")) -> Figure:
+def plot_people(table: pd.DataFrame, path=None, names=("f_h", "xi_h", "blf_1", "blf_2"), title=None) -> Figure:
     """Each identified person as one point with its interval, against its bouncing frequency.
 
     Parameters
@@ -49,6 +49,8 @@ def plot_people(table: pd.DataFrame, path=None, names=("f_h", "xi_h", "blf_1", "
         PNG file to write.
     names : sequence of str
         Parameters drawn, one panel each (those the table lacks are skipped).
+    title : str, optional
+        The figure's title (default: one person per record, and how many).
 
     Returns
     -------
@@ -77,6 +79,7 @@ def plot_people(table: pd.DataFrame, path=None, names=("f_h", "xi_h", "blf_1", "
         if ax.get_legend_handles_labels()[1]:
             ax.legend(fontsize=7, loc="best", frameon=False)
     axes[-1].set_xlabel(r"bouncing frequency $f_b$ (Hz)")
-    fig.suptitle(f"One person per record ({len(ok)} people, record-level model)", fontsize=11, x=0.02, ha="left")
+    fig.suptitle(title or f"One person per record ({len(ok)} people, record-level model)", fontsize=11, x=0.02,
+                 ha="left")
     fig.tight_layout()
     return save(fig, path, DPI)

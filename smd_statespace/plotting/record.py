@@ -56,7 +56,8 @@ def plot_record_parts(prepared, path=None) -> Figure:
             top.axvline(edge, color="tab:blue", lw=1.4)
         top.annotate("fitted", xy=(float(np.mean(prepared.span)), 0.03), xycoords=("data", "axes fraction"),
                      ha="center", va="bottom", fontsize=9, color="tab:blue", weight="bold")
-    top.axhline(original.mass * G, color="tab:purple", lw=0.8, ls="--", label="given mass x g")
+    weighed = "weighed" if original.extra.get("weighed") else "given"
+    top.axhline(original.mass * G, color="tab:purple", lw=0.8, ls="--", label=f"{weighed} mass x g")
     top.set(xlabel="time (s)", ylabel="force (N)", xlim=(original.time[0], original.time[-1]))
     top.legend(fontsize=7, loc="upper right", ncol=3)
     said = next((note for note in prepared.notes if note.startswith(("bouncing", "span"))), "the whole record fitted")
