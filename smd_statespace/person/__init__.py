@@ -22,8 +22,8 @@ if TYPE_CHECKING:  # the names as tools that read the source see them (the refer
     from .search import FitError
     from .timing import CycleTiming, estimate_timing
 
-__all__ = ["identify_person", "identify_bouts", "BoutAnswer", "PersonResult", "RecordModel", "Regressor", "CycleTiming", "estimate_timing",
-           "FitError"]
+__all__ = ["identify_person", "identify_bouts", "BoutAnswer", "PersonResult", "RecordModel", "Regressor", "CycleTiming",
+           "estimate_timing", "FitError"]
 
 _HOMES = {"identify_person": ".fit", "identify_bouts": ".bouts", "BoutAnswer": ".bouts", "FitError": ".search",
           "RecordModel": ".model", "Regressor": ".model", "PersonResult": ".results", "CycleTiming": ".timing",
