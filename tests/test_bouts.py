@@ -53,3 +53,18 @@ def test_identify_bouts_takes_no_span(session):
 
     with pytest.raises(OptionError, match="each bout's steady part is its span"):
         identify_bouts(read_record(session, 68.0), span=(1.0, 5.0))
+
+
+def test_a_folder_of_sessions_gives_a_row_per_bout_and_a_bout_that_fails_does_not_fail_its_record(session, tmp_path,
+                                                                                                  capsys):
+    folder = tmp_path / "sessions"
+    folder.mkdir()
+    (folder / "s1.csv").write_bytes(session.read_bytes())
+    assert main(["identify", str(folder), "--mass", "68", "--span", "each", "--out", str(tmp_path / "o"),
+                 "--quiet"]) == 0
+    table = pd.read_csv(tmp_path / "o" / "results.csv")
+    assert table["record"].tolist() == ["s1.csv"] * 3 and table["bout"].tolist() == [1, 2, 3]
+    assert table["status"].tolist() == ["ok", "ok", "failed"]
+    assert "1 records: 1 identified now" in capsys.readouterr().out and (tmp_path / "o" / "people.png").exists()
+    assert main(["identify", str(folder), "--mass", "68", "--span", "2:9", "--out", str(tmp_path / "p")]) == 2
+    assert "--span applies to one record; with many, only --span each" in capsys.readouterr().err

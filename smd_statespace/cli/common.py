@@ -207,7 +207,7 @@ def rate_of(args):
 
 
 MASS_HELP = ("body mass M_h (kg); without it a force plate's record weighs the person: the mean force while "
-             "standing still before (or after) bouncing, else over the whole bouncing cycles, over g")
+             "standing still before bouncing, else over its whole bouncing cycles, over g")
 
 
 def add_record_arguments(parser, accelerometer=False):

@@ -205,6 +205,9 @@ def run_batch_identify(args) -> int:
 
     if args.truth is not None:
         raise OptionError("--truth applies to one record, not to a batch")
+    if args.span != "auto" and (args.span != "each" or args.estimator != "record"):
+        raise OptionError("--span applies to one record; with many, only --span each (a person per bout of every "
+                          "record, the record-level model)")
     directory = out_dir(args.out)
     model = build_model(args)
     records = collect_records(args.record, args.mass, args.manifest, accelerometer=args.accelerometer,
@@ -215,6 +218,8 @@ def run_batch_identify(args) -> int:
         options["measured_floor"] = False
     if args.estimator == "record":
         options["noise_floor"], options["fade"] = args.noise_floor, FADE_CHOICES[args.fade]
+        if args.span == "each":
+            options["span"] = "each"
     started = time.perf_counter()
     summary = run_batch(records, directory, model, args.estimator, options, jobs=args.jobs, resume=args.resume,
                         progress=not args.quiet, check=not args.ignore_checks)
@@ -222,7 +227,8 @@ def run_batch_identify(args) -> int:
     if (summary.table["status"] == "ok").any():
         if args.estimator == "record":
             written.append(directory / "people.png")
-            plot_people(summary.table, written[-1])
+            plot_people(summary.table, written[-1], title="A person per bout of every record" if
+                        args.span == "each" else None)
         else:
             written.append(directory / "parameters.png")
             plot_parameters(summary.table, written[-1], against="f_b")
@@ -288,6 +294,7 @@ def run_bouts(record, directory, fit_options: dict, options: dict, truth) -> int
             written += write_person(out_dir(directory / f"bout_{answer.number}"), answer.result, options,
                                     truth=truth)[:1]
     table = pd.DataFrame([answer.row() for answer in answers])
+    table.insert(0, "record", str(record.source))
     table.to_csv(written[0], index=False)
     atomic_write_text(written[1], json.dumps({"version": __version__, "command": "identify", "estimator": "record",
                                               "record": str(record.source), "options": options,

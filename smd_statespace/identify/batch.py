@@ -142,7 +142,8 @@ class BatchSummary:
         counts = ", ".join(f"{n} {status}" + (f" ({self.implausible} of them implausible)"
                                                if status == "ok" and self.implausible else "")
                            for status, n in sorted(self.cycles.items()))
-        unit = "cycles" if self.table is None or "cycle" in self.table else "rows (one person per record)"
+        unit = "cycles" if self.table is None or "cycle" in self.table else (
+            "rows (one person per bout)" if "bout" in self.table else "rows (one person per record)")
         return (f"{self.records} records: {self.identified} identified now, {self.resumed} taken from the earlier "
                 f"run, {len(self.failed_records)} failed; {unit}: {counts or 'none'}")
 
@@ -292,16 +293,20 @@ def identify_record(record: BatchRecord, model, estimator, runner_options: dict,
     try:
         measured = weigh_record(record.read())  # no mass given: the plate weighs the person
         mass = measured.mass if record.sensor != "accelerometer" else mass
-        if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row
-            from ..person import identify_person
+        if estimator == RECORD_ESTIMATOR:  # the person from the whole record: one row (a row per bout: "each")
+            from ..person import identify_bouts, identify_person
             from ..person.noise_floor import NOISE_FLOOR
 
-            person = identify_person(measured, n_harmonics=model.n_harmonics, check=check,
-                                     rate=runner_options.get("rate", RECORD_RATE), effects=model.effects,
-                                     measured_floor=runner_options.get("measured_floor", True),
-                                     noise_floor=runner_options.get("noise_floor", NOISE_FLOOR),
-                                     fade=runner_options.get("fade", "auto"))
-            table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
+            options = dict(n_harmonics=model.n_harmonics, check=check, rate=runner_options.get("rate", RECORD_RATE),
+                           effects=model.effects, measured_floor=runner_options.get("measured_floor", True),
+                           noise_floor=runner_options.get("noise_floor", NOISE_FLOOR),
+                           fade=runner_options.get("fade", "auto"))
+            if runner_options.get("span") == "each":
+                table = pd.DataFrame([a.row() for a in identify_bouts(measured, **options)])
+                table["label"] = record.name + ": " + table["label"]
+            else:
+                person = identify_person(measured, **options)
+                table = pd.DataFrame([{"status": "ok", "reason": "", **person.table_row()}])
         else:
             runner = CycleRunner(model, estimator=estimator, progress=False, **runner_options)
             check_bouncing(measured).raise_if_refused(override=not check)
@@ -448,8 +453,8 @@ def run_batch(records, out, model=None, estimator=RECORD_ESTIMATOR, runner_optio
 
         pooled = out / "pooled.csv"
         atomic_write_csv(pooled_people(table), pooled)
-    cycle = table["cycle"] if "cycle" in table else pd.Series(np.nan, index=table.index)
-    failed = table[(table["status"] == "failed") & cycle.isna()]  # a record's one row: it was not identified
+    part = next((table[c] for c in ("cycle", "bout") if c in table), pd.Series(np.nan, index=table.index))
+    failed = table[(table["status"] == "failed") & part.isna()]  # a record's one row: it was not identified
     _, bad, reasons = implausible_ok(table)
     return BatchSummary(records=len(records), identified=len(pending), resumed=len(records) - len(pending),
                         failures=dict(zip(failed["record"], failed["reason"])),

@@ -57,9 +57,9 @@ class BoutAnswer:
         return f"bout {self.number} ({self.start:.1f}-{self.end:.1f} s)"
 
     def row(self) -> dict:
-        """One row of the session's table: the bout, ``status`` and ``reason``, and the person's
-        :meth:`~smd_statespace.person.results.PersonResult.table_row` when identified."""
-        out = {"record": self.name, "bout": self.number, "start_s": self.start, "end_s": self.end,
+        """One row of the session's table: the bout (``label`` names it in figures), ``status`` and ``reason``, and
+        the person's :meth:`~smd_statespace.person.results.PersonResult.table_row` when identified."""
+        out = {"bout": self.number, "label": self.name, "start_s": self.start, "end_s": self.end,
                "cycles": self.cycles, "status": "ok" if self.result is not None else "failed",
                "reason": self.error}
         if self.result is not None:
@@ -79,7 +79,10 @@ class BoutAnswer:
             unit = " Hz" if name == "f_h" else ""
             flag = "" if r.to_dict()[f"{name}_determined"] else " NOT DETERMINED"
             parts.append(f"{name} {value:.3f}{unit} ({low:.2f}-{high:.2f}){flag}")
-        return f"{self.name}, {self.cycles} cycles at f_b {self.f_b:.2f} Hz: " + ", ".join(parts)
+        said = [w for w in r.warnings if "is not determined" not in w]  # "NOT DETERMINED" says those
+        warned = f"; warning: {said[0].split(':')[0]}" + (f" (and {len(said) - 1} more)" if len(said) > 1 else "") \
+            if said else ""
+        return f"{self.name}, {self.cycles} cycles at f_b {self.f_b:.2f} Hz: " + ", ".join(parts) + warned
 
 
 def identify_bouts(record: Record, **options) -> list:

@@ -123,7 +123,9 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     Parameters
     ----------
     record : Record
-        The measurement (``time``, ``force`` in N, ``mass`` in kg).
+        The measurement (``time``, ``force`` in N, ``mass`` in kg). One read without a mass
+        (``read_record(path)``) is weighed on the plate first
+        (:func:`~smd_statespace.signals.weighing.weigh_record`; a note says how).
     n_harmonics : int
         Harmonics ``n`` of the force, Eq. 4.
     variation : {"auto", "independent", "smooth", "random_walk", "both"}

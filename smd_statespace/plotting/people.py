@@ -43,8 +43,8 @@ def plot_people(table: pd.DataFrame, path=None, names=("f_h", "xi_h", "blf_1", "
     table : pandas.DataFrame
         One row per record, as ``results.csv`` of ``identify FOLDER --estimator record``
         (columns ``status``, ``f_b`` (Hz), the parameters and ``<name>_low``/``<name>_high``
-        or ``<name>_sd``, ``<name>_determined``, ``implausible``). Rows whose status is not
-        ``ok`` are left out.
+        or ``<name>_sd``, ``<name>_determined``, ``implausible``; ``label`` or ``record`` names the points when
+        there are few). Rows whose status is not ``ok`` are left out.
     path : str or Path, optional
         PNG file to write.
     names : sequence of str
@@ -73,8 +73,9 @@ def plot_people(table: pd.DataFrame, path=None, names=("f_h", "xi_h", "blf_1", "
                             lw=0.9, **{"fmt": "o", **style})
         ax.set_ylabel(PARAMETER_LABELS.get(name, name))
         ax.grid(alpha=0.3)
-        if ax is axes[0] and "record" in ok and len(ok) <= MAX_LABELLED:
-            for x, y, record in zip(f_b, ok[name].to_numpy(dtype=float), ok["record"].astype(str)):
+        labels = "label" if "label" in ok else "record"
+        if ax is axes[0] and labels in ok and len(ok) <= MAX_LABELLED:
+            for x, y, record in zip(f_b, ok[name].to_numpy(dtype=float), ok[labels].astype(str)):
                 ax.annotate(record, (x, y), xytext=(4, 3), textcoords="offset points", fontsize=7, color="0.3")
         if ax.get_legend_handles_labels()[1]:
             ax.legend(fontsize=7, loc="best", frameon=False)
