@@ -286,7 +286,8 @@ def run_bouts(record, directory, fit_options: dict, options: dict, truth) -> int
 
     started = time.perf_counter()
     answers = identify_bouts(record, **fit_options)
-    print(f"{record.source}: {len(answers)} bouts of bouncing, a person each ({time.perf_counter() - started:.1f} s)")
+    bouts = f"{len(answers)} bouts of bouncing, a person each" if len(answers) > 1 else "1 bout of bouncing"
+    print(f"{record.source}: {bouts} ({time.perf_counter() - started:.1f} s)")
     written = [directory / "bouts.csv", directory / "run.json"]
     for answer in answers:
         print(answer.line())
