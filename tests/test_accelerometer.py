@@ -452,6 +452,42 @@ def test_reads_sensor_loggers_export_with_its_axes_in_reverse(tmp_path):
         read_accelerometer(linear)
 
 
+def test_reads_sensorlogs_export_and_physics_toolboxs_g_force_meter_with_its_clock_times(tmp_path):
+    """Two common phone apps: SensorLog (iOS; accelerometerAccelerationX(G), its time since the phone's reboot, the
+    gravity-free motionUserAcceleration columns beside, not read) and Physics Toolbox Sensor Suite's g-force meter
+    (time,gFx,gFy,gFz,TgF in g; its iPhone export writes the time as a clock, MM:SS.fff, with semicolons; its
+    multi-record export adds wx, Bx, ... columns)."""
+    rec = synthetic(duration=4.0)
+    g = rec.acc / G
+    names = ["loggingTime(txt)", "loggingSample(N)", "accelerometerTimestamp_sinceReboot(s)",
+             "accelerometerAccelerationX(G)", "accelerometerAccelerationY(G)", "accelerometerAccelerationZ(G)",
+             "motionUserAccelerationX(G)", "motionUserAccelerationY(G)", "motionUserAccelerationZ(G)"]
+    rows = [f"2026-12-01 10:00:{t:06.3f} +0000,{k},{62608 + t:.9f},{a[0]:.9g},{a[1]:.9g},{a[2]:.9g},0.01,0.02,0.03"
+            for k, (t, a) in enumerate(zip(rec.time, g))]
+    (tmp_path / "sensorlog.csv").write_text("\n".join([",".join(names), *rows]) + "\n")
+    record = read_accelerometer(tmp_path / "sensorlog.csv")
+    assert (record.format, record.units_read) == ("labelled", "g")
+    np.testing.assert_allclose(record.time - record.time[0], rec.time - rec.time[0], atol=1e-8)
+    np.testing.assert_allclose(record.acc, rec.acc, rtol=1e-7)
+    clock = [f"{int(t // 60):02d}:{t % 60:09.6f}" for t in rec.time]  # microseconds, so that the test is exact
+    rows = [f"{c};{a[0]:.9g};{a[1]:.9g};{a[2]:.9g};{np.linalg.norm(a):.9g}" for c, a in zip(clock, g)]
+    (tmp_path / "ptb.csv").write_text("\n".join(["time;gFx;gFy;gFz;gFTotal", *rows]) + "\n")
+    record = read_accelerometer(tmp_path / "ptb.csv")
+    assert (record.format, record.units_read) == ("physics toolbox", "g")
+    np.testing.assert_allclose(record.time, rec.time, atol=1e-6)
+    np.testing.assert_allclose(record.acc, rec.acc, rtol=1e-7)
+    millis = np.round(1000 * rec.time).astype(int)
+    hours = [f"10:{59 + m // 60000:02d}:{m // 1000 % 60:02d}:{m % 1000:03d}" for m in millis]
+    rows = [f"{h},{a[0]:.9g},{a[1]:.9g},{a[2]:.9g},0,0,0,1,2,3" for h, a in zip(hours, g)]
+    (tmp_path / "multi.csv").write_text("\n".join(["time,gFx,gFy,gFz,wx,wy,wz,Bx,By,Bz", *rows]) + "\n")
+    multi = read_accelerometer(tmp_path / "multi.csv")  # HH:MM:SS:fff, milliseconds after a colon
+    np.testing.assert_allclose(multi.time - multi.time[0], rec.time - rec.time[0], atol=6e-4)
+    rows[5] = "later," + rows[5].split(",", 1)[1]
+    (tmp_path / "multi.csv").write_text("\n".join(["time,gFx,gFy,gFz,wx,wy,wz,Bx,By,Bz", *rows]) + "\n")
+    with pytest.raises(RecordError, match="column 'time' row 6 holds 'later'; its first row is a clock time"):
+        read_accelerometer(tmp_path / "multi.csv")
+
+
 @pytest.mark.parametrize("header", ["Time (s),X (rad/s),Y (rad/s),Z (rad/s)", "Time (s),X (m/s^2),Y (m/s^2)",
                                     "Time (s),X (m/s^2),Y (g),Z (m/s^2)"],
                          ids=["gyroscope", "two-axes", "mixed-units"])

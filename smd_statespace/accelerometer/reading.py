@@ -32,7 +32,7 @@ __all__ = [
 UNITS = ("auto", "m/s^2", "g")
 """Values of ``units`` accepted by :func:`read_accelerometer`: ``"auto"`` decides from the data."""
 
-FORMATS = ("phyphox", "plain", "vertical", "labelled")
+FORMATS = ("phyphox", "plain", "vertical", "labelled", "physics toolbox")
 """The file formats :func:`read_accelerometer` recognises from the header (see there)."""
 
 GRAVITY_TOLERANCE = 0.3
@@ -59,11 +59,17 @@ _PHYPHOX_LINEAR_AXES = tuple(f"Linear {name}" for name in _PHYPHOX_AXES)
 _PHYPHOX_ABSOLUTE = "Absolute acceleration (m/s^2)"
 _TIME_NAMES = ("time", "t")
 _DELIMITERS = (("tab", "\t"), ("semicolon", ";"), ("comma", ","))
-_LABELLED_TIME = ("time", "t", "elapsed")
+_LABELLED_TIME = ("time", "t", "elapsed", "accelerometertimestamp sincereboot")  # the last: SensorLog's
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 _SECONDS_NAMES = ("seconds elapsed",)  # Sensor Logger's (its "time" is an epoch in ns, without a unit)
 _ACCELERATION_UNITS = {"m/s^2": "m/s^2", "m/s²": "m/s^2", "m/s2": "m/s^2", "g": "g"}
-_LABELLED_AXIS = re.compile(r"^(?:acc(?:el(?:eration|erometer)?)?[\s_-]*)?([xyz])(?:[\s_-]*axis)?$")
+_LABELLED_AXIS = re.compile(r"^(?:(?:accelerometer)?acc(?:el(?:eration|erometer)?)?[\s_-]*)?([xyz])"
+                            r"(?:[\s_-]*axis)?$")  # x, Accel_X, x-axis, SensorLog's accelerometerAccelerationX
+_G_FORCE_AXES = ("gfx", "gfy", "gfz")
+"""Physics Toolbox Sensor Suite's g-force meter: the specific force in g along the phone's axes (``time,gFx,gFy,gFz,
+TgF``; its multi-record export adds ``wx``, ``Bx``, ...), its time in s or as a clock (``00:01.234``)."""
+_CLOCK = re.compile(r"^(?:(\d+):)?(\d+):(\d+(?:[.,]\d*)?)(?::(\d{1,3}))?$")
+"""A time written as a clock: ``MM:SS.fff``, ``HH:MM:SS.fff`` or ``HH:MM:SS:fff`` (milliseconds after a colon)."""
 
 ACCEPTED_HEADERS = (
     '"Time (s)","Acceleration x (m/s^2)","Acceleration y (m/s^2)","Acceleration z (m/s^2)"'
@@ -71,7 +77,8 @@ ACCEPTED_HEADERS = (
     "(any case; t for time; separated by commas, semicolons or tabs), or a time in s or ms and x, y, z axes "
     'named with their unit, other columns left alone ("Time (s)","X (m/s^2)",... as phyphox exports a sensor; '
     "elapsed (s),x-axis (g),... as MetaWear does; seconds_elapsed,ACCELEROMETER X (m/s²),... as Sensor Logger "
-    "does; Accel_X (m/s^2))"
+    "does; accelerometerTimestamp_sinceReboot(s),accelerometerAccelerationX(G),... as SensorLog does; Accel_X "
+    "(m/s^2)), or Physics Toolbox's g-force meter (time,gFx,gFy,gFz[,TgF])"
 )
 """The headers :func:`read_accelerometer` accepts, as its error messages list them."""
 
@@ -94,6 +101,7 @@ class AccelerometerRecord:
         The units of the file: ``"m/s^2"`` or ``"g"`` (``acc`` is in m/s^2 either way).
     format : str
         One of :data:`FORMATS`: ``"phyphox"``, ``"plain"`` (``time,ax,ay,az``),
+        ``"physics toolbox"`` (``time,gFx,gFy,gFz``),
         ``"vertical"`` (``time,acc`` or ``time,az``) or ``"labelled"`` (the time and
         the axes named with their units: :func:`read_accelerometer`).
     """
@@ -172,6 +180,8 @@ def _layout(path, header: list) -> tuple:
     time = [name for name in _TIME_NAMES if name in position]
     rest = set(lower) - set(time)
     if len(time) == 1:
+        if set(_G_FORCE_AXES) <= rest:
+            return "physics toolbox", [names[position[name]] for name in (time[0], *_G_FORCE_AXES)], "g", 1.0
         if rest == {"ax", "ay", "az"}:
             return "plain", [names[position[name]] for name in (time[0], "ax", "ay", "az")], None, 1.0
         if rest in ({"acc"}, {"az"}):
@@ -244,6 +254,8 @@ def _read_columns(source: str, header: list, body: list, delimiter: str, columns
     texts = [np.char.strip(cells[:, names.index(name)].astype(str)) for name in columns]  # 2 or 4 columns
     decimal_comma = delimiter != "," and any((np.char.find(text, ",") >= 0).any() for text in texts)
     numbers = []
+    if texts[0].size and _CLOCK.match(str(texts[0][0])):  # a time written as a clock (Physics Toolbox)
+        texts[0] = _clock_seconds(texts[0], columns[0], source)
     for name, column in zip(columns, texts):
         if decimal_comma:
             column = np.char.replace(column, ",", ".")
@@ -252,6 +264,21 @@ def _read_columns(source: str, header: list, body: list, delimiter: str, columns
         except RecordError as exc:
             raise RecordError(f"{exc} (decimal commas read as points)" if decimal_comma else str(exc)) from None
     return numbers[0], np.column_stack(numbers[1:])
+
+
+def _clock_seconds(cells: np.ndarray, column: str, source: str) -> np.ndarray:
+    """A time column written as a clock (``MM:SS.fff``, ``HH:MM:SS.fff``, ``HH:MM:SS:fff``) as seconds (text, for
+    :func:`numeric_column`); a one-line :class:`RecordError` naming the first cell that is no clock."""
+    seconds = np.empty(cells.size)
+    for row, cell in enumerate(cells.tolist()):
+        match = _CLOCK.match(str(cell))
+        if match is None:
+            raise RecordError(f"{source}: column {column!r} row {row + 1} holds {cell!r}; its first row is a clock "
+                              "time (MM:SS.fff or HH:MM:SS.fff), so every row must be one")
+        hours, minutes, secs, millis = match.groups()
+        seconds[row] = (3600.0 * float(hours or 0) + 60.0 * float(minutes) + float(secs.replace(",", "."))
+                        + float(millis or 0) / 1000.0)
+    return np.array([repr(float(value)) for value in seconds])
 
 
 def _refuse_turning(path, acc: np.ndarray, level: float, unit: float) -> None:
@@ -314,6 +341,12 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
         as phyphox exports a sensor's data, MetaWear sensors export theirs and the
         Sensor Logger app does (``seconds_elapsed``, ``ACCELEROMETER X (m/s²)``);
         other columns (an epoch, a date) are not read. The units are the header's.
+        SensorLog's (iOS) ``accelerometerTimestamp_sinceReboot(s)`` and ``accelerometerAccelerationX(G)``, ... are
+        read so (its ``motionUserAcceleration`` columns, without gravity, are not).
+    ``time,gFx,gFy,gFz[,TgF]``
+        **physics toolbox**: Physics Toolbox Sensor Suite's g-force meter, the specific force in g (other columns of
+        its multi-record export left alone); the time in s, or as a clock (``00:01.234``, ``12:00:01.234``,
+        ``12:00:01:234``), read as seconds.
 
     Columns may be separated by commas, semicolons or tabs (the delimiter is
     taken from the header). With semicolons or tabs a decimal comma
