@@ -486,6 +486,11 @@ def test_reads_sensorlogs_export_and_physics_toolboxs_g_force_meter_with_its_clo
     (tmp_path / "multi.csv").write_text("\n".join(["time,gFx,gFy,gFz,wx,wy,wz,Bx,By,Bz", *rows]) + "\n")
     with pytest.raises(RecordError, match="column 'time' row 6 holds 'later'; its first row is a clock time"):
         read_accelerometer(tmp_path / "multi.csv")
+    bounce = 0.2 * np.sin(2 * np.pi * FB * rec.time)  # its linear accelerometer: no gravity, said so
+    rows = [f"{t:.4f};0.01;{z:.5f};0.02;{abs(z):.5f}" for t, z in zip(rec.time, bounce)]
+    (tmp_path / "linear.csv").write_text("\n".join(["time;ax;ay;az;aT", *rows]) + "\n")
+    with pytest.raises(RecordError, match="never see gravity .*: a linear-acceleration export"):
+        read_accelerometer(tmp_path / "linear.csv")
 
 
 @pytest.mark.parametrize("header", ["Time (s),X (rad/s),Y (rad/s),Z (rad/s)", "Time (s),X (m/s^2),Y (m/s^2)",

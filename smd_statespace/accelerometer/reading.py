@@ -182,7 +182,7 @@ def _layout(path, header: list) -> tuple:
     if len(time) == 1:
         if set(_G_FORCE_AXES) <= rest:
             return "physics toolbox", [names[position[name]] for name in (time[0], *_G_FORCE_AXES)], "g", 1.0
-        if rest == {"ax", "ay", "az"}:
+        if rest in ({"ax", "ay", "az"}, {"ax", "ay", "az", "at"}):  # "at": Physics Toolbox's total, not read
             return "plain", [names[position[name]] for name in (time[0], "ax", "ay", "az")], None, 1.0
         if rest in ({"acc"}, {"az"}):
             return "vertical", [names[position[name]] for name in (time[0], *rest)], None, 1.0
@@ -329,8 +329,9 @@ def read_accelerometer(path, units: str = "auto") -> AccelerometerRecord:
         (quoted names, numbers like ``9.806650000E0``), optionally with a fifth
         column ``"Absolute acceleration (m/s^2)"``, which is not read (it is
         ``|a|``, derivable, and phyphox pads it with ``NaN``). Always m/s^2.
-    ``time,ax,ay,az`` (or ``t,ax,ay,az``)
-        **plain**: the phone's three axes in m/s^2 or g.
+    ``time,ax,ay,az`` (or ``t,ax,ay,az``; a fourth ``aT``, their magnitude, not read)
+        **plain**: the phone's three axes in m/s^2 or g. (Physics Toolbox's linear accelerometer writes
+        ``time;ax;ay;az;aT`` without gravity: it is read, and refused as a linear-acceleration export.)
     ``time,acc`` or ``time,az``
         **vertical**: one channel along a vertical axis (up or down), with gravity,
         in m/s^2 or g.
