@@ -270,8 +270,8 @@ def demo_next_steps(out_dir=DEMO_OUT) -> str:
         ("smd-statespace hsi --repeats 1 --duration 8 --max-passes 2", "Section 6, small (defaults: 10 x 30 s)"),
     ]
     lines = [line for command, what in steps for line in (f"  {what}:", f"    {command}")]
-    lines.append("  your own record: identify REC.csv --mass KG; a whole study: identify FOLDER --manifest M.csv "
-                 "(docs/batch.md)")
+    lines.append("  your own record (a CSV or a force plate's export): identify REC --mass KG, or without --mass to "
+                 "weigh the person on the plate; a whole study: identify FOLDER --manifest M.csv (docs/batch.md)")
     return (_heading("Next (each command runs as printed, in order, from this directory)") + "\n"
             + "\n".join(lines))
 
