@@ -299,6 +299,7 @@ def run_bouts(record, directory, fit_options: dict, options: dict, truth) -> int
     table.to_csv(written[0], index=False)
     atomic_write_text(written[1], json.dumps({"version": __version__, "command": "identify", "estimator": "record",
                                               "record": str(record.source), "options": options,
+                                              "mass": record.mass if record.extra.get("mass_known", True) else None,
                                               "bouts": [[a.start, a.end] for a in answers]}, indent=2))
     if (table["status"] == "ok").any():
         written.append(directory / "person_bouts.png")
