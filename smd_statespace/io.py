@@ -321,9 +321,13 @@ def provisional_mass(force, source: str) -> float:
     level = float(np.median(loaded)) if loaded.size else float("nan")
     lo, hi = MASS_RANGE
     if not (np.isfinite(level) and lo <= level / G <= hi):
+        swing = float(np.std(finite)) if finite.size else 0.0
+        zeroed = swing > 0.0 and abs(float(np.mean(finite))) < swing  # it swings about 0, not about a weight
+        hint = (f"it swings about 0 (sd {swing:.4g} N): the body weight looks subtracted (the plate zeroed with the "
+                "person on it), so the plate cannot weigh the person; add the weight back, or " if zeroed else "")
         raise MassError(f"{source}: no body mass given, and the plate's force (median {level:.4g} N = "
-                        f"{level / G:.4g} kg at g) is no person's weight ({lo:g}-{hi:g} kg); give it with --mass KG "
-                        "(mass=KG), and check the force's units (N)")
+                        f"{level / G:.4g} kg at g) is no person's weight ({lo:g}-{hi:g} kg); {hint}give it with "
+                        "--mass KG (mass=KG), and check the force's units (N)")
     return level / G
 
 

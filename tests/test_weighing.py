@@ -51,8 +51,13 @@ def test_what_cannot_be_weighed_is_refused_in_one_line(tmp_path):
     t = np.arange(0, 10, 0.01)
     rows = "\n".join(f"{tk:.2f},{1 + 0.3 * np.sin(2 * np.pi * 2 * tk):.5f}" for tk in t)
     (tmp_path / "bw.csv").write_text("time,force\n" + rows + "\n")  # a force in body weights, not N
-    with pytest.raises(MassError, match=r"bw.csv: no body mass given, and the plate's force \(median 1 N = 0.1"):
+    with pytest.raises(MassError, match=r"bw.csv: no body mass given, and the plate's force \(median 1 N = 0.1"
+                                        r".* no person's weight \(20-250 kg\); give it with --mass KG"):
         read_record(tmp_path / "bw.csv")
+    rows = "\n".join(f"{tk:.2f},{300 * np.sin(2 * np.pi * 2 * tk):.5f}" for tk in t)
+    (tmp_path / "zeroed.csv").write_text("time,force\n" + rows + "\n")  # the plate zeroed with the person on it
+    with pytest.raises(MassError, match="it swings about 0 .*: the body weight looks subtracted"):
+        read_record(tmp_path / "zeroed.csv")
     rng = np.random.default_rng(3)  # neither still nor rhythmic: slow random movement of 30 % of the weight
     moving = 700 * (1 + 0.3 * np.convolve(rng.standard_normal(t.size + 49), np.ones(50) / 7, "valid"))
     read = unweighed(make_record(t, moving, 70.0), tmp_path, "moving.csv")
