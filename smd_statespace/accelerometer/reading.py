@@ -255,8 +255,8 @@ def _read_columns(source: str, header: list, body: list, delimiter: str, columns
     decimal_comma = delimiter != "," and any((np.char.find(text, ",") >= 0).any() for text in texts)
     numbers = []
     if texts[0].size and _CLOCK.match(str(texts[0][0])):  # a time written as a clock (Physics Toolbox)
-        texts[0] = _clock_seconds(texts[0], columns[0], source)
-    for name, column in zip(columns, texts):
+        numbers.append(_clock_seconds(texts[0], columns[0], source))
+    for name, column in zip(columns[len(numbers):], texts[len(numbers):]):
         if decimal_comma:
             column = np.char.replace(column, ",", ".")
         try:
@@ -267,18 +267,17 @@ def _read_columns(source: str, header: list, body: list, delimiter: str, columns
 
 
 def _clock_seconds(cells: np.ndarray, column: str, source: str) -> np.ndarray:
-    """A time column written as a clock (``MM:SS.fff``, ``HH:MM:SS.fff``, ``HH:MM:SS:fff``) as seconds (text, for
-    :func:`numeric_column`); a one-line :class:`RecordError` naming the first cell that is no clock."""
-    seconds = np.empty(cells.size)
-    for row, cell in enumerate(cells.tolist()):
-        match = _CLOCK.match(str(cell))
-        if match is None:
-            raise RecordError(f"{source}: column {column!r} row {row + 1} holds {cell!r}; its first row is a clock "
-                              "time (MM:SS.fff or HH:MM:SS.fff), so every row must be one")
-        hours, minutes, secs, millis = match.groups()
-        seconds[row] = (3600.0 * float(hours or 0) + 60.0 * float(minutes) + float(secs.replace(",", "."))
-                        + float(millis or 0) / 1000.0)
-    return np.array([repr(float(value)) for value in seconds])
+    """A time column written as a clock (``MM:SS.fff``, ``HH:MM:SS.fff``, ``HH:MM:SS:fff``) in seconds; a one-line
+    :class:`RecordError` naming the first cell that is no clock."""
+    parts = np.char.partition(np.char.replace(cells.astype(str), ",", "."), " ")[:, 0]  # no date or zone after it
+    fields = [_CLOCK.match(cell) for cell in parts.tolist()]
+    bad = [row for row, match in enumerate(fields) if match is None]
+    if bad:
+        raise RecordError(f"{source}: column {column!r} row {bad[0] + 1} holds {str(cells[bad[0]])!r}; its first "
+                          "row is a clock time (MM:SS.fff or HH:MM:SS.fff), so every row must be one")
+    hours, minutes, secs, millis = (np.array([float(group or 0) for group in groups]) for groups in
+                                    zip(*(match.groups() for match in fields)))
+    return 3600.0 * hours + 60.0 * minutes + secs + millis / 1000.0
 
 
 def _refuse_turning(path, acc: np.ndarray, level: float, unit: float) -> None:
