@@ -359,12 +359,9 @@ def _read_plain(path: Path, rows: list, header: list, mass) -> Record:
             raise RecordError(f"{path}: data row {number} has {len(row)} fields, the header has {len(header)}")
     columns = {name: np.array([row[i].strip() for row in body], dtype=object) for i, name in enumerate(header)}
     source = os.fspath(path)
-    if mass is None:
-        record = make_record(columns["time"], columns["force"], provisional_mass(
-            numeric_column(columns["force"], "force", source), source), floor_acc=columns.get("floor_acc"),
-            source=source)
-        return replace(record, extra={"weigh": True})
-    return make_record(columns["time"], columns["force"], mass, floor_acc=columns.get("floor_acc"), source=source)
+    given = mass if mass is not None else provisional_mass(numeric_column(columns["force"], "force", source), source)
+    record = make_record(columns["time"], columns["force"], given, floor_acc=columns.get("floor_acc"), source=source)
+    return record if mass is not None else replace(record, extra={"weigh": True})
 
 
 def write_record(path, record: Record) -> None:

@@ -60,8 +60,9 @@ FORCE_UNITS = {"": 1.0, "n": 1.0, "newton": 1.0, "newtons": 1.0, "kn": 1000.0, "
                "kgf": 9.80665}
 """Multipliers to N of the units a vertical force column may name (none: N)."""
 
-ACCELERATION_UNITS = {"m/s^2", "m/s2", "m/s²", "g", "m s^-2"}
-"""Units of a column that holds an acceleration (a phone's export read as a plate's: said so)."""
+ACCELERATION_UNITS = {"m/s^2": "m/s^2", "m/s²": "m/s^2", "m/s2": "m/s^2", "g": "g"}
+"""Units of a column that holds an acceleration, as its header may write them, and their one spelling: what the
+accelerometer reader reads, and what a plate's export read without force is told it holds (a phone's export)."""
 
 TIME_UNITS = {"": 1.0, "s": 1.0, "sec": 1.0, "seconds": 1.0, "ms": 1e-3, "msec": 1e-3}
 """Multipliers to s of the units a time column may name (none: s)."""

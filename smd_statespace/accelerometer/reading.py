@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import OptionError, RecordError
 from ..io import G, csv_rows, numeric_column
-from ..plate_exports import split_name
+from ..plate_exports import ACCELERATION_UNITS, split_name
 
 __all__ = [
     "UNITS",
@@ -62,7 +62,6 @@ _DELIMITERS = (("tab", "\t"), ("semicolon", ";"), ("comma", ","))
 _LABELLED_TIME = ("time", "t", "elapsed", "accelerometertimestamp sincereboot")  # the last: SensorLog's
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 _SECONDS_NAMES = ("seconds elapsed",)  # Sensor Logger's (its "time" is an epoch in ns, without a unit)
-_ACCELERATION_UNITS = {"m/s^2": "m/s^2", "m/s²": "m/s^2", "m/s2": "m/s^2", "g": "g"}
 _LABELLED_AXIS = re.compile(r"^(?:(?:accelerometer)?acc(?:el(?:eration|erometer)?)?[\s_-]*)?([xyz])"
                             r"(?:[\s_-]*axis)?$")  # x, Accel_X, x-axis, SensorLog's accelerometerAccelerationX
 _G_FORCE_AXES = ("gfx", "gfy", "gfz")
@@ -150,9 +149,9 @@ def _labelled(names: list):
         elif base in _SECONDS_NAMES and not unit:
             times.append((name, 1.0))
         axis = _LABELLED_AXIS.match(base)
-        if axis is not None and unit in _ACCELERATION_UNITS:
+        if axis is not None and unit in ACCELERATION_UNITS:
             axes.setdefault(axis.group(1), []).append(name)
-            units.add(_ACCELERATION_UNITS[unit])
+            units.add(ACCELERATION_UNITS[unit])
     if len(times) != 1 or sorted(axes) != ["x", "y", "z"] or any(len(v) != 1 for v in axes.values()) \
             or len(units) != 1:
         return None

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import OptionError
-from .common import demo_out_dir, load_record, load_sample
+from .common import MASS_HELP, demo_out_dir, load_record, load_sample
 
 
 DEMO_OUT = "smd_demo_output"
@@ -37,9 +37,7 @@ def add_demo(subparsers):
                         help=f"directory for the figure (default ./{DEMO_OUT})")
     parser.add_argument("--record", metavar="CSV",
                         help="your own record (time,force[,floor_acc]) instead of the built-in sample; needs --mass")
-    parser.add_argument("--mass", type=float, metavar="KG",
-                        help="body mass (kg) of --record; without it the plate weighs the person (--record's standing "
-                             "before bouncing, else its whole cycles)")
+    parser.add_argument("--mass", type=float, metavar="KG", help=f"of --record: {MASS_HELP}")
     return parser
 
 

@@ -72,12 +72,13 @@ class BoutAnswer:
         if self.result is None:
             return f"{self.name}, {self.cycles} cycles at f_b {self.f_b:.2f} Hz: not identified: {self.error}"
         r = self.result
+        determined = r.to_dict()
         parts = []
         for name in ("f_h", "xi_h"):
             low, high = (float(v) for v in r.intervals[name])
             value = getattr(r, name)
             unit = " Hz" if name == "f_h" else ""
-            flag = "" if r.to_dict()[f"{name}_determined"] else " NOT DETERMINED"
+            flag = "" if determined[f"{name}_determined"] else " NOT DETERMINED"
             parts.append(f"{name} {value:.3f}{unit} ({low:.2f}-{high:.2f}){flag}")
         said = [w for w in r.warnings if "is not determined" not in w]  # "NOT DETERMINED" says those
         warned = f"; warning: {said[0].split(':')[0]}" + (f" (and {len(said) - 1} more)" if len(said) > 1 else "") \
