@@ -424,6 +424,49 @@ def test_the_likelihood_ratio_of_an_absent_effect_is_small_and_of_a_present_one_
         assert abs(gain["value"] - 0.3) < 3 * gain["sd"] and gain["value"] > 5 * gain["sd"]
 
 
+def test_a_cubic_springs_range_and_starts_read_the_displacement_within_cycles_not_its_wander():
+    """A displacement of 1 cm at 2 Hz on a wander of 5 cm (0.05 Hz) and a ramp: the swing is the 2 Hz part's RMS
+    (0.71 cm), and the spring's range and trial starts are scaled to it, not to the 3.6 cm RMS of the whole."""
+    from smd_statespace.effects.cubic_stiffness import CubicStiffness
+    from smd_statespace.model.fitted import FittedRecord
+
+    time = np.arange(3000) / 100.0
+    bounce = 0.01 * np.sin(2 * np.pi * 2.0 * time)
+    displacement = bounce + 0.05 * np.sin(2 * np.pi * 0.05 * time) + 0.02 * time / 30.0
+    fitted = FittedRecord(time, None, predicted_displacement=lambda: displacement, strongest_line=None, f_h=3.0)
+    assert fitted.swing == pytest.approx(0.01 / np.sqrt(2), rel=0.03) and np.std(displacement) > 0.03
+    spring = CubicStiffness.propose(fitted)
+    bound = 100.0 * np.ceil(CubicStiffness.STIFFNESS_CHANGE / (3 * fitted.swing**2) / 100.0)
+    assert spring.beta_range == (-bound, bound) and bound == pytest.approx(13333, rel=0.03)  # 2 / (3 * 0.00707^2)
+    starts = spring.record_starts(fitted)
+    assert starts[0] == {} and len(starts) == len(CubicStiffness.TRIAL_STARTS) + 1
+    change, ratio = CubicStiffness.TRIAL_STARTS[1]
+    assert starts[2]["f_h"] == pytest.approx(3.0 * ratio)
+    assert starts[2]["beta_3"] == pytest.approx(change / (3 * fitted.swing**2))
+    assert spring.record_starts(FittedRecord(time, None, lambda: displacement, None, per_cycle=True)) == []
+
+
+@pytest.mark.slow
+def test_a_large_hardening_spring_is_found_from_where_the_fit_without_it_left_the_person():
+    """Fitted without the spring, the person's ``f_h`` is twice the truth and each cycle's mean force absorbs what is
+    missed (the predicted displacement wanders by centimetres). Searched from there with the spring absent, it stayed
+    absent (``beta_3`` 18, ``f_h`` 4.07, LR 15 before the trial starts of ``CubicStiffness.record_starts``); from the
+    default variances with ``f_h`` lowered, the spring is found: ``f_h`` back within 10 % and ``beta_3``'s interval
+    holding the truth."""
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.extend import fit_effects
+    from smd_statespace.simulation import simulate_bouncing
+
+    sim = simulate_bouncing(mass=63, f_b=1.7, f_h=2.0, xi_h=0.4, duration=15, seed=3, noise=0.01,
+                            effects={"cubic_stiffness": {"beta_3": 1500.0}})
+    base = identify_person(sim.record)
+    assert base.f_h > 3.0
+    fitted = fit_effects(base, ["cubic_stiffness"])
+    beta = fitted.effect_estimates().loc["beta_3"]
+    assert abs(fitted.f_h / 2.0 - 1) < 0.1 and fitted.effect_test()["lr"] > 100
+    assert beta["low"] <= 1500.0 <= beta["high"]
+
+
 def test_an_effect_added_on_top_of_another_is_tested_against_the_person_with_the_first():
     """diagnose REC --effect A: candidates are fitted on top of A. Adding B to the person with A reaches the same
     likelihood as adding A and B together, its test counts only B's unknowns, and A cannot be added twice."""
@@ -570,7 +613,7 @@ def test_the_modal_floor_starts_where_its_whole_grid_does(long_fit):
     model = extend.effect_model(long_fit, [floor])
     counted, seen, j = extend.effect_model(long_fit, [floor]), [], model.position("f_f")
     counted.loglike = lambda params: seen.append(params[j]) or model.loglike(params)
-    start = extend._starts(counted, long_fit, long_fit, [floor])[0]
+    start = extend._starts(counted, long_fit, long_fit, [floor])[0][1]
     assert len(seen) < 0.6 * len(frequencies)  # 136 of 233 here
     every = [model.loglike(np.r_[start[:j], f, start[j + 1:]]) for f in frequencies]
     assert start[j] == frequencies[int(np.argmax(every))]

@@ -80,7 +80,7 @@ def fitted_record(result: "PersonResult | FittedRecord") -> FittedRecord:
     record = result.record
     return FittedRecord(time=record.time, floor_acc=getattr(record, "floor_acc", None),
                         predicted_displacement=lambda: result.predicted_path()[:, 0],
-                        strongest_line=lambda: result.innovation_line())
+                        strongest_line=lambda: result.innovation_line(), f_h=float(result.f_h))
 
 
 def record_harmonics(effect: "Effect", model: "SMDModel") -> int:

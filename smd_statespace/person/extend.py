@@ -52,7 +52,8 @@ from .model import RecordModel
 from .search import WIDER_SANDWICH
 from .threads import one_blas_thread, record_cores, spare_best, spare_map
 
-__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "check_effects", "record_effects",
+__all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "START_LINEARISATIONS", "START_TOLERANCE",
+           "check_effects", "record_effects",
            "configured_for_record", "split_effects", "record_signals", "effect_model", "at_zero", "fit_effects",
            "GRID_STRIDE", "GRID_KEEP", "grid_best"]
 
@@ -254,8 +255,16 @@ def grid_best(function, items, leading: int = 0, stride: int = GRID_STRIDE, keep
     return items[max(sorted(values), key=values.__getitem__)]
 
 
+START_LINEARISATIONS = 12
+"""Most re-linearisations of a nonlinear effect's path at one trial start, before its likelihood ranks the start."""
+
+START_TOLERANCE = 0.5
+"""Change of the log-likelihood between two linearisations at a trial start below which its path has settled for
+ranking the starts (the search itself settles to :data:`NOMINAL_TOLERANCE`)."""
+
+
 def _starts(model: RecordModel, result, root, effects) -> list:
-    """Starts of the search, one per fit the model could grow from.
+    """Starts of the search, one per fit the model could grow from: ``(model, params)`` pairs.
 
     From ``result`` (the fit the effects are added to) by name, the best of
     the added effects' own trial starts (:func:`~smd_statespace.person.effect_adapter.record_starts`) by likelihood, else the
@@ -263,28 +272,63 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     ``root`` (the fit without any) with ``result``'s effect parameters: a
     variance that an earlier effect's fit drove to zero sits on a flat
     plateau of the likelihood that a search started there does not leave.
+
+    A nonlinear effect's trial starts (a cubic spring's) are tried from the model's default variances instead
+    (the fit without the effect put what it missed into the variation of each cycle's mean force, and the
+    displacement it predicts wanders by centimetres), each ranked by its likelihood about its own predicted path
+    (:func:`_own_path`): the best of them is one more start. From ``result`` the effects then start at their first
+    trial (a cubic spring absent).
     """
     default = model.start_params(result.f_h, result.xi_h)
-    low, high = np.asarray(model.bounds).T
     trials = [record_starts(effect, result) or [{}] for effect in effects]
     many = [i for i, starts in enumerate(trials) if len(starts) > 1]
+    fresh = model.approximate and bool(many)
     # one effect's trials on an ordered grid (a floor mode's frequencies), the others single: a grid in that order
-    leading = record_grid_start(effects[many[0]]) if len(many) == 1 else None
+    leading = record_grid_start(effects[many[0]]) if len(many) == 1 and not fresh else None
     origins = [result.model.unpack(result.params)]
     if root is not result:
         origins.append({**origins[0], **root.model.unpack(root.params)})
     out = []
     for named in origins:
-        starts = []
-        for combination in itertools.product(*trials):
-            values = dict(named)
-            for part in combination:
-                values.update(part)
-            starts.append(np.clip([values.get(name, value) for name, value in zip(model.param_names, default)],
-                                  low, high))
-        out.append(spare_best(model.loglike, starts) if leading is None  # half of them in an idle thread
-                   else grid_best(model.loglike, starts, leading))
+        starts = _combined(model, named, [starts[:1] for starts in trials] if fresh else trials, default)
+        out.append((model, spare_best(model.loglike, starts) if leading is None  # half of them in an idle thread
+                    else grid_best(model.loglike, starts, leading)))
+    if fresh:
+        ranked = spare_map(lambda start: _own_path(model, start),
+                           _combined(model, dict(zip(model.param_names, default)), trials, default))
+        out.append(max(ranked, key=lambda pair: pair[0])[1:])
     return out
+
+
+def _combined(model: RecordModel, named: dict, trials: list, default) -> list:
+    """Every combination of the effects' ``trials`` (one dict of values from each) over the values ``named``, as
+    parameter vectors of ``model`` (``default`` where neither names a parameter), within its bounds."""
+    low, high = np.asarray(model.bounds).T
+    starts = []
+    for combination in itertools.product(*trials):
+        values = dict(named)
+        for part in combination:
+            values.update(part)
+        starts.append(np.clip([values.get(name, value) for name, value in zip(model.param_names, default)], low, high))
+    return starts
+
+
+def _own_path(model: RecordModel, params) -> tuple:
+    """``(loglike, model, params)``: ``model`` linearised about the path it predicts at ``params``, again until the
+    likelihood settles (:data:`START_TOLERANCE`, at most :data:`START_LINEARISATIONS` times).
+
+    A start far from the fit the path came from (a hardening spring's ``f_h`` 30 % lower) is judged about its
+    own path: about the first path its log-likelihood read -4671 where, about its own, 1954 (its search's end).
+    """
+    from .statespace import nominal_path
+
+    loglike = -np.inf
+    for _ in range(START_LINEARISATIONS):
+        model = replace(model, nominal=nominal_path(model, params))
+        loglike, earlier = model.loglike(params), loglike
+        if abs(loglike - earlier) < START_TOLERANCE:
+            break
+    return loglike, model, params
 
 
 @one_blas_thread
@@ -344,8 +388,8 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
     while root.effects:  # the fit without any effect: the model's structure
         root = root.before
     model = effect_model(root, effects, path=result)
-    fitted = max((fit_model(model, start, quick=model.approximate) for start in _starts(model, result, root, added)),
-                 key=lambda fit: fit["loglike"])
+    model, fitted = max(((at, fit_model(at, start, quick=at.approximate)) for at, start in
+                         _starts(model, result, root, added)), key=lambda pair: pair[1]["loglike"])
     model, fitted, linearisations, settled = _settle_path(model, fitted, result.loglike, progress)
     # the test is made here, at result's starts and variation model: its statistic and its count of added unknowns
     comparison, tested = result.comparison, fitted["loglike"]
