@@ -21,7 +21,6 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Callable, Protocol, runtime_checkable
 
 import numpy as np
-from scipy import signal
 
 if TYPE_CHECKING:  # annotations only
     from .effect import Effect
@@ -86,6 +85,8 @@ class FittedRecord:
         what it predicts below :data:`SLOW_WANDER` (a zero-phase high-pass, second order) the same fit gives
         0.64 cm, and 0.80 cm (truth 0.80) where it wanders not.
         """
+        from scipy import signal  # here: the CLI starts without scipy.signal (docs/performance.md, "Imports")
+
         u = self.displacement
         if u.size < 16 or self.duration <= 0:
             return float(np.sqrt(np.mean(u**2))) if u.size else 0.0
