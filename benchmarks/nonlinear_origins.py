@@ -48,7 +48,8 @@ def one(task) -> dict:
         name = pe.TRUE_PARAMETER[kind][0]
         return dict(kind=kind, size=size, gen=gen, i=i, f_h=person["f_h"], base=base.f_h, now=now.f_h,
                     now_ll=now.loglike, now_c=float(now.model.unpack(now.params)[name]), fresh=p["f_h"],
-                    fresh_ll=f2["loglike"], fresh_c=p[name], base_ll=base.loglike, t_now=t1 - t0, t_fresh=time.time() - t1,
+                    fresh_ll=f2["loglike"], fresh_c=p[name], base_ll=base.loglike, t_now=t1 - t0,
+                    t_fresh=time.time() - t1,
                     swing=float(np.std(base.predicted_path()[:, 0])))
     except Exception as exc:  # noqa: BLE001 - one record must never kill the study
         return dict(kind=kind, size=size, gen=gen, i=i, error=str(exc)[:100])

@@ -173,10 +173,17 @@ def _numbers(row: list, decimal_comma: bool) -> int:
 
 
 def _table_start(rows: list, decimal_comma: bool) -> int | None:
-    """The index of the first of three rows of numbers with as many cells as each other."""
+    """The index of the first of three rows of numbers with as many cells as each other.
+
+    Rows of numbers just above those, as wide but with blank cells (a centre of pressure left blank while the
+    plate is unloaded, a marker not yet seen), belong to the table too: a header is not a row of numbers. (The
+    first data row of such an export was taken for the header, and the file refused as having no time column.)
+    """
     counts = [_numbers(row, decimal_comma) for row in rows[:HEADER_SEARCH_ROWS + 3]]
     for index in range(len(counts) - 2):
         if counts[index] and counts[index] == counts[index + 1] == counts[index + 2]:
+            while index > 0 and counts[index - 1] and len(rows[index - 1]) == len(rows[index]):
+                index -= 1
             return index
     return None
 

@@ -72,6 +72,20 @@ def test_vertical_force_columns_qualified_by_side_or_limb_are_summed_and_horizon
     assert "'dominant Fvert (N)' (column 3), 'non-dominant Fvert (N)' (column 6)" in record.extra["reading"][0]
 
 
+def test_blank_cells_in_the_first_rows_of_an_unused_column_leave_the_table_where_it_starts(tmp_path):
+    """A centre of pressure left blank in the first two rows (the plate not yet loaded): those rows are the table's
+    first, not its header (they were, and the file was refused for a time column it has). A blank force is refused
+    naming its column and data row."""
+    t, force, share = bouncing(n=600)
+    rows = [f"{tk:.4f},{f:.6f},{'' if k < 2 else '12.5'}" for k, (tk, f) in enumerate(zip(t, force))]
+    record = read_record(write(tmp_path / "cop.csv", ["Time (s),Fz (N),COPx (mm)", *rows]), MASS)
+    np.testing.assert_allclose(record.force, force, atol=1e-6)
+    np.testing.assert_allclose(record.time, t, atol=1e-9)
+    rows[300] = f"{t[300]:.4f},,12.5"
+    with pytest.raises(RecordError, match=r"column 'Fz \(N\)' row 301 holds ''"):
+        read_record(write(tmp_path / "gap.csv", ["Time (s),Fz (N),COPx (mm)", *rows]), MASS)
+
+
 def test_a_qualisys_tsv_reads_its_time_and_force_z(tmp_path):
     t, force, _ = bouncing()
     block = ["NO_OF_SAMPLES\t3000", "FREQUENCY\t1000", "TIME_STAMP\t2026-11-30, 10:00:00", "FIRST_SAMPLE\t0",
