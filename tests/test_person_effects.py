@@ -212,6 +212,22 @@ def exact_loglike(time, y, truth, beta):
     return -0.5 * y.size * (np.log(2 * np.pi * rss / y.size) + 1.0)
 
 
+def test_a_trial_start_is_ranked_about_its_own_path_and_one_that_runs_away_is_never_taken(cubic_record):
+    """At the truth, the likelihood about the path predicted from a zero path is far below the one about the
+    truth's own path, which ``_own_path`` reaches (re-linearised until it settles: the relinearised likelihood); a
+    spring so soft that its stiffness turns negative within the bounce gives -inf, not a NaN that ``max`` could keep."""
+    from smd_statespace.person.extend import _own_path
+
+    time, y, truth = cubic_record
+    model = cubic_model(time, y, nominal=np.zeros((time.size, 2)))
+    params = params_of(model, **truth)
+    loglike, moved, same = _own_path(model, params)
+    assert same is params and loglike == pytest.approx(moved.loglike(params))
+    assert loglike == pytest.approx(relinearised_loglike(time, y, truth, truth["beta_3"], times=12), abs=0.5)
+    assert loglike > model.loglike(params) + 10
+    assert _own_path(model, params_of(model, f_h=2.6, xi_h=0.3, beta_3=-1e7))[0] == -np.inf
+
+
 def test_a_nonlinear_effect_at_zero_is_the_base_model(cubic_record):
     time, y, truth = cubic_record
     rng = np.random.default_rng(0)

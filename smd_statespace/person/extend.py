@@ -319,16 +319,22 @@ def _own_path(model: RecordModel, params) -> tuple:
 
     A start far from the fit the path came from (a hardening spring's ``f_h`` 30 % lower) is judged about its
     own path: about the first path its log-likelihood read -4671 where, about its own, 1954 (its search's end).
+    A path that runs away (a softening spring whose stiffness turns negative at the extremes) or a likelihood that
+    is not finite gives -inf: the start is never taken.
     """
     from .statespace import nominal_path
 
     loglike = -np.inf
-    for _ in range(START_LINEARISATIONS):
-        model = replace(model, nominal=nominal_path(model, params))
-        loglike, earlier = model.loglike(params), loglike
-        if abs(loglike - earlier) < START_TOLERANCE:
-            break
-    return loglike, model, params
+    try:
+        with np.errstate(over="ignore", invalid="ignore"):  # a runaway overflows on its way to -inf, said by the value
+            for _ in range(START_LINEARISATIONS):
+                model = replace(model, nominal=nominal_path(model, params))
+                loglike, earlier = model.loglike(params), loglike
+                if abs(loglike - earlier) < START_TOLERANCE:
+                    break
+    except (ArithmeticError, np.linalg.LinAlgError):  # a path that runs away (a spring gone negative): not a start
+        return -np.inf, model, params
+    return (loglike if np.isfinite(loglike) else -np.inf), model, params
 
 
 @one_blas_thread
