@@ -47,24 +47,29 @@ def oracle(truth, t0, t):
 
 
 @pytest.mark.parametrize("person", [dict(tire=0.25, slow=0.08, f_h_change=0.14),
-                                    dict(tire=0.1, change="step", xi_h_change=0.5, f_h_change=-0.1)])
+                                    dict(tire=0.1, change="step", xi_h_change=0.5, f_h_change=-0.1),
+                                    dict(tire=0.1, f_h_change=0.14, effects={"cubic_stiffness": {"beta_3": 1500.0}})])
 def test_the_bouncing_part_is_eq2_under_the_enveloped_tiring_force(person):
+    """Eq. 2 written out here from the truth alone (with a cubic spring's ``-w_h^2 beta_3 u^3``, at the f_h of
+    the moment, where the record has one), integrated apart: the record is its GRF (Eq. 3)."""
     lab = simulate_lab_record(fb_variation=0.0, coef_variation=0.0, seed=4, **QUIET, **SHORT, **person)
     truth, time, force = lab.truth, lab.record.time, lab.record.force
     t0 = lab.cycles["t_start"].iloc[0]  # no variation: one phase origin, in the standing part (tau = t there)
     on = truth["span"]["bouncing_start_s"]
+    beta = truth["effects"].get("cubic_stiffness", {}).get("beta_3", 0.0)
+    assert beta == (1500.0 if "effects" in person else 0.0)
 
     def eq2(t, x):
         force_g, f_h, xi_h = oracle(truth, t0, t)
         w = 2 * np.pi * f_h
-        return [x[1], -w**2 * x[0] - 2 * xi_h * w * x[1] + force_g]
+        return [x[1], -w**2 * (x[0] + beta * x[0] ** 3) - 2 * xi_h * w * x[1] + force_g]
 
     after = time >= on
     exact = integrate.solve_ivp(eq2, (on, time[-1]), [0.0, 0.0], t_eval=time[after], method="DOP853", rtol=1e-11,
                                 atol=1e-13)
     force_g, f_h, xi_h = oracle(truth, t0, time[after])
     w = 2 * np.pi * f_h
-    u_ddot = -w**2 * exact.y[0] - 2 * xi_h * w * exact.y[1] + force_g
+    u_ddot = -w**2 * (exact.y[0] + beta * exact.y[0] ** 3) - 2 * xi_h * w * exact.y[1] + force_g
     weight = truth["mass"] * G
     assert np.abs(force[after] - truth["mass"] * (G + u_ddot)).max() < 1e-6 * weight  # Eq. 3
     assert np.all(force[~after] == weight)  # standing: the person at rest
@@ -239,6 +244,26 @@ def test_bad_lab_options_are_one_line_errors(tmp_path, capsys, argv, pattern):
     err = capsys.readouterr().err.strip()
     assert pattern in err and "\n" not in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_lab_record_takes_effects_in_the_equation_of_motion_and_refuses_the_others(tmp_path, capsys):
+    """``simulate --lab --effect`` writes the spring into the record and its truth; a floor mode (states of its
+    own) or force harmonics are refused in one line, and so is an effect on a phone's record of a trial."""
+    out = tmp_path / "r.csv"
+    base = ["simulate", "--lab", "--out", str(out), "--mass", "70", "--fb", "2", "--fh", "2.5", "--xi", "0.3",
+            "--bout", "6", "--seed", "3"]
+    assert main(base + ["--effect", "cubic_stiffness:beta_3=1500"]) == 0
+    assert "effects cubic_stiffness:beta_3=1500" in capsys.readouterr().out
+    truth = json.loads((tmp_path / "r_truth.json").read_text())
+    assert truth["effects"] == {"cubic_stiffness": {"beta_3": 1500.0}}
+    plain = simulate_lab_record(mass=70, f_b=2, f_h=2.5, xi_h=0.3, bout=6, seed=3)
+    assert np.abs(read_record(out, mass=70).force - plain.record.force).max() > 5.0  # N: the spring is in it
+    for effect in ("floor_mode", "harmonics"):
+        assert main(base + ["--effect", effect]) == 2
+        err = capsys.readouterr().err.strip()
+        assert f"effect '{effect}' adds force harmonics or states of its own" in err and "\n" not in err
+    assert main(base + ["--accelerometer", "--effect", "cubic_stiffness"]) == 2
+    assert "--effect does not apply to --lab --accelerometer" in capsys.readouterr().err
 
 
 def test_lab_options_need_lab_and_the_person_needs_its_options(tmp_path, capsys):

@@ -184,7 +184,7 @@ def run_simulate(args) -> int:
         raise type(exc)(str(exc).replace("simulate_bouncing: ", "", 1)) from None
     csv_path, truth_path = synthetic.write(out, truth)
     record, info = synthetic.record, synthetic.truth
-    extra = f", effects {', '.join(effect.spec for effect in effects)}" if effects else ""
+    extra = _effects_text([effect.spec for effect in effects])
     extra += f", {args.variation} variation"
     seed = f"seed {info['seed']}" if args.seed is not None else "random seed (in the truth file)"
     print(
@@ -224,7 +224,7 @@ def _simulate_phone(args, mass, effects, names, out, truth, phone) -> int:
         raise type(exc)(str(exc).replace("simulate_bouncing: ", "", 1).replace("simulate_phone: ", "", 1)) from None
     csv_path, truth_path = record.write(out, truth)
     settings = record.truth["phone"]
-    extra = f", effects {', '.join(effect.spec for effect in effects)}" if effects else ""
+    extra = _effects_text([effect.spec for effect in effects])
     print(f"wrote {csv_path}: a phone's accelerometer ({settings['fs']:g} Hz, {len(record.time)} samples, "
           f"{settings['n_dropped']} dropped; tilt {settings['tilt_deg']:g} deg, sway {settings['sway_deg']:g} deg, "
           f"noise {settings['noise']:g} m/s^2) on a person bouncing {args.duration:g} s (f_b {args.fb:g} Hz, f_h "
@@ -269,13 +269,18 @@ def _simulate_lab(args, out, truth) -> int:
     from ..io import check_mass
     from ..simulation.lab import simulate_lab_record, simulate_typical_lab_record
 
-    for flag in ("duration", "noise", "effect"):
+    for flag in ("duration", "noise"):
         if getattr(args, flag):
             raise OptionError(f"--{flag} does not apply to --lab (the record's length is --stand, the ramps and "
-                              "--bout; its noise --plate-noise N; no effects)")
+                              "--bout; its noise --plate-noise N)")
+    if args.effect and args.accelerometer:
+        raise OptionError("--effect does not apply to --lab --accelerometer (a phone's record of a whole trial is "
+                          "of the person without effects)")
     if args.handling is not None and not args.accelerometer:
         raise OptionError("--handling applies to a phone's record of a whole trial (--lab --accelerometer)")
     settings = _lab_settings(args)
+    if args.effect:
+        settings["effects"] = list(args.effect)
     if "mass" in settings:
         settings["mass"] = check_mass(settings["mass"], source="--mass")
     missing = [f"--{flag}" for flag, key in PERSON_OPTIONS[:4] if key not in settings]
@@ -298,9 +303,15 @@ def _simulate_lab(args, out, truth) -> int:
           f"{span['full_start_s']:.2f}-{span['full_end_s']:.2f} s (mass {info['mass']:.1f} kg, f_b "
           f"{info['f_b_start']:.3g} Hz, f_h {info['f_h_start']:.3g}-{info['f_h_end']:.3g} Hz, xi_h "
           f"{info['xi_h_start']:.3g}-{info['xi_h_end']:.3g}, tiring {info['tire']:.2g}, "
-          f"{info['variations']['generator']} variation); hum {hum['frequency_hz']:g} Hz, drift up to "
+          f"{info['variations']['generator']} variation{_effects_text(args.effect)}); hum {hum['frequency_hz']:g} Hz, "
+          "drift up to "
           f"{info['drift']['max_abs_n']:.3g} N, noise {info['noise_n']:.3g} N; truth in {truth_path}")
     return 0
+
+
+def _effects_text(specs) -> str:
+    """``, effects A, B`` for the lines that say what was written ("" without effects)."""
+    return f", effects {', '.join(specs)}" if specs else ""
 
 
 PLATE_ONLY = ("hum", "hum-amplitude", "hum-variation", "drift", "drift-shape", "plate-noise", "fs", "typical")

@@ -149,14 +149,19 @@ class _System:
         twin.model = SMDModel(n_harmonics=1, effects=twin.effects)
         return twin
 
-    def rates(self, x, force_g, t):
-        """``(dx/dt, u'')`` for states ``x`` (shape (n_state, ...)) under input ``g F`` at time(s) ``t``."""
-        acc = equations.smd_acceleration(x[0], x[1], self.f_h, self.xi_h, force_g)  # Eq. 2
+    def rates(self, x, force_g, t, f_h=None, xi_h=None):
+        """``(dx/dt, u'')`` for states ``x`` (shape (n_state, ...)) under input ``g F`` at time(s) ``t``; ``f_h``,
+        ``xi_h`` (Hz, -; broadcast with the samples) in place of the system's own where given (a person who
+        changes during the record)."""
+        f_h = self.f_h if f_h is None else f_h
+        xi_h = self.xi_h if xi_h is None else xi_h
+        acc = equations.smd_acceleration(x[0], x[1], f_h, xi_h, force_g)  # Eq. 2
         if self.model is None:
             return np.stack(np.broadcast_arrays(x[1], acc)), acc
         x = np.asarray(x, dtype=float)
         full = np.empty(x.shape[1:] + self.template.shape)
         full[...] = self.template
+        full[..., self.model.index("f_h")], full[..., self.model.index("xi_h")] = f_h, xi_h
         full[..., self.dynamic] = x.T if x.ndim <= 2 else np.moveaxis(x, 0, -1)  # (the ODE solver: one state)
         for effect in self.effects:
             acc = acc + effect.acceleration(self.model, full, t, self.inputs)

@@ -37,12 +37,14 @@ import numpy as np
 from ..errors import OptionError
 from ..io import G, check_mass, make_record
 from ..model import c_h, equations, k_h
-from .dynamics import ATOL, RTOL, _CycleForce, _number, _vector
+from .dynamics import ATOL, RTOL, _CycleForce, _number, _simulation_effects, _System, _vector
+from .effect_adapter import force_harmonics
 from .force_shape import DEFAULT_BLF, default_phases
 from .plate_extras import DRIFT_SHAPES, SWAY_BAND, drift_path, hum_force, sway_force
 from .generators import _normals
 from .settings import _resolve_seed
 from .synthetic import SyntheticRecord
+from .truth import _effects_truth
 from .variation import (SMOOTH_KERNELS, TRUNCATION_SD, _cycles_frame, _draw_cycles, _smooth_cycles, _smooth_force,
                         _smooth_geometry)
 
@@ -180,12 +182,30 @@ def _pieces_in_time(schedule, pieces, t_end):
     return out
 
 
-def _integrate(schedule, pieces, time):
-    """``(u, u_dot, u_ddot, force_bio, f_h, xi_h)`` at ``time`` (m, m/s, m/s^2, m/s^2, Hz, -): Eq. 2 from rest."""
+def _effects_system(effects, s):
+    """The person's equation of motion with ``effects`` (a ``dynamics._System``), None without; an effect that is
+    more than terms in it is refused in one line."""
+    built = _simulation_effects(effects, s["mass"], where="simulate_lab_record")
+    if not built:
+        return None
+    system = _System(s["f_h"], s["xi_h"], built)
+    for effect in built:
+        if force_harmonics(effect, system.model) is not None or any(
+                slot.kind == "dynamic" for slot in effect.slots(system.model)):
+            raise OptionError(f"simulate_lab_record: effect {effect.name!r} adds force harmonics or states of its "
+                              "own, which a lab record does not simulate (simulate_bouncing does: simulate without --lab)")
+    return system
+
+
+def _integrate(schedule, pieces, time, system=None):
+    """``(u, u_dot, u_ddot, force_bio, f_h, xi_h)`` at ``time`` (m, m/s, m/s^2, m/s^2, Hz, -): Eq. 2 from rest,
+    with the terms of ``system``'s effects where given."""
     from scipy.integrate import solve_ivp  # imported here: with scipy.optimize, 0.3 s (not needed to start)
 
     def rhs(t, x, force):
         scale, tau, f_h, xi_h = schedule.at(t)
+        if system is not None:
+            return system.rates(np.asarray(x, dtype=float), G * scale * force.scalar(tau), t, f_h, xi_h)[0]
         return [x[1], equations.smd_acceleration(x[0], x[1], f_h, xi_h, G * scale * force.scalar(tau))]  # Eq. 2
 
     states = np.zeros((2, time.size))
@@ -201,7 +221,8 @@ def _integrate(schedule, pieces, time):
         scale, tau = schedule.arrays(time[inside])[:2]
         force_bio[inside] = G * scale * force(tau)
     _, _, f_h, xi_h = schedule.arrays(time)
-    u_ddot = equations.smd_acceleration(states[0], states[1], f_h, xi_h, force_bio)  # Eq. 2
+    u_ddot = (equations.smd_acceleration(states[0], states[1], f_h, xi_h, force_bio) if system is None  # Eq. 2
+              else system.rates(states, force_bio, time, f_h, xi_h)[1])
     return states[0], states[1], u_ddot, force_bio, f_h, xi_h
 
 
@@ -331,7 +352,7 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
                         bout=30.0, ramp_up=2.0, ramp_down=2.0, sway=2.0, hum_frequency=50, hum=(5.0, 0.0, 2.0),
                         hum_variation=0.0, drift=10.0, noise=1.0, tire=0.0, slow=0.0, f_h_change=0.0,
                         xi_h_change=0.0, change="drift", change_time=None, drift_shape="cubic",
-                        seed=None) -> SyntheticRecord:
+                        effects=None, seed=None) -> SyntheticRecord:
     """Simulate a lab's force-plate export of one trial: standing, bouncing, standing, with the plate's artefacts.
 
     The person is the SMD of Eq. 2 (the module docstring gives every term); the GRF is Eq. 3 plus sway, hum,
@@ -366,6 +387,11 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
         Largest excursion of the plate's drifting zero (N); white noise sd (N).
     drift_shape : {"cubic", "settling", "walk", "steps"}
         The drifting zero's shape (:func:`~smd_statespace.simulation.plate_extras.drift_path`).
+    effects : list of Effect or str, or dict, optional
+        Physical effects beyond the base model acting on the person, as in :func:`simulate_bouncing`, each
+        with its terms in the equation of motion alone (a cubic spring, a quadratic damper, a generic term);
+        one with states of its own (a floor mode) or force harmonics is refused (simulate it with
+        :func:`simulate_bouncing`). Its terms read ``f_h`` and ``xi_h`` as they change over the bout.
     tire, slow : float
         Fractions of every BLF (0-0.9) and of ``f_b`` (0-0.5) lost linearly over the bout.
     f_h_change, xi_h_change, change, change_time : float, float, {"drift", "step"}, float
@@ -385,7 +411,7 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
         the bout with their ``_start`` and ``_end`` values; ``K_h``, ``C_h`` of the means, Eq. 17-18),
         ``change``, ``span`` (the bout's times), ``hum``, ``drift`` (its path: start, end, at the bouncing's
         start and end), ``sway``, ``noise`` (body weights, as :func:`simulate_bouncing`) and ``noise_n`` (N),
-        ``fs``, ``duration``, ``seed``, ``variations``.
+        ``fs``, ``duration``, ``seed``, ``variations``, ``effects`` (``{name: {key: value}}``).
 
     Raises
     ------
@@ -396,7 +422,8 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
     """
     import pandas as pd  # imported here: the command line imports this module to start
 
-    s = _check_lab({key: value for key, value in locals().items() if key != "seed"})
+    s = _check_lab({key: value for key, value in locals().items() if key not in ("seed", "effects")})
+    system = _effects_system(effects, s)
     schedule, duration = _schedule(s)
     sequence, seed_record = _seed_sequence(seed)
     rngs = dict(zip(STREAMS, (np.random.default_rng(child) for child in sequence.spawn(len(STREAMS)))))
@@ -404,7 +431,7 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
     cycles, pieces = _bout_force(rngs["force"], s["variation"], schedule.at(schedule.t_off)[1], s["f_b"], s["blf"],
                                  s["phases"], s["fb_variation"], s["coef_variation"])
     u, u_dot, u_ddot, force_bio, f_h_t, xi_h_t = _integrate(
-        schedule, _pieces_in_time(schedule, pieces, time[-1] + 0.5 / s["fs"]), time)
+        schedule, _pieces_in_time(schedule, pieces, time[-1] + 0.5 / s["fs"]), time, system)
     person = s["mass"] * (G + u_ddot)  # Eq. 3
     if person.min() <= 0.0:
         raise OptionError(f"simulate_lab_record: the GRF falls to {person.min():.1f} N: the person would leave the "
@@ -424,6 +451,8 @@ def simulate_lab_record(mass=70.0, f_b=2.0, f_h=2.5, xi_h=0.3, *, blf=DEFAULT_BL
                            "sway": sway_n, "hum": hum_n, "drift": drift_n})
     extras = {"hum": hum_truth, "drift": drift_truth, "sway": sway_truth}
     truth = _lab_truth(s, schedule, float(time[-1]), seed_record, extras, len(table))
+    if system is not None:
+        truth["effects"] = _effects_truth(system)
     return SyntheticRecord(record=make_record(time, force, s["mass"], source="simulate_lab_record"), truth=truth,
                            states=states, cycles=table)
 
@@ -555,6 +584,7 @@ def simulate_typical_lab_record(seed=None, ranges=LAB_RANGES, **fixed) -> Synthe
     """
     sequence, record = _seed_sequence(seed)
     draw, own = sequence.spawn(2)
-    synthetic = simulate_lab_record(**draw_lab_settings(draw, ranges, **fixed), seed=own)
+    effects = fixed.pop("effects", None)  # not drawn: the person's effects, as given
+    synthetic = simulate_lab_record(**draw_lab_settings(draw, ranges, **fixed), effects=effects, seed=own)
     synthetic.truth["typical"] = {"seed": record, "fixed": sorted(fixed), "ranges": asdict(ranges)}
     return synthetic
