@@ -142,16 +142,19 @@ JUMPS_SETTINGS = {"jumps_phase": {"coef_variation": 0.0, "phase_variation": 0.1}
                   "jumps_size": {"phase_variation": 0.0}}
 """``simulate_bouncing``'s settings of the jumps generators that vary the force one way (variation "jumps")."""
 
-LAB_KINDS = {"clean", "term_f_drift", "term_f_step"}
-"""What the lab generator makes: a person without an effect, or whose ``f_h`` drifts or steps over the bout (the
-lab simulator's ``f_h_change``; it has no other effects)."""
+LAB_KINDS = {"clean", "term_f_drift", "term_f_step", "cubic_stiffness"}
+"""What the lab generator makes: a person without an effect, whose ``f_h`` drifts or steps over the bout (the
+lab simulator's ``f_h_change``), or with a cubic spring (its ``effects``, since 2026-12-01)."""
 
 
 def lab_change(effects) -> dict:
     """``simulate_lab_record``'s options for a drift or step term: the change of ``f_h`` over the bout that the
-    term's ``c`` makes (``w_h^2`` from ``1 - c/2`` to ``1 + c/2`` times the middle's)."""
+    term's ``c`` makes (``w_h^2`` from ``1 - c/2`` to ``1 + c/2`` times the middle's); for another effect, the
+    effect itself."""
     if not effects:
         return {}
+    if "term" not in effects:  # an effect in the equation of motion: the lab simulator takes it as it is
+        return {"effects": effects}
     term = effects["term"]
     c = term[f"c_{term['kind']}"]
     return {"f_h_change": float(np.sqrt((1 + c / 2) / (1 - c / 2)) - 1),
@@ -337,7 +340,8 @@ def one(task) -> dict:
                        misfit_share_after=fitted.misfit_share, f_h_determined_after=fitted.determined("f_h"),
                        ljung_box_after=fitted.test_pvalues()["ljung_box_p"],
                        f_h_covered=bool(fitted.intervals["f_h"][0] <= person["f_h"] <= fitted.intervals["f_h"][1]))
-            if kind in TRUE_PARAMETER and not generator.startswith("lab"):  # the lab simulator's truth is its change of f_h
+            # a lab record's change of f_h is its simulator's f_h_change, not the term's parameter
+            if kind in TRUE_PARAMETER and not (generator.startswith("lab") and kind.startswith("term_f")):
                 name, key = TRUE_PARAMETER[kind]
                 truth = sim.truth["effects"][next(iter(effects))][key]
                 estimate = fitted.effect_estimates().loc[name]
