@@ -616,6 +616,27 @@ def test_a_grid_of_trial_starts_is_computed_coarse_to_fine():
     assert grid_best(spike.__getitem__, range(spike.size), leading=1) != 100
 
 
+def test_a_spring_and_a_floor_together_rank_the_springs_starts_alone_about_their_paths(long_fit, monkeypatch):
+    """A cubic spring fitted with an estimated floor mode (``diagnose``'s joint fit of its two best): the spring's
+    trials are each judged about their own path, the floor at its first frequency there (every combination of the
+    two, each about its own path, took over 10 minutes); from the fit without them the floor's grid is searched
+    with the spring absent. Two starts: from the person (the grid's best) and the best of the spring's trials."""
+    from smd_statespace.person import extend
+    from smd_statespace.person.effect_adapter import record_starts
+
+    spring = extend.configured_for_record("cubic_stiffness", long_fit)
+    floor = extend.configured_for_record("floor_mode:source=modal", long_fit)
+    judged = []
+    own_path = extend._own_path
+    monkeypatch.setattr(extend, "_own_path", lambda model, params: judged.append(params) or own_path(model, params))
+    model = extend.effect_model(long_fit, [spring, floor])
+    starts = extend._starts(model, long_fit, long_fit, [spring, floor])
+    assert len(starts) == 2 and len(judged) == len(record_starts(spring, long_fit))
+    first_frequency = record_starts(floor, long_fit)[0]["f_f"]
+    assert all(params[model.position("f_f")] == first_frequency for params in judged)
+    assert starts[0][1][model.position("beta_3")] == 0.0  # from the person: the spring absent, the floor searched
+
+
 def test_the_modal_floor_starts_where_its_whole_grid_does(long_fit):
     """The floor mode's trial frequencies are an ordered grid after the innovations' line: the search's start is
     the whole grid's best start by likelihood, from about 130 of its 233 likelihoods."""

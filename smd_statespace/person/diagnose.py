@@ -557,7 +557,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
         name = diagnosis.missing[0]  # (after the joint test, which compares the screened fits)
         started = time.perf_counter()
         try:
-            fitted = fit_effects(result, fits[name].effects[len(result.effects):], threads=threads)
+            fitted = fit_effects(result, fits[name].effects[len(result.effects):], threads=threads, start=fits[name])
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed[name] = " ".join(str(exc).split())
         else:

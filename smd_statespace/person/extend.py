@@ -273,29 +273,36 @@ def _starts(model: RecordModel, result, root, effects) -> list:
     variance that an earlier effect's fit drove to zero sits on a flat
     plateau of the likelihood that a search started there does not leave.
 
-    A nonlinear effect's trial starts (a cubic spring's) are tried from the model's default variances instead
-    (the fit without the effect put what it missed into the variation of each cycle's mean force, and the
-    displacement it predicts wanders by centimetres), each ranked by its likelihood about its own predicted path
-    (:func:`_own_path`): the best of them is one more start. From ``result`` the effects then start at their first
-    trial (a cubic spring absent).
+    A nonlinear model's trial starts that are not an ordered grid (a cubic spring's) are tried from the model's
+    default variances instead (the fit without the effect put what it missed into the variation of each cycle's
+    mean force, and the displacement it predicts wanders by centimetres), each ranked by its likelihood about its
+    own predicted path (:func:`_own_path`), the other effects at their first trial: the best of them is one more
+    start. From ``result`` such an effect then starts at its first trial (a cubic spring absent), while a grid
+    (a floor mode's, fitted with the spring) is searched there as it is without one. (Every combination of a
+    spring's 8 trials and a floor's 233 frequencies, each about its own path, took over 10 minutes.)
     """
     default = model.start_params(result.f_h, result.xi_h)
     trials = [record_starts(effect, result) or [{}] for effect in effects]
     many = [i for i, starts in enumerate(trials) if len(starts) > 1]
-    fresh = model.approximate and bool(many)
+    # a nonlinear model's trials that are not an ordered grid (a cubic spring's, not a floor mode's frequencies) are
+    # tried from the default variances, each about its own path; from result, such an effect starts at its first
+    fresh = [i for i in many if record_grid_start(effects[i]) is None] if model.approximate else []
+    kept = [i for i in many if i not in fresh]
     # one effect's trials on an ordered grid (a floor mode's frequencies), the others single: a grid in that order
-    leading = record_grid_start(effects[many[0]]) if len(many) == 1 and not fresh else None
+    leading = record_grid_start(effects[kept[0]]) if len(kept) == 1 else None
     origins = [result.model.unpack(result.params)]
     if root is not result:
         origins.append({**origins[0], **root.model.unpack(root.params)})
     out = []
     for named in origins:
-        starts = _combined(model, named, [starts[:1] for starts in trials] if fresh else trials, default)
+        starts = _combined(model, named, [starts[:1] if i in fresh else starts for i, starts in enumerate(trials)],
+                           default)
         out.append((model, spare_best(model.loglike, starts) if leading is None  # half of them in an idle thread
                     else grid_best(model.loglike, starts, leading)))
     if fresh:
-        ranked = spare_map(lambda start: _own_path(model, start),
-                           _combined(model, dict(zip(model.param_names, default)), trials, default))
+        ranked = spare_map(lambda start: _own_path(model, start), _combined(
+            model, dict(zip(model.param_names, default)),
+            [starts if i in fresh else starts[:1] for i, starts in enumerate(trials)], default))
         out.append(max(ranked, key=lambda pair: pair[0])[1:])
     return out
 
@@ -340,7 +347,7 @@ def _own_path(model: RecordModel, params) -> tuple:
 @one_blas_thread
 @record_cores
 def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDWICH, progress=False, timing=True,
-                threads=1):
+                threads=1, start=None):
     """Identify the person of ``result`` again with ``effects`` added to its model.
 
     Parameters
@@ -373,6 +380,10 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         starts) and ``f_h`` left its search bound on one (docs/person.md).
     threads : int
         Threads for the variation models' re-placed starts (:mod:`~smd_statespace.person.threads`).
+    start : PersonResult, optional
+        A fit of the same effects on ``result`` at its cycle starts (``diagnose``'s screening of the candidate
+        it proposes, ``timing=False``): the search starts at its estimates, about its path, instead of searching
+        the trial starts again (for a cubic spring, 1-2 s).
 
     Returns
     -------
@@ -394,8 +405,11 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
     while root.effects:  # the fit without any effect: the model's structure
         root = root.before
     model = effect_model(root, effects, path=result)
-    model, fitted = max(((at, fit_model(at, start, quick=at.approximate)) for at, start in
-                         _starts(model, result, root, added)), key=lambda pair: pair[1]["loglike"])
+    same = start is not None and start.before is result and [e.spec for e in start.effects] == [
+        e.spec for e in effects] and start.model.param_names == model.param_names
+    model, fitted = max(((at, fit_model(at, params, quick=at.approximate)) for at, params in
+                         ([(start.model, start.params)] if same else _starts(model, result, root, added))),
+                        key=lambda pair: pair[1]["loglike"])
     model, fitted, linearisations, settled = _settle_path(model, fitted, result.loglike, progress)
     # the test is made here, at result's starts and variation model: its statistic and its count of added unknowns
     comparison, tested = result.comparison, fitted["loglike"]
