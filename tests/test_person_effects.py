@@ -637,6 +637,25 @@ def test_a_spring_and_a_floor_together_rank_the_springs_starts_alone_about_their
     assert starts[0][1][model.position("beta_3")] == 0.0  # from the person: the spring absent, the floor searched
 
 
+def test_a_refit_started_at_the_screened_fit_ends_where_a_search_from_the_trial_starts_ends(long_fit, monkeypatch):
+    """``diagnose`` refits the candidate it proposes as ``identify --effect`` does (cycle starts re-placed), started
+    at its screened fit (``start``): the same person as searching the trial starts again, without searching them;
+    a ``start`` of other effects is not used."""
+    from smd_statespace.person import extend
+
+    spring = extend.configured_for_record("cubic_stiffness", long_fit)
+    screened = extend.fit_effects(long_fit, [spring], timing=False)
+    again = extend.fit_effects(long_fit, [spring])
+    searched = []
+    starts = extend._starts
+    monkeypatch.setattr(extend, "_starts", lambda *args: searched.append(1) or starts(*args))
+    refit = extend.fit_effects(long_fit, [spring], start=screened)
+    assert searched == [] and refit.f_h == pytest.approx(again.f_h, abs=0.1 * again.se[0])
+    assert refit.loglike == pytest.approx(again.loglike, abs=0.05)
+    extend.fit_effects(long_fit, ["harmonics"], timing=False, start=screened)
+    assert searched == [1]
+
+
 def test_the_modal_floor_starts_where_its_whole_grid_does(long_fit):
     """The floor mode's trial frequencies are an ordered grid after the innovations' line: the search's start is
     the whole grid's best start by likelihood, from about 130 of its 233 likelihoods."""
