@@ -557,7 +557,10 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
         name = diagnosis.missing[0]  # (after the joint test, which compares the screened fits)
         started = time.perf_counter()
         try:
-            fitted = fit_effects(result, fits[name].effects[len(result.effects):], threads=threads, start=fits[name])
+            # a nonlinear candidate from its screened fit, not its trial starts again, each about its own path (1-2 s
+            # for a cubic spring); a linear one's search is cheap and identical to identify --effect's to the last digit
+            start = fits[name] if fits[name].model.approximate else None
+            fitted = fit_effects(result, fits[name].effects[len(result.effects):], threads=threads, start=start)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed[name] = " ".join(str(exc).split())
         else:

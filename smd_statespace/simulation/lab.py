@@ -193,7 +193,8 @@ def _effects_system(effects, s):
         if force_harmonics(effect, system.model) is not None or any(
                 slot.kind == "dynamic" for slot in effect.slots(system.model)):
             raise OptionError(f"simulate_lab_record: effect {effect.name!r} adds force harmonics or states of its "
-                              "own, which a lab record does not simulate (simulate_bouncing does: simulate without --lab)")
+                              "own, which a lab record does not simulate (simulate_bouncing does: simulate without "
+                              "--lab)")
     return system
 
 
