@@ -129,7 +129,7 @@ def check_mass(mass, source: str = "--mass") -> float:
     return value
 
 
-def numeric_column(values: np.ndarray, column: str, source: str) -> np.ndarray:
+def numeric_column(values: np.ndarray, column: str, source: str, first_line: int | None = None) -> np.ndarray:
     """Convert one column of a file to float64, naming the first bad row (1-based data row).
 
     Parameters
@@ -138,6 +138,9 @@ def numeric_column(values: np.ndarray, column: str, source: str) -> np.ndarray:
         The column as read (strings or numbers).
     column, source : str
         Its name and the file's, for the error message.
+    first_line : int, optional
+        The file's line number (1-based) of the first value, when known: the message then names the bad value's
+        line too, as an editor shows it.
 
     Raises
     ------
@@ -150,8 +153,9 @@ def numeric_column(values: np.ndarray, column: str, source: str) -> np.ndarray:
     bad = ~np.isfinite(numeric)
     if bad.any():
         row = int(np.argmax(bad))
+        line = "" if first_line is None else f" (line {first_line + row})"
         raise RecordError(
-            f"{source}: column '{column}' row {row + 1} holds {values[row]!r}; "
+            f"{source}: column '{column}' row {row + 1}{line} holds {values[row]!r}; "
             "every value must be a finite number"
         )
     return numeric
@@ -338,7 +342,7 @@ def _read_export(rows: list, delimiter, source: str, fs, force_columns) -> tuple
 
     def column(index):
         cells = np.array([row[index].strip() if index < len(row) else "" for row in layout.body], dtype=object)
-        return numeric_column(cells, layout.header[index], source)
+        return numeric_column(cells, layout.header[index], source, layout.body_line)
 
     force = layout.force_scale * sum(column(index) for index in layout.forces)
     time = (layout.time_scale * column(layout.time) if layout.time is not None

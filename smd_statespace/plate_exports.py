@@ -104,6 +104,8 @@ class ExportLayout:
         Newtons per unit of the force columns.
     notes : list of str
         How the export was read, in words.
+    body_line : int or None
+        The first row of numbers' line number in the file (1-based).
     """
 
     header: list
@@ -115,6 +117,7 @@ class ExportLayout:
     forces: list
     force_scale: float
     notes: list = field(default_factory=list)
+    body_line: int | None = None
 
 
 def check_file(path: Path, expected: str = "a CSV file") -> None:
@@ -300,7 +303,7 @@ def find_layout(rows: list, delimiter: str | None, source: str, fs: float | None
     time_unit = names[times[0]][1] if times else "s"
     notes = _notes(_software(block, header), header, times, rate, forces, header_at, bool(fs), groups)
     return ExportLayout(header, header_at + 1, body, times[0] if times else None, TIME_UNITS[time_unit], rate,
-                        forces, FORCE_UNITS[units.pop()], notes)
+                        forces, FORCE_UNITS[units.pop()], notes, start + 1)
 
 
 def _header(rows: list, start: int, source: str, force_columns) -> tuple:

@@ -82,7 +82,7 @@ def test_blank_cells_in_the_first_rows_of_an_unused_column_leave_the_table_where
     np.testing.assert_allclose(record.force, force, atol=1e-6)
     np.testing.assert_allclose(record.time, t, atol=1e-9)
     rows[300] = f"{t[300]:.4f},,12.5"
-    with pytest.raises(RecordError, match=r"column 'Fz \(N\)' row 301 holds ''"):
+    with pytest.raises(RecordError, match=r"column 'Fz \(N\)' row 301 \(line 302\) holds ''"):
         read_record(write(tmp_path / "gap.csv", ["Time (s),Fz (N),COPx (mm)", *rows]), MASS)
 
 
