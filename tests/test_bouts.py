@@ -46,6 +46,8 @@ def test_every_bout_is_a_person_at_its_own_tempo_and_a_short_one_fails_alone(ses
     assert "3 bouts of bouncing, a person each" in captured.out and captured.out.count("cycles at f_b") == 3
     assert (out / "person_bouts.png").stat().st_size > 0 and (out / "bout_1" / "person.json").exists()
     assert json.loads((out / "run.json").read_text())["bouts"][0][0] == pytest.approx(ok["start_s"].iloc[0])
+    notes = json.loads((out / "bout_1" / "person.json").read_text())["notes"]
+    assert any(note.endswith("s fitted, bout 1's steady part") for note in notes)  # not "as given": the user gave none
 
 
 def test_identify_bouts_takes_no_span(session):

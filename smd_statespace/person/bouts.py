@@ -20,7 +20,17 @@ from ..io import Record
 from ..signals import find_bouts, mains_hum, remove_hum
 from ..signals.weighing import weigh_record
 
-__all__ = ["BoutAnswer", "identify_bouts"]
+__all__ = ["BoutAnswer", "BoutSpan", "identify_bouts"]
+
+
+class BoutSpan(tuple):
+    """A bout's steady part ``(start, end)`` (s), as a span for :func:`~smd_statespace.person.identify_person`, that
+    says where it came from (``said``) in the note of the fitted span: "bout 2's steady part", not "as given"."""
+
+    def __new__(cls, start: float, end: float, said: str):
+        span = super().__new__(cls, (float(start), float(end)))
+        span.said = said
+        return span
 
 
 @dataclass(frozen=True)
@@ -122,7 +132,7 @@ def identify_bouts(record: Record, **options) -> list:
     for number, bout in enumerate(bouts.bouts, start=1):
         f_b = 1.0 / bout.period
         try:
-            result = identify_person(record, span=bout.span, **options)
+            result = identify_person(record, span=BoutSpan(*bout.span, f"bout {number}'s steady part"), **options)
         except SMDInputError as exc:
             answers.append(BoutAnswer(number, bout.start, bout.end, bout.cycles, f_b, None,
                                       " ".join(str(exc).split())))

@@ -195,6 +195,7 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
         decimated, factor, moved = decimate_record(record, rate, extra)
         notes = [*record.extra.get("reading", ()), *_rate_notes(record, decimated, factor, rate)]
         return PreparedRecord(decimated, record, None, factor, notes=notes, extra=moved)
+    said = getattr(span, "said", "as given")  # where a span that was not found here came from, for its note
     if span != "auto":
         trim_record(record, span)  # a malformed span, or one outside the record: one line before any work
         span = (float(span[0]), float(span[1]))
@@ -210,7 +211,7 @@ def prepare_record(record: Record, rate=RECORD_RATE, span="auto", extra=()) -> P
         notes += said
         warnings += _weight_warnings(bouts, record)
     else:
-        notes.append(f"span {span[0]:g}-{span[1]:g} s fitted, as given")
+        notes.append(f"span {span[0]:g}-{span[1]:g} s fitted, {said}")
     _refuse_a_loose_phone(record, span)
     factor = safe_factor(record.fs, rate, hum)
     decimated, factor, moved = decimate_record(clean, None if factor < 2 else record.fs / factor, extra)
