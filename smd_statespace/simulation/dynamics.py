@@ -130,8 +130,8 @@ class _System:
             self.dynamic = np.array(dynamic)
             self.names = tuple(self.model.state_names[i] for i in dynamic)
             self.template = np.zeros(self.model.n_state)
-            self.template[self.model.index("f_h")] = f_h
-            self.template[self.model.index("xi_h")] = xi_h
+            self.person = [self.model.index("f_h"), self.model.index("xi_h")]  # where rates' f_h, xi_h go
+            self.template[self.person] = f_h, xi_h
             self.inputs = CycleInputs(f_b=1.0)
         self.n_state = len(self.names)
         self.a_matrix, self.b_vector = self._linear_matrices()
@@ -153,6 +153,7 @@ class _System:
         """``(dx/dt, u'')`` for states ``x`` (shape (n_state, ...)) under input ``g F`` at time(s) ``t``; ``f_h``,
         ``xi_h`` (Hz, -; broadcast with the samples) in place of the system's own where given (a person who
         changes during the record)."""
+        changing = f_h is not None or xi_h is not None  # a person who changes: not the template's f_h, xi_h
         f_h = self.f_h if f_h is None else f_h
         xi_h = self.xi_h if xi_h is None else xi_h
         acc = equations.smd_acceleration(x[0], x[1], f_h, xi_h, force_g)  # Eq. 2
@@ -161,7 +162,8 @@ class _System:
         x = np.asarray(x, dtype=float)
         full = np.empty(x.shape[1:] + self.template.shape)
         full[...] = self.template
-        full[..., self.model.index("f_h")], full[..., self.model.index("xi_h")] = f_h, xi_h
+        if changing:
+            full[..., self.person[0]], full[..., self.person[1]] = f_h, xi_h
         full[..., self.dynamic] = x.T if x.ndim <= 2 else np.moveaxis(x, 0, -1)  # (the ODE solver: one state)
         for effect in self.effects:
             acc = acc + effect.acceleration(self.model, full, t, self.inputs)
