@@ -452,8 +452,9 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     """Fit the two best candidates together and test each on top of the other."""
     first, second = names[:2]
     present = len(base.effects)
+    # from the two fits (each with the person), not the trial starts again: the joint model nests both
     both = fit_effects(base, list(fits[first].effects[present:]) + list(fits[second].effects[present:]),
-                       timing=False)
+                       timing=False, start=[fits[first], fits[second]])
     out = {"effects": [first, second], "loglike": both.loglike}
     for name, other in ((first, second), (second, first)):
         lr = 2.0 * (both.loglike - fits[other].loglike)

@@ -54,7 +54,8 @@ from .threads import one_blas_thread, record_cores, spare_best, spare_map
 
 __all__ = ["NOMINAL_ITERATIONS", "NOMINAL_TOLERANCE", "NOMINAL_RELATIVE", "START_LINEARISATIONS", "START_TOLERANCE",
            "check_effects", "record_effects",
-           "configured_for_record", "split_effects", "record_signals", "effect_model", "at_zero", "fit_effects",
+           "configured_for_record", "split_effects", "record_signals", "effect_model", "model_on_top", "root_fit",
+           "at_zero", "fit_effects",
            "GRID_STRIDE", "GRID_KEEP", "grid_best"]
 
 NOMINAL_ITERATIONS = 6
@@ -201,10 +202,40 @@ def effect_model(result, effects, path=None) -> RecordModel:
                        nominal=nominal, observed=base.observed, fade=base.fade)
 
 
+def model_on_top(result, effects) -> RecordModel:
+    """``result``'s model, its own effects in it, with ``effects`` added on top of them: at ``result``'s cycle
+    starts, variation model and phase template (a fit with effects re-places them, :func:`fit_effects`), where
+    its parameters give its own likelihood with the added effects absent.
+
+    Built from the fit without any effect (:func:`root_fit`, the model's structure) by :func:`effect_model`, the
+    nonlinear effects linearised about ``result``'s predicted path."""
+    root = root_fit(result)
+    model = effect_model(root, list(result.effects) + list(effects), path=result)
+    if root is result:
+        return model
+    template = result.model.phase_template
+    if template is not None and model.n_harmonics > result.model.n_harmonics:
+        template = np.r_[template, np.zeros(2 * (model.n_harmonics - result.model.n_harmonics))]
+    return replace(model, timing=result.model.timing, variation=result.model.variation, phase_template=template)
+
+
+def root_fit(result):
+    """The fit without any effect that ``result`` grew from (``result`` itself when it has none): the record-level
+    model's structure, to which :func:`effect_model` adds effects."""
+    while result.effects:
+        result = result.before
+    return result
+
+
 def at_zero(result, effect) -> tuple:
     """``(model, params, j)``: ``result``'s model with the one-parameter ``effect``, at the fit with its
-    coefficient (index ``j``) at 0: the model a score test of the effect works in (it is ``result``'s there)."""
-    model = effect_model(result, [effect])
+    coefficient (index ``j``) at 0: the model a score test of the effect works in (it is ``result``'s there).
+
+    The effects ``result`` has stay in the model, ``effect`` on top of them (as :func:`fit_effects` adds it): until
+    2026-12-01 they were left out, and ``diagnose REC --effect A`` screened the library against the person without
+    ``A`` (on a record with a hidden spring, the model at ``c = 0`` read 921 in log-likelihood where the person
+    with the spring reads 1213)."""
+    model = model_on_top(result, [effect])
     added = [name for name in model.param_names if name not in result.model.param_names]
     if len(added) != 1:
         raise ValueError(f"{effect.spec}: a score test takes an effect of one parameter, this adds {added}")
@@ -380,10 +411,15 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         starts) and ``f_h`` left its search bound on one (docs/person.md).
     threads : int
         Threads for the variation models' re-placed starts (:mod:`~smd_statespace.person.threads`).
-    start : PersonResult, optional
+    start : PersonResult or sequence of PersonResult, optional
         A fit of the same effects on ``result`` at its cycle starts (``diagnose``'s screening of the candidate
         it proposes, ``timing=False``): the search starts at its estimates, about its path, instead of searching
-        the trial starts again (for a cubic spring, 1-2 s).
+        the trial starts again (for a cubic spring, 1-2 s). Several fits on ``result``, each of some of the
+        effects and together of all of them (``diagnose``'s joint fit of its two best candidates): the search
+        starts from the person of the best of them with each effect's parameters from its own fit (about that
+        start's own path, :func:`_own_path`); should it end below any of them by more than
+        :data:`NOMINAL_TOLERANCE` (the model nests each), the trial starts are searched as well and the better
+        end is kept.
 
     Returns
     -------
@@ -401,16 +437,25 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         raise OptionError(f"{result.record.source}: the effect {already[0]!r} is in the model already "
                           f"(it has {', '.join(e.spec for e in present)})")
     effects = present + added
-    root = result
-    while root.effects:  # the fit without any effect: the model's structure
-        root = root.before
-    model = effect_model(root, effects, path=result)
-    same = start is not None and start.before is result and [e.spec for e in start.effects] == [
-        e.spec for e in effects] and start.model.param_names == model.param_names
-    model, fitted = max(((at, fit_model(at, params, quick=at.approximate)) for at, params in
-                         ([(start.model, start.params)] if same else _starts(model, result, root, added))),
-                        key=lambda pair: pair[1]["loglike"])
-    model, fitted, linearisations, settled = _settle_path(model, fitted, result.loglike, progress)
+    root = root_fit(result)
+    model = model_on_top(result, added)
+    pieces = _start_pieces(start, result, effects)
+
+    def searched(starts):
+        best = max(((at, fit_model(at, params, quick=at.approximate)) for at, params in starts),
+                   key=lambda pair: pair[1]["loglike"])
+        return _settle_path(*best, result.loglike, progress)
+
+    if pieces is None:
+        model, fitted, linearisations, settled = searched(_starts(model, result, root, added))
+    elif len(pieces) == 1 and pieces[0].model.param_names == model.param_names:  # the same effects' fit
+        model, fitted, linearisations, settled = searched([(pieces[0].model, pieces[0].params)])
+    else:
+        model, fitted, linearisations, settled = searched([_joined(model, result, pieces)])
+        if fitted["loglike"] < max(piece.loglike for piece in pieces) - NOMINAL_TOLERANCE:
+            model, fitted, linearisations, settled = max(
+                [(model, fitted, linearisations, settled), searched(_starts(model, result, root, added))],
+                key=lambda ended: ended[1]["loglike"])
     # the test is made here, at result's starts and variation model: its statistic and its count of added unknowns
     comparison, tested = result.comparison, fitted["loglike"]
     tested_df = model.unknowns(fitted["params"]) - result.model.unknowns(result.params)
@@ -438,6 +483,40 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
                          settled=settled, tested_loglike=tested, tested_df=tested_df,
                          change=_change_left(root.change, effects),
                          prepared=root.prepared, threads=threads)
+
+
+def _start_pieces(start, result, effects) -> list | None:
+    """The fits of ``start`` (one, or a sequence) to start ``fit_effects`` from: each on ``result`` itself, each of
+    some of the added ``effects`` and together of all of them, once; ``None`` where they are not (a start of other
+    effects is not used)."""
+    if start is None:
+        return None
+    pieces = [start] if not isinstance(start, (list, tuple)) else list(start)
+    present = len(result.effects)
+    specs = [e.spec for piece in pieces for e in piece.effects[present:]]
+    if any(piece.before is not result or [e.spec for e in piece.effects[:present]] != [e.spec for e in
+                                                                                      result.effects]
+           for piece in pieces) or sorted(specs) != sorted(e.spec for e in effects[present:]):
+        return None
+    return pieces
+
+
+def _joined(model: RecordModel, result, pieces) -> tuple:
+    """``(model, params)``: the start of a search with the effects of several fits ``pieces`` on ``result``: the
+    person (and the effects ``result`` has) of the best of them by likelihood, each added effect's parameters from
+    the fit that has it, about that start's own predicted path when the model is linearised (:func:`_own_path`)."""
+    best = max(pieces, key=lambda piece: piece.loglike)
+    named = dict(best.model.unpack(best.params))
+    known = set(result.model.param_names)
+    for piece in pieces:
+        named.update({name: value for name, value in piece.model.unpack(piece.params).items() if name not in known})
+    low, high = np.asarray(model.bounds).T
+    default = model.start_params(best.f_h, best.xi_h)
+    params = np.clip([named.get(name, value) for name, value in zip(model.param_names, default)], low, high)
+    if not model.approximate:
+        return model, params
+    _, model, params = _own_path(model, params)
+    return model, params
 
 
 def _change_left(change, effects):

@@ -45,7 +45,7 @@ from ..effects.generic import TERMS, GenericTerm, label
 from ..errors import SMDInputError
 from .breaks import fitted_span, located_step
 from .detection import detection_limits
-from .extend import at_zero, effect_model
+from .extend import at_zero, model_on_top
 from .robust import robust_scale
 from .score import cycle_sums, profile_out, score
 from .search import fit_model
@@ -163,7 +163,7 @@ def score_tests(result, effects, threads: int = 1) -> list:
         if len(members) == 1:
             model, params, j = placed[members[0]]
             return [_test_at(model, params, score(model, params), j, [j])]
-        model = effect_model(result, [effects[i] for i in members])
+        model = model_on_top(result, [effects[i] for i in members])
         named = {**dict(zip(placed[members[0]][0].param_names, placed[members[0]][1])),
                  **{names[i]: 0.0 for i in members}}
         params = np.array([named.get(name, 0.0) for name in model.param_names], dtype=float)
