@@ -77,19 +77,30 @@ def test_a_drifting_f_h_is_ranked_first_and_a_clean_record_raises_no_alarm(clean
 
 
 @pytest.mark.slow
-def test_a_spring_stiffer_on_one_side_is_ranked_first_by_its_quick_fit_though_its_score_is_small(clean):
+def test_a_spring_stiffer_on_one_side_is_ranked_first_by_its_quick_fit_though_its_score_is_small(clean, monkeypatch):
     """|u| linearised about the path of the person without it is nearly a change of stiffness: its score test
     passes the library's level but ranks it below terms that imitate it; linearised again about its own path,
-    its quick fit ranks it first, its coefficient near the truth. A clean record: nothing passes."""
+    its quick fit ranks it first, its coefficient near the truth. A clean record: nothing passes. The term's fit
+    goes on from its quick fit's end (``diagnose``) to where a search from its trial starts ends."""
+    from smd_statespace.person import extend
+
     assert (screen(clean, alpha=0.01)["p_quick_holm"] > 0.01).all()
     library = {effect.kind: effect for effect in generic_library(clean)}
     stiffer = library["abs_u"].with_values(c_abs_u=-0.3)
     record = simulate_bouncing(**PERSON, seed=5, effects=[stiffer]).record
     person = identify_person(record, check_change=False)
-    table = screen(person, alpha=0.01)
+    ends = {}
+    table = screen(person, alpha=0.01, ends=ends)
     ranked_by_score = list(table.sort_values("p_robust")["label"])
     assert table["label"].iloc[0] == "term:abs_u" and ranked_by_score.index("term:abs_u") > 0
     assert -0.45 < table["estimate"].iloc[0] < -0.15  # -w_h^2 c |u|: c is the stiffness's asymmetry, -0.3
+    term = next(effect for effect in generic_library(person) if effect.spec == table.index[0])
+    searched = extend.fit_effects(person, [term], timing=False)
+    starts, counted = extend._starts, []
+    monkeypatch.setattr(extend, "_starts", lambda *args: counted.append(1) or starts(*args))
+    went_on = extend.fit_effects(person, [term], timing=False, start=ends[term.spec])
+    assert counted == [] and went_on.loglike == pytest.approx(searched.loglike, abs=0.05)
+    assert went_on.f_h == pytest.approx(searched.f_h, abs=0.1 * searched.se[0])
 
 
 @pytest.mark.slow

@@ -510,7 +510,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     PersonDiagnosis
     """
     present, threads = {label(effect) for effect in result.effects}, search_threads(threads)
-    screened, failed = pd.DataFrame(), {}
+    screened, failed, ends = pd.DataFrame(), {}, {}  # ends: the screened terms' quick fits, where their fits go on
     if candidates is None:
         fitted = fitted_record(result)
         effects = [effect for name, cls in EFFECTS.items() if name not in present
@@ -535,7 +535,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
                  if label(term) not in taken and SAME_AS.get(term.kind) not in taken]
         tests += len(terms)  # Bonferroni counts every term screened, fitted or not
         try:
-            screened = screen(result, terms, alpha=alpha, threads=threads)
+            screened = screen(result, terms, alpha=alpha, threads=threads, ends=ends)
         except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
             failed["generic terms (score tests)"] = " ".join(str(exc).split())
         else:
@@ -543,7 +543,7 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
             screened = screened.assign(fitted=screened.index.isin(flagged))  # what the figure colours as fitted
             effects += [effect for effect in terms if effect.spec in flagged]
     level = alpha / max(tests, 1)
-    fits, rows = _fit_candidates(result, effects, level, failed, threads, progress)
+    fits, rows = _fit_candidates(result, effects, level, failed, threads, progress, ends)
     validation = held_out_checks(result, fits, rows, level, threads)
     scans = {term.kind: term.scan for term in terms if term.scan} if library_screened else {}
     diagnosis = PersonDiagnosis(base=result, fits=fits, rows=rows, failed=failed, alpha=alpha, screened=screened,
@@ -574,9 +574,11 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
     return diagnosis
 
 
-def _fit_candidates(result, effects, level: float, failed: dict, threads: int, progress: bool) -> tuple:
+def _fit_candidates(result, effects, level: float, failed: dict, threads: int, progress: bool, ends: dict) -> tuple:
     """Every candidate fitted with the person (one search each, at ``result``'s starts; in threads) and its row:
-    ``(fits by name, rows)``; a candidate whose fit fails is said in ``failed``."""
+    ``(fits by name, rows)``; a candidate whose fit fails is said in ``failed``. A term the library's screen fitted
+    quickly goes on from that fit's end (``ends`` by spec): the same search, continued (it starts at ``c = 0``
+    from the person either way)."""
     from ..progress import tqdm
 
     fits, rows = {}, []
@@ -584,7 +586,8 @@ def _fit_candidates(result, effects, level: float, failed: dict, threads: int, p
         def fit_candidate(effect):
             started = time.perf_counter()
             try:
-                return fit_effects(result, [effect], timing=False), time.perf_counter() - started
+                return (fit_effects(result, [effect], timing=False, start=ends.get(effect.spec)),
+                        time.perf_counter() - started)
             except (SMDInputError, ArithmeticError, np.linalg.LinAlgError) as exc:
                 return exc, None
             finally:

@@ -411,10 +411,12 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
         starts) and ``f_h`` left its search bound on one (docs/person.md).
     threads : int
         Threads for the variation models' re-placed starts (:mod:`~smd_statespace.person.threads`).
-    start : PersonResult or sequence of PersonResult, optional
+    start : PersonResult or sequence of PersonResult or (RecordModel, ndarray), optional
         A fit of the same effects on ``result`` at its cycle starts (``diagnose``'s screening of the candidate
-        it proposes, ``timing=False``): the search starts at its estimates, about its path, instead of searching
-        the trial starts again (for a cubic spring, 1-2 s). Several fits on ``result``, each of some of the
+        it proposes, ``timing=False``; or a search's end, ``(model, params)``, as a screen's quick fit of a term
+        leaves it, :func:`~smd_statespace.person.screen.quick_ratio`): the search starts at its estimates, about
+        its path, instead of searching the trial starts again (for a cubic spring, 1-2 s). Several fits on
+        ``result``, each of some of the
         effects and together of all of them (``diagnose``'s joint fit of its two best candidates): the search
         starts from the person of the best of them with each effect's parameters from its own fit (about that
         start's own path, :func:`_own_path`); should it end below any of them by more than
@@ -446,7 +448,9 @@ def fit_effects(result, effects, *, intervals="calibrated", cov_type=WIDER_SANDW
                    key=lambda pair: pair[1]["loglike"])
         return _settle_path(*best, result.loglike, progress)
 
-    if pieces is None:
+    if isinstance(start, tuple) and isinstance(start[0], RecordModel) and start[0].param_names == model.param_names:
+        model, fitted, linearisations, settled = searched([start])
+    elif pieces is None:
         model, fitted, linearisations, settled = searched(_starts(model, result, root, added))
     elif len(pieces) == 1 and pieces[0].model.param_names == model.param_names:  # the same effects' fit
         model, fitted, linearisations, settled = searched([(pieces[0].model, pieces[0].params)])
@@ -489,7 +493,7 @@ def _start_pieces(start, result, effects) -> list | None:
     """The fits of ``start`` (one, or a sequence) to start ``fit_effects`` from: each on ``result`` itself, each of
     some of the added ``effects`` and together of all of them, once; ``None`` where they are not (a start of other
     effects is not used)."""
-    if start is None:
+    if start is None or isinstance(start, tuple) and isinstance(start[0], RecordModel):
         return None
     pieces = [start] if not isinstance(start, (list, tuple)) else list(start)
     present = len(result.effects)

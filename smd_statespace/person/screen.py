@@ -216,7 +216,8 @@ def quick_ratio(result, effect) -> dict:
     dict
         ``lr_quick`` (twice the gain of log-likelihood over ``result``), ``estimate`` (the coefficient) and
         ``lr_scale`` (:func:`~smd_statespace.person.robust.robust_scale` at the quick fit: the ratio over it is
-        what is tested).
+        what is tested) and ``end`` (the quick fit's ``(model, params)``, about its last path: where
+        :func:`~smd_statespace.person.extend.fit_effects` continues the search, ``start``).
     """
     from .statespace import nominal_path  # statsmodels: imported when an effect is linearised
 
@@ -226,7 +227,7 @@ def quick_ratio(result, effect) -> dict:
         model = replace(model, nominal=nominal_path(model, fitted["params"]))
         fitted = fit_model(model, fitted["params"], quick=True)
     return {"lr_quick": float(2.0 * (fitted["loglike"] - result.loglike)), "estimate": float(fitted["params"][j]),
-            "lr_scale": robust_scale(model, fitted["params"], [model.param_names[j]])}
+            "lr_scale": robust_scale(model, fitted["params"], [model.param_names[j]]), "end": (model, fitted["params"])}
 
 
 def holm(p_values) -> np.ndarray:
@@ -244,7 +245,7 @@ def holm(p_values) -> np.ndarray:
     return out
 
 
-def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
+def screen(result, effects=None, alpha=None, threads=1, ends=None) -> pd.DataFrame:
     """Score-test every candidate of ``effects`` (default :func:`generic_library`) at ``result``, most
     significant first; with ``alpha``, the terms the score test does not rule out fitted quickly and tested
     by their likelihood ratio over the library.
@@ -267,7 +268,8 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
         the library by :func:`holm`), sorted by ``p_robust``. With ``alpha``: ``lr_quick``, ``estimate``,
         ``lr_scale`` (:func:`quick_ratio`; NaN where not fitted) and ``p_quick_holm`` (of ``lr_quick /
         lr_scale``), ordered as above. The tests, and the quick fits, run in up to ``threads`` threads
-        (:mod:`~smd_statespace.person.threads`), with the same table.
+        (:mod:`~smd_statespace.person.threads`), with the same table. A dict ``ends`` receives each quick fit's
+        end by spec (``quick_ratio``'s ``end``): ``diagnose`` fits the terms it passes on from there.
     """
     effects = generic_library(result) if effects is None else list(effects)
     tests = score_tests(result, effects, threads)
@@ -289,6 +291,8 @@ def screen(result, effects=None, alpha=None, threads=1) -> pd.DataFrame:
     for spec, quick in zip(fitted, thread_map(lambda spec: quick_ratio(result, by_spec[spec]), fitted, threads)):
         table.loc[spec, ["lr_quick", "estimate", "lr_scale"]] = [quick[key] for key in ("lr_quick", "estimate",
                                                                                          "lr_scale")]
+        if ends is not None:
+            ends[spec] = quick["end"]
     scaled = (table["lr_quick"] / table["lr_scale"]).fillna(0.0).to_numpy()
     p_quick = np.exp([log_p_value(value, 1, [by_spec[spec]]) for spec, value in zip(table.index, scaled)])
     table["p_quick_holm"] = holm(np.where(table["lr_quick"].notna(), p_quick, 1.0))
