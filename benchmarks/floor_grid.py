@@ -36,7 +36,8 @@ def one(task) -> dict:
     """Every trial start's log-likelihood on one record and the coarse-to-fine choice; never raises."""
     from smd_statespace.person import identify_person
     from smd_statespace.person.effect_adapter import record_grid_start, record_starts
-    from smd_statespace.person.extend import configured_for_record, effect_model, grid_best
+    from smd_statespace.person.extend import configured_for_record, effect_model
+    from smd_statespace.person.starts import grid_best
     from smd_statespace.simulation import simulate_bouncing
 
     kind, size, generator, index, person, sim_seed, effects = task

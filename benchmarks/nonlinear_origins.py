@@ -1,6 +1,6 @@
 """Does a nonlinear generic term's search stall where it starts, as a hardening spring's did? ``fit_effects`` (the term
 started at zero from the fit without it) against a search started at zero from the model's default variances, each
-start about its own predicted path (``extend._own_path``), on ``person_effects.py``'s large terms.
+start about its own predicted path (``starts.own_path``), on ``person_effects.py``'s large terms.
 
 A hardening spring's search stalled at zero when started from the fit without it (docs/effects.md); this checks
 whether the library's other nonlinear terms need the same second origin. One JSON line per record::
@@ -23,8 +23,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 import person_effects as pe  # noqa: E402  (benchmarks/, the script's own folder)
 from smd_statespace.person import identify_person  # noqa: E402
-from smd_statespace.person.extend import (_own_path, _settle_path, configured_for_record, effect_model,  # noqa: E402
+from smd_statespace.person.extend import (_settle_path, configured_for_record, effect_model,  # noqa: E402
                                           fit_effects)
+from smd_statespace.person.starts import own_path  # noqa: E402
 from smd_statespace.person.search import fit_model  # noqa: E402
 from smd_statespace.simulation import simulate_bouncing  # noqa: E402
 
@@ -41,7 +42,7 @@ def one(task) -> dict:
         t1 = time.time()
         eff = configured_for_record(spec, base)
         model = effect_model(base, [eff])
-        ll, m, s = _own_path(model, model.start_params(base.f_h, base.xi_h))
+        ll, m, s = own_path(model, model.start_params(base.f_h, base.xi_h))
         f = fit_model(m, s, quick=True)
         m2, f2, lin, settled = _settle_path(m, f, base.loglike)
         p = m2.unpack(f2["params"])

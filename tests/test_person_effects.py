@@ -214,18 +214,18 @@ def exact_loglike(time, y, truth, beta):
 
 def test_a_trial_start_is_ranked_about_its_own_path_and_one_that_runs_away_is_never_taken(cubic_record):
     """At the truth, the likelihood about the path predicted from a zero path is far below the one about the
-    truth's own path, which ``_own_path`` reaches (re-linearised until it settles: the relinearised likelihood); a
+    truth's own path, which ``own_path`` reaches (re-linearised until it settles: the relinearised likelihood); a
     spring so soft that its stiffness turns negative within the bounce gives -inf, not a NaN that ``max`` could keep."""
-    from smd_statespace.person.extend import _own_path
+    from smd_statespace.person.starts import own_path
 
     time, y, truth = cubic_record
     model = cubic_model(time, y, nominal=np.zeros((time.size, 2)))
     params = params_of(model, **truth)
-    loglike, moved, same = _own_path(model, params)
+    loglike, moved, same = own_path(model, params)
     assert same is params and loglike == pytest.approx(moved.loglike(params))
     assert loglike == pytest.approx(relinearised_loglike(time, y, truth, truth["beta_3"], times=12), abs=0.5)
     assert loglike > model.loglike(params) + 10
-    assert _own_path(model, params_of(model, f_h=2.6, xi_h=0.3, beta_3=-1e7))[0] == -np.inf
+    assert own_path(model, params_of(model, f_h=2.6, xi_h=0.3, beta_3=-1e7))[0] == -np.inf
 
 
 def test_a_nonlinear_effect_at_zero_is_the_base_model(cubic_record):
@@ -597,7 +597,7 @@ def test_a_grid_of_trial_starts_is_computed_coarse_to_fine():
     """grid_best computes every other grid point, then the neighbours of the best of those: a peak between two
     coarse points is found at about half the cost; a lone spike whose neighbours are low is missed (the grid must be
     fine enough that a peak spans neighbours, as the floor's 1 % grid is)."""
-    from smd_statespace.person.extend import GRID_KEEP, grid_best
+    from smd_statespace.person.starts import GRID_KEEP, grid_best
 
     grid = np.geomspace(2.0, 20.0, 232)
     peak = 2.0 + 25.0 / (1.0 + (np.log(grid / 3.53) / 0.012) ** 2)  # a floor's narrow peak at 3.53 Hz
@@ -621,16 +621,17 @@ def test_a_spring_and_a_floor_together_rank_the_springs_starts_alone_about_their
     trials are each judged about their own path, the floor at its first frequency there (every combination of the
     two, each about its own path, took over 10 minutes); from the fit without them the floor's grid is searched
     with the spring absent. Two starts: from the person (the grid's best) and the best of the spring's trials."""
-    from smd_statespace.person import extend
+    from smd_statespace.person import extend, starts as starts_module
     from smd_statespace.person.effect_adapter import record_starts
 
     spring = extend.configured_for_record("cubic_stiffness", long_fit)
     floor = extend.configured_for_record("floor_mode:source=modal", long_fit)
     judged = []
-    own_path = extend._own_path
-    monkeypatch.setattr(extend, "_own_path", lambda model, params: judged.append(params) or own_path(model, params))
+    own_path = starts_module.own_path
+    monkeypatch.setattr(starts_module, "own_path", lambda model, params: judged.append(params) or own_path(model,
+                                                                                                           params))
     model = extend.effect_model(long_fit, [spring, floor])
-    starts = extend._starts(model, long_fit, long_fit, [spring, floor])
+    starts = starts_module.search_starts(model, long_fit, long_fit, [spring, floor])
     assert len(starts) == 2 and len(judged) == len(record_starts(spring, long_fit))
     first_frequency = record_starts(floor, long_fit)[0]["f_f"]
     assert all(params[model.position("f_f")] == first_frequency for params in judged)
@@ -647,8 +648,8 @@ def test_a_refit_started_at_the_screened_fit_ends_where_a_search_from_the_trial_
     screened = extend.fit_effects(long_fit, [spring], timing=False)
     again = extend.fit_effects(long_fit, [spring])
     searched = []
-    starts = extend._starts
-    monkeypatch.setattr(extend, "_starts", lambda *args: searched.append(1) or starts(*args))
+    starts = extend.search_starts
+    monkeypatch.setattr(extend, "search_starts", lambda *args: searched.append(1) or starts(*args))
     refit = extend.fit_effects(long_fit, [spring], start=screened)
     assert searched == [] and refit.f_h == pytest.approx(again.f_h, abs=0.1 * again.se[0])
     assert refit.loglike == pytest.approx(again.loglike, abs=0.05)
@@ -669,7 +670,7 @@ def test_the_modal_floor_starts_where_its_whole_grid_does(long_fit):
     model = extend.effect_model(long_fit, [floor])
     counted, seen, j = extend.effect_model(long_fit, [floor]), [], model.position("f_f")
     counted.loglike = lambda params: seen.append(params[j]) or model.loglike(params)
-    start = extend._starts(counted, long_fit, long_fit, [floor])[0][1]
+    start = extend.search_starts(counted, long_fit, long_fit, [floor])[0][1]
     assert len(seen) < 0.6 * len(frequencies)  # 136 of 233 here
     every = [model.loglike(np.r_[start[:j], f, start[j + 1:]]) for f in frequencies]
     assert start[j] == frequencies[int(np.argmax(every))]

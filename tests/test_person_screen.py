@@ -96,8 +96,8 @@ def test_a_spring_stiffer_on_one_side_is_ranked_first_by_its_quick_fit_though_it
     assert -0.45 < table["estimate"].iloc[0] < -0.15  # -w_h^2 c |u|: c is the stiffness's asymmetry, -0.3
     term = next(effect for effect in generic_library(person) if effect.spec == table.index[0])
     searched = extend.fit_effects(person, [term], timing=False)
-    starts, counted = extend._starts, []
-    monkeypatch.setattr(extend, "_starts", lambda *args: counted.append(1) or starts(*args))
+    starts, counted = extend.search_starts, []
+    monkeypatch.setattr(extend, "search_starts", lambda *args: counted.append(1) or starts(*args))
     went_on = extend.fit_effects(person, [term], timing=False, start=ends[term.spec])
     assert counted == [] and went_on.loglike == pytest.approx(searched.loglike, abs=0.05)
     assert went_on.f_h == pytest.approx(searched.f_h, abs=0.1 * searched.se[0])

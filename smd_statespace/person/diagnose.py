@@ -23,7 +23,7 @@ Candidates, by default (:func:`~smd_statespace.model.fitted.propose`): every reg
 (a user's too); the floor as the measured floor when the record has a
 ``floor_acc`` column, else as an estimated floor mode (``floor_mode:source=modal``),
 whose frequency is searched from the best of a fine grid of about 230 trials (the likelihood at every
-other one and around the best of those: :func:`~smd_statespace.person.extend.grid_best`), which costs about a
+other one and around the best of those: :func:`~smd_statespace.person.starts.grid_best`), which costs about a
 second, and whose test counts them (Bonferroni).
 
 Generic terms: besides those, every generic term of the library
@@ -452,9 +452,8 @@ def _joint(base, fits: dict, names: list, level: float) -> dict:
     """Fit the two best candidates together and test each on top of the other."""
     first, second = names[:2]
     present = len(base.effects)
-    # from the two fits (each with the person), not the trial starts again: the joint model nests both
     both = fit_effects(base, list(fits[first].effects[present:]) + list(fits[second].effects[present:]),
-                       timing=False, start=[fits[first], fits[second]])
+                       timing=False, start=[fits[first], fits[second]])  # from the two fits: it nests both
     out = {"effects": [first, second], "loglike": both.loglike}
     for name, other in ((first, second), (second, first)):
         lr = 2.0 * (both.loglike - fits[other].loglike)
@@ -575,10 +574,8 @@ def diagnose_person(result, candidates=None, alpha=0.01, progress=False, library
 
 
 def _fit_candidates(result, effects, level: float, failed: dict, threads: int, progress: bool, ends: dict) -> tuple:
-    """Every candidate fitted with the person (one search each, at ``result``'s starts; in threads) and its row:
-    ``(fits by name, rows)``; a candidate whose fit fails is said in ``failed``. A term the library's screen fitted
-    quickly goes on from that fit's end (``ends`` by spec): the same search, continued (it starts at ``c = 0``
-    from the person either way)."""
+    """Every candidate fitted with the person (one search each, at ``result``'s starts; in threads; a screened term on
+    from its quick fit, ``ends``) and its row: ``(fits by name, rows)``; a failed fit is said in ``failed``."""
     from ..progress import tqdm
 
     fits, rows = {}, []

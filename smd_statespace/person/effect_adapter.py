@@ -104,7 +104,7 @@ def record_grid_start(effect: "Effect") -> int | None:
     """Where the ordered grid begins in ``effect``'s trial starts (:func:`record_starts`), or None: no grid.
 
     On a grid the search computes the likelihood at every other point and then at the neighbours of the
-    best of those (:func:`~smd_statespace.person.extend.grid_best`) instead of at every point.
+    best of those (:func:`~smd_statespace.person.starts.grid_best`) instead of at every point.
     """
     return int(effect.record_grid_start()) if isinstance(effect, RecordStartGrid) else None
 
