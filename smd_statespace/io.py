@@ -129,7 +129,7 @@ def check_mass(mass, source: str = "--mass") -> float:
     return value
 
 
-def numeric_column(values: np.ndarray, column: str, source: str, first_line: int | None = None) -> np.ndarray:
+def numeric_column(values: np.ndarray, column: str, source: str, first_line=None) -> np.ndarray:
     """Convert one column of a file to float64, naming the first bad row (1-based data row).
 
     Parameters
@@ -138,9 +138,9 @@ def numeric_column(values: np.ndarray, column: str, source: str, first_line: int
         The column as read (strings or numbers).
     column, source : str
         Its name and the file's, for the error message.
-    first_line : int, optional
-        The file's line number (1-based) of the first value, when known: the message then names the bad value's
-        line too, as an editor shows it.
+    first_line : int or sequence of int, optional
+        The file's line number (1-based) of the first value, or of every value (a file with blank lines between
+        its rows), when known: the message then names the bad value's line too, as an editor shows it.
 
     Raises
     ------
@@ -153,7 +153,7 @@ def numeric_column(values: np.ndarray, column: str, source: str, first_line: int
     bad = ~np.isfinite(numeric)
     if bad.any():
         row = int(np.argmax(bad))
-        line = "" if first_line is None else f" (line {first_line + row})"
+        line = _line_text(first_line, row)
         raise RecordError(
             f"{source}: column '{column}' row {row + 1}{line} holds {values[row]!r}; "
             "every value must be a finite number"
@@ -161,7 +161,15 @@ def numeric_column(values: np.ndarray, column: str, source: str, first_line: int
     return numeric
 
 
-def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> Record:
+def _line_text(lines, row: int) -> str:
+    """``" (line 12)"``: the file line of data row ``row`` (0-based), from the first line's number or every row's;
+    "" when not known."""
+    if lines is None:
+        return ""
+    return f" (line {lines + row if np.isscalar(lines) else lines[row]})"
+
+
+def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>", lines=None) -> Record:
     """Check arrays and return a :class:`Record`.
 
     Parameters
@@ -178,12 +186,15 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
         Floor acceleration (m/s^2).
     source : str
         Name used in error messages.
+    lines : int or sequence of int, optional
+        The file line (1-based) of the first sample, or of every sample, when read from a file: the messages
+        name a bad sample's line beside its data row, as an editor shows it.
     """
     mass = check_mass(mass)
-    time = numeric_column(np.asarray(time).ravel(), "time", source)
-    force = numeric_column(np.asarray(force).ravel(), "force", source)
+    time = numeric_column(np.asarray(time).ravel(), "time", source, lines)
+    force = numeric_column(np.asarray(force).ravel(), "force", source, lines)
     if floor_acc is not None:
-        floor_acc = numeric_column(np.asarray(floor_acc).ravel(), "floor_acc", source)
+        floor_acc = numeric_column(np.asarray(floor_acc).ravel(), "floor_acc", source, lines)
         if floor_acc.size != time.size:
             raise RecordError(f"{source}: column 'floor_acc' has {floor_acc.size} rows, 'time' has {time.size}")
     if force.size != time.size:
@@ -194,13 +205,15 @@ def make_record(time, force, mass, floor_acc=None, source: str = "<arrays>") -> 
     if (steps <= 0).any():
         row = int(np.argmax(steps <= 0)) + 2
         what = "repeats" if steps[row - 2] == 0 else "decreases"
-        raise RecordError(f"{source}: column 'time' {what} at row {row}; time must strictly increase")
+        raise RecordError(f"{source}: column 'time' {what} at row {row}{_line_text(lines, row - 1)}; time must "
+                          "strictly increase")
     median = float(np.median(steps))
     deviation = np.abs(steps / median - 1.0)
     if deviation.max() > SAMPLING_TOLERANCE:
         row = int(np.argmax(deviation)) + 2
         raise RecordError(
-            f"{source}: non-uniform sampling at row {row} (step {steps[row - 2]:.6g} s, median {median:.6g} s); "
+            f"{source}: non-uniform sampling at row {row}{_line_text(lines, row - 1)} (step {steps[row - 2]:.6g} s, "
+            f"median {median:.6g} s); "
             f"resample to a uniform rate (tolerance {SAMPLING_TOLERANCE:.0%})"
         )
     rate = 1.0 / median
@@ -355,16 +368,21 @@ def _read_export(rows: list, delimiter, source: str, fs, force_columns) -> tuple
 def _read_plain(path: Path, rows: list, header: list, mass) -> Record:
     """A record in this library's own format (``time,force[,floor_acc]``, commas), every row checked; ``mass``
     None: a provisional one, to be weighed (:func:`read_record`)."""
-    body = [row for row in rows[1:] if any(cell.strip() for cell in row)]
+    # rows[i] is the file's line i + 1 (csv_rows reads from the first line, the header)
+    lines = [i + 1 for i, row in enumerate(rows) if i > 0 and any(cell.strip() for cell in row)]
+    body = [rows[line - 1] for line in lines]
     if not body:
         raise RecordError(f"{path}: header only, no data rows")
-    for number, row in enumerate(body, start=1):
+    for number, (line, row) in enumerate(zip(lines, body), start=1):
         if len(row) != len(header):
-            raise RecordError(f"{path}: data row {number} has {len(row)} fields, the header has {len(header)}")
+            raise RecordError(f"{path}: data row {number} (line {line}) has {len(row)} fields, the header has "
+                              f"{len(header)}")
     columns = {name: np.array([row[i].strip() for row in body], dtype=object) for i, name in enumerate(header)}
     source = os.fspath(path)
-    given = mass if mass is not None else provisional_mass(numeric_column(columns["force"], "force", source), source)
-    record = make_record(columns["time"], columns["force"], given, floor_acc=columns.get("floor_acc"), source=source)
+    given = (mass if mass is not None
+             else provisional_mass(numeric_column(columns["force"], "force", source, lines), source))
+    record = make_record(columns["time"], columns["force"], given, floor_acc=columns.get("floor_acc"), source=source,
+                         lines=lines)
     return record if mass is not None else replace(record, extra={"weigh": True})
 
 

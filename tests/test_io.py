@@ -53,9 +53,9 @@ def csv_text(t, force):
         (lambda t, f: (t, f / (MASS * G)), "body weights"),
         (lambda t, f: (t, f / 1000.0), "kN"),
         (lambda t, f: (t, f * 3), "expected about mass\\*g"),
-        (lambda t, f: (np.r_[t[:10], t[9], t[11:]], f), "repeats at row 11"),
-        (lambda t, f: (np.r_[t[:10], t[8], t[11:]], f), "decreases at row 11"),
-        (lambda t, f: (np.r_[t[:50], t[50:] + 0.004], f), "non-uniform sampling at row 51"),
+        (lambda t, f: (np.r_[t[:10], t[9], t[11:]], f), r"repeats at row 11 \(line 12\)"),
+        (lambda t, f: (np.r_[t[:10], t[8], t[11:]], f), r"decreases at row 11 \(line 12\)"),
+        (lambda t, f: (np.r_[t[:50], t[50:] + 0.004], f), r"non-uniform sampling at row 51 \(line 52\)"),
     ],
 )
 def test_bad_values(tmp_path, mutate, pattern):
@@ -72,8 +72,26 @@ def test_non_numeric_cell_names_column_and_row(tmp_path, token):
     lines = csv_text(t, force).splitlines()
     lines[8] = f"{t[7]},{token}"
     path = write_csv(tmp_path / "cell.csv", "\n".join(lines) + "\n")
-    with pytest.raises(RecordError, match="column 'force' row 8"):
+    with pytest.raises(RecordError, match=r"column 'force' row 8 \(line 9\)"):
         read_record(path, MASS)
+
+
+def test_a_bad_row_is_named_by_its_file_line_across_blank_lines(tmp_path):
+    """Blank lines between rows are skipped, and a bad value's message names the line an editor shows it on: its
+    data row counts the values only."""
+    t, force = good_rows()
+    lines = csv_text(t, force).splitlines()
+    lines[20] = f"{t[19]},heavy"  # data row 20
+    lines[3:3] = ["", ""]  # two blank lines after data row 2: row 20 is now on line 23
+    path = write_csv(tmp_path / "blank.csv", "\n".join(lines) + "\n")
+    with pytest.raises(RecordError, match=r"column 'force' row 20 \(line 23\) holds 'heavy'"):
+        read_record(path, MASS)
+    with pytest.raises(RecordError, match=r"column 'force' row 20 \(line 23\)"):
+        read_record(path)  # weighed: the provisional mass reads the force first
+    lines[22] = f"{t[19]},{force[19]}"
+    lines[30] = lines[29]  # data row 28 repeats row 27's time
+    with pytest.raises(RecordError, match=r"column 'time' repeats at row 28 \(line 31\)"):
+        read_record(write_csv(tmp_path / "again.csv", "\n".join(lines) + "\n"), MASS)
 
 
 def test_structural_problems(tmp_path):
@@ -86,7 +104,7 @@ def test_structural_problems(tmp_path):
         read_record(write_csv(tmp_path / "header.csv", "time,force\n"), MASS)
     with pytest.raises(RecordError, match="missing column 'force'"):
         read_record(write_csv(tmp_path / "cols.csv", csv_text(t, force).replace("force", "load", 1)), MASS)
-    with pytest.raises(RecordError, match="data row 3 has 3 fields"):
+    with pytest.raises(RecordError, match=r"data row 3 \(line 4\) has 3 fields"):
         lines = csv_text(t, force).splitlines()
         lines[3] += ",1"
         read_record(write_csv(tmp_path / "ragged.csv", "\n".join(lines)), MASS)
