@@ -384,3 +384,25 @@ def test_a_floor_parameter_held_at_its_search_bound_is_said_so_not_given_an_sd_o
                               {"parameter": "mass_ratio", "unit": "-", "value": 0.001, "sd": np.nan, "on_bound": True}]
                              ).set_index("parameter")
     assert _parameters_text(same, same, estimates) == "f_f 9.135 ± 0.067 Hz; mass_ratio 0.001 (on its search bound)"
+
+
+@pytest.mark.slow
+def test_a_record_whose_floor_makes_the_fit_worse_is_warned_of_with_f_h_either_way():
+    """A person bouncing at a floor's resonance (f_b 3.5 Hz, the floor 3.48 Hz, 2000 kg). Where the force's rate
+    jitters from cycle to cycle, the measured floor puts f_h near the truth (3.65 Hz) and the ratio is large; where
+    its harmonics jump too, the fit with the floor is worse than without it by far more than FLOOR_WORSE (AIC; the
+    same unknowns): a warning says so and gives f_h both ways."""
+    from smd_statespace.person import identify_person
+    from smd_statespace.person.fit import FLOOR_WORSE
+
+    person = dict(mass=88.0, f_b=3.5, f_h=3.65, xi_h=0.47, blf=(0.29, 0.11, 0.04, 0.02), duration=20, seed=2,
+                  effects={"floor_mode": {"modal_mass": 2000.0}})
+    helped = identify_person(simulate_bouncing(coef_variation=0.0, **person).record)
+    assert helped.effect_test()["lr"] > 100 and abs(helped.f_h / 3.65 - 1) < 0.05
+    assert not any("makes the fit worse" in w for w in helped.record_warnings)
+    worse = identify_person(simulate_bouncing(**person).record)
+    lr = worse.effect_test()["lr"]
+    assert lr < FLOOR_WORSE
+    warning = next(w for w in worse.record_warnings if "floor_acc makes the fit worse" in w)
+    assert f"likelihood ratio {lr:.1f}" in warning and f"{worse.f_h:.3f} Hz with the floor" in warning
+    assert f"{worse.before.f_h:.3f} Hz without it (--no-floor)" in warning

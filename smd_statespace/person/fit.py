@@ -328,6 +328,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
         result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)
         if len(given) > len(effects_asked):  # the record brought its floor
             result.notes.append(_floor_note(result))
+            result.record_warnings.extend(_floor_worse(result))
     return result
 
 
@@ -404,6 +405,28 @@ def _floor_note(result) -> str:
             f"added; likelihood ratio against the person without it {test['lr']:.1f} = 2 x "
             f"({test['loglike_tested']:.1f} - {test['loglike_before']:.1f}), both at the cycle starts and variation "
             "model of the fit without it); --no-floor (measured_floor=False) leaves it out")
+
+
+FLOOR_WORSE = -10.0
+"""A record's measured floor whose likelihood ratio against the person without it is below this is warned of
+(:func:`_floor_worse`). The two models have the same unknowns (the floor adds none), so the ratio is their AIC
+difference: over 10, the worse model has essentially no support (Burnham & Anderson 2002, Sect. 2.6). On the floor
+rows of ``benchmarks/person_effects.py`` (seed 92, jumps) 5 of 15 records were below it (-27 to -534), 3 between
+it and 0 (docs/effects.md, "Why a measured floor can fit worse than no floor")."""
+
+
+def _floor_worse(result) -> list:
+    """The warning of a record whose own floor makes the fit worse by more than :data:`FLOOR_WORSE`, with ``f_h``
+    with and without the floor; none otherwise."""
+    lr = result.effect_test()["lr"]
+    if not lr < FLOOR_WORSE:
+        return []
+    return [f"the record's floor_acc makes the fit worse, not better (likelihood ratio {lr:.1f} against the person "
+            "without it, the same unknowns): the model misses something, and each cycle's force takes up the "
+            "floor's terms better than the physics does (on simulated records: harmonics that jump from cycle to "
+            "cycle as well as the rate); f_h is "
+            f"{result.f_h:.3f} Hz with the floor and {result.before.f_h:.3f} Hz without it (--no-floor): read "
+            "neither beyond its interval"]
 
 
 def zero_drift(time, seconds=ZERO_DRIFT_SECONDS) -> list:
