@@ -423,8 +423,8 @@ def _floor_worse(result) -> list:
         return []
     return [f"the record's floor_acc makes the fit worse, not better (likelihood ratio {lr:.1f} against the person "
             "without it, the same unknowns): the model misses something, and each cycle's force takes up the "
-            "floor's terms better than the physics does (on simulated records: harmonics that jump from cycle to "
-            "cycle as well as the rate); f_h is "
+            "floor's terms better than the physics does (on simulated records: cycle starts placed up to half a "
+            "cycle off, where the floor's resonance moves the force's peaks); f_h is "
             f"{result.f_h:.3f} Hz with the floor and {result.before.f_h:.3f} Hz without it (--no-floor): read "
             "neither beyond its interval"]
 
