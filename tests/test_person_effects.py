@@ -674,3 +674,30 @@ def test_the_modal_floor_starts_where_its_whole_grid_does(long_fit):
     assert len(seen) < 0.6 * len(frequencies)  # 136 of 233 here
     every = [model.loglike(np.r_[start[:j], f, start[j + 1:]]) for f in frequencies]
     assert start[j] == frequencies[int(np.argmax(every))]
+
+
+@pytest.mark.slow
+def test_effect_on_the_command_line_is_configured_for_the_record_as_in_the_library(tmp_path, monkeypatch, capsys):
+    """``identify REC --effect cubic_stiffness`` and ``diagnose REC --effect cubic_stiffness`` search the spring's
+    range scaled to the record, as ``identify_person(record, effects=["cubic_stiffness"])`` does: until 2026-12-01
+    the command line made the effect with its class's default (+-1000 1/m^2), on which a strong spring ends (the
+    interval of a spring of 1500 read 652 to 1000)."""
+    import json
+
+    from smd_statespace.io import read_record
+    from smd_statespace.person import identify_person
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["simulate", "--out", "s.csv", "--mass", "70", "--fb", "2.2", "--fh", "2.9", "--xi", "0.3",
+                 "--duration", "15", "--seed", "5", "--effect", "cubic_stiffness:beta_3=1500"]) == 0
+    library = identify_person(read_record("s.csv", 70.0), effects=["cubic_stiffness"])
+    spec = library.effects[0].spec
+    assert spec.startswith("cubic_stiffness:beta_range=") and library.effects[0].beta_range[1] > 1000.0
+    assert main(["identify", "s.csv", "--mass", "70", "--effect", "cubic_stiffness", "--quiet", "--out", "a"]) == 0
+    person = json.loads((tmp_path / "a" / "person.json").read_text())
+    assert person["effects"] == [spec] and person["beta_3"] == pytest.approx(library.effect_estimates().loc[
+        "beta_3", "value"])
+    capsys.readouterr()
+    assert main(["diagnose", "s.csv", "--mass", "70", "--effect", "cubic_stiffness", "--candidate", "harmonics",
+                 "--quiet", "--out", "d"]) == 0
+    assert capsys.readouterr().out.splitlines()[0] == f"s.csv: record-level model with {spec}"

@@ -342,6 +342,20 @@ def add_run_arguments(parser):
     add_check_argument(parser)
 
 
+def person_effects(args) -> list:
+    """``--effect`` as the record-level person takes it: the specs themselves, each checked first (one line before
+    anything is read).
+
+    A bare registered name then configures itself for the record
+    (:func:`~smd_statespace.person.extend.configured_for_record`: a cubic spring's range scaled to the record's
+    displacement), as ``identify FOLDER`` and the library have it. An effect made here would keep its class's
+    default (a cubic spring's +-1000 1/m^2, on which a strong spring ends): until 2026-12-01 ``identify REC
+    --effect cubic_stiffness`` and ``diagnose REC --effect cubic_stiffness`` searched that default range.
+    """
+    build_model(args)
+    return [spec.strip() for spec in args.effect]
+
+
 def build_model(args):
     """The model the options describe."""
     from ..effects import make_effect

@@ -12,7 +12,7 @@ from ..diagnostics.check import INITIAL_STATES
 from ..estimators import ESTIMATORS
 from .common import (FADE_CHOICES, add_fade_argument, add_model_arguments, add_noise_floor_argument,
                      add_rate_argument, add_record_arguments, add_run_arguments, add_span_argument, build_model,
-                     check_record_level_options, estimator_options, out_dir, prepare_record, rate_of,
+                     check_record_level_options, estimator_options, out_dir, person_effects, prepare_record, rate_of,
                      read_person_record)
 from ..identify.runner import DEFAULT_ESTIMATOR
 
@@ -83,14 +83,15 @@ def before_after(before, after) -> pd.DataFrame:
 
 
 def _effects_and_candidates(args) -> tuple:
-    """``(effects added to the model, candidates or None)`` of ``--effect`` and ``--candidate``, checked."""
+    """``(effects added to the model, candidates or None)`` of ``--effect`` and ``--candidate``, checked: their specs
+    (:func:`~smd_statespace.cli.common.person_effects`: a bare name configures itself for the record)."""
     from ..effects import make_effect
     from ..errors import OptionError
 
-    added = list(build_model(args).effects)
-    candidates = [make_effect(spec) for spec in args.candidate] or None
-    present = {effect.key for effect in added}
-    both = [effect.key for effect in candidates or [] if effect.key in present]
+    added = person_effects(args)
+    keys = {spec.strip(): make_effect(spec).key for spec in [*added, *args.candidate]}  # a bad one: one line
+    candidates = [spec.strip() for spec in args.candidate] or None
+    both = [keys[spec] for spec in candidates or [] if keys[spec] in {keys[name] for name in added}]
     if both:
         raise OptionError(f"--candidate {both[0]!r} is also given as --effect: an effect is either in the model "
                           "(--effect) or a candidate to try on top of it (--candidate)")
@@ -215,10 +216,12 @@ def run_diagnose(args) -> int:
         return run_person_diagnose(args)
     check_record_level_options(args, "tries it as a candidate anyway")
     from ..diagnostics.missing import diagnose
+    from ..effects import make_effect
     from ..plotting.cycles import plot_before_after
 
     directory = out_dir(args.out)
     _, candidates = _effects_and_candidates(args)
+    candidates = [make_effect(spec) for spec in candidates] if candidates else None
     model = build_model(args)
     record, preprocessed = prepare_record(args)
     options = dict(max_passes=args.max_passes, seed=args.seed, progress=not args.quiet,

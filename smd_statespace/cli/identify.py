@@ -17,8 +17,8 @@ from ..identify.plausibility import plausible_cycles
 from .common import (FADE_CHOICES, MASS_HELP, PROG, _count, add_accelerometer_arguments, add_export_arguments,
                      add_fade_argument, add_model_arguments, add_noise_floor_argument, add_rate_argument,
                      add_run_arguments, add_span_argument, build_model, check_record_level_options, estimator_options,
-                     load_truth, out_dir, prepare_record, rate_of, read_person_record, reading_options,
-                     truth_values)
+                     load_truth, out_dir, person_effects, prepare_record, rate_of, read_person_record,
+                     reading_options, truth_values)
 
 
 SUMMARY_PARAMETERS = ("f_h", "xi_h", "blf_1", "blf_2", "blf_3", "k_h", "c_h")
@@ -249,7 +249,7 @@ def run_person(args) -> int:
     from ..person.extend import check_effects
     from .person_output import write_person
 
-    effects = build_model(args).effects  # an unknown effect or option: one line before anything is read
+    effects = person_effects(args)  # an unknown effect or option: one line before anything is read
     record = read_person_record(args)
     check_effects(effects, record)  # a column the record lacks (floor_acc): one line, nothing written
     truth = truth_values(load_truth(args.truth))  # a bad --truth fails before the fit, not after
@@ -260,7 +260,7 @@ def run_person(args) -> int:
                        noise_floor=args.noise_floor, fade=FADE_CHOICES[args.fade])
     options = {"variation": args.variation, "timing": args.timing, "intervals": args.intervals,
                "harmonics": args.harmonics, "rate": rate_of(args), "span": args.span,
-               "noise_floor": args.noise_floor, "fade": args.fade, "effects": [e.spec for e in effects]}
+               "noise_floor": args.noise_floor, "fade": args.fade, "effects": list(effects)}
     if args.span == "each":
         return run_bouts(record, directory, fit_options, options, truth)
     started = time.perf_counter()
