@@ -89,9 +89,9 @@ def _effects_and_candidates(args) -> tuple:
     from ..errors import OptionError
 
     added = person_effects(args)
-    keys = {spec.strip(): make_effect(spec).key for spec in [*added, *args.candidate]}  # a bad one: one line
+    present = {make_effect(spec).key for spec in added}
     candidates = [spec.strip() for spec in args.candidate] or None
-    both = [keys[spec] for spec in candidates or [] if keys[spec] in {keys[name] for name in added}]
+    both = [key for key in (make_effect(spec).key for spec in candidates or []) if key in present]  # bad: one line
     if both:
         raise OptionError(f"--candidate {both[0]!r} is also given as --effect: an effect is either in the model "
                           "(--effect) or a candidate to try on top of it (--candidate)")

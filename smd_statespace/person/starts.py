@@ -71,8 +71,8 @@ def search_starts(model: RecordModel, result, root, effects) -> list:
     """Starts of the search, one per fit the model could grow from: ``(model, params)`` pairs.
 
     From ``result`` (the fit the effects are added to) by name, the best of the added effects' own trial starts
-    (:func:`~smd_statespace.person.effect_adapter.record_starts`) by likelihood, else the model's. When ``result`` holds effects already, a second start from
-    ``root`` (the fit without any) with ``result``'s effect parameters: a
+    (:func:`~smd_statespace.person.effect_adapter.record_starts`) by likelihood, else the model's. When ``result``
+    holds effects already, a second start from ``root`` (the fit without any) with ``result``'s effect parameters: a
     variance that an earlier effect's fit drove to zero sits on a flat
     plateau of the likelihood that a search started there does not leave.
 
@@ -154,13 +154,12 @@ def start_pieces(start, result, effects) -> list | None:
     if start is None or isinstance(start, tuple) and isinstance(start[0], RecordModel):
         return None
     pieces = [start] if not isinstance(start, (list, tuple)) else list(start)
-    present = len(result.effects)
-    specs = [e.spec for piece in pieces for e in piece.effects[present:]]
-    if any(piece.before is not result or [e.spec for e in piece.effects[:present]] != [e.spec for e in
-                                                                                      result.effects]
-           for piece in pieces) or sorted(specs) != sorted(e.spec for e in effects[present:]):
+    present = [e.spec for e in result.effects]
+    if any(piece.before is not result or [e.spec for e in piece.effects[:len(present)]] != present
+           for piece in pieces):
         return None
-    return pieces
+    added = sorted(e.spec for piece in pieces for e in piece.effects[len(present):])
+    return pieces if added == sorted(e.spec for e in effects[len(present):]) else None
 
 
 def joined_start(model: RecordModel, result, pieces) -> tuple:
