@@ -34,7 +34,7 @@ from ..signals.weighing import weigh_record
 # the steps below identify_person (the names of __all__ were defined here up to 2026-11-27, and stay importable)
 from .answer import honest_intervals, person_result, undetermined_interval
 from .change import change_test
-from .comparison import comparison_row
+from .comparison import aic, comparison_row
 from .model import PERSON, VARIATIONS, Regressor, RecordModel
 from .fade import fading
 from .noise_floor import NOISE_FLOOR, check_noise_floor, raise_to_floor
@@ -42,7 +42,7 @@ from .screen import time_change
 from .profile import profile_interval
 from .search import COV_TYPES, TIMING_ITERATIONS, WIDER_SANDWICH, FitError, choose_with_own_timing, fit_model
 from .threads import one_blas_thread, record_cores, search_threads, thread_map
-from .timing import TIMING_METHODS, estimate_timing
+from .timing import TIMING_METHODS, estimate_timing, floor_share
 
 __all__ = ["FitError", "MIN_CYCLES", "UNMEASURED_SHARE", "ZERO_DRIFT_SECONDS", "ZERO_DRIFT_MAX_DEGREE",
            "ZERO_WANDERS_SECONDS", "ZERO_WANDERS_ALPHA", "zero_drift",
@@ -265,12 +265,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
     given = record_effects(record, effects_asked, measured_floor)
     effects = check_effects(given, record)  # bad specs and missing columns fail before any fit
     record = weigh_record(record)  # read without a mass: the plate weighs the person
-    if variation != "auto" and variation not in VARIATIONS:
-        raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
-    if intervals not in INTERVAL_METHODS:
-        raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
-    if timing not in ("model",) + TIMING_METHODS:
-        raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
+    _check_options(variation, intervals, timing, cov_type)
     noise_floor, threads = check_noise_floor(noise_floor), search_threads(threads)
     prepared, observed = _prepared(record, rate, span, regressors, check)
     record_warnings = _applicable(record, prepared, check)
@@ -282,12 +277,7 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
                                     seed_from=measured_force)
     notes = list(prepared.notes) + floor_notes
     first = "template" if timing == "model" else timing
-    cycle_timing = estimate_timing(record.time, record.force, n_harmonics, first, source=record.source)
-    inside = np.sum((cycle_timing.boundaries > record.time[0]) & (cycle_timing.boundaries < record.time[-1]))
-    if inside - 1 < MIN_CYCLES:
-        raise CycleError(f"{record.source}: {max(inside - 1, 0)} whole bouncing cycles found; the record-level model "
-                         f"needs at least {MIN_CYCLES} to estimate the cycle-to-cycle variation: use a longer record "
-                         "or a per-cycle estimator (--estimator ekf)")
+    cycle_timing = _first_timing(record, record.force, n_harmonics, first)
     offset = Regressor("offset", np.ones_like(y), "m/s^2", dynamic=False)
     all_regressors = (offset,) + tuple(regressors)
     names = AUTO_VARIATIONS if variation == "auto" else (variation,)
@@ -297,39 +287,115 @@ def identify_person(record: Record, n_harmonics=4, variation="auto", timing="mod
                            regressors=all_regressors + (zero if zero_ is None else zero_), phase_template=template,
                            observed=observed, fade=faded)
 
-    if cov_type not in COV_TYPES:
-        raise OptionError(f"cov_type {cov_type!r} is not one of: {', '.join(COV_TYPES)}")
     steps = len(names) * (1 + (TIMING_ITERATIONS + 1 if timing == "model" else 0)) + (2 if timing == "model" else 1)
     steps += 1 if check_change else 0  # the halves' fits
-    with tqdm(total=steps, desc="identify (record)", unit="fit", disable=not progress, leave=False) as bar:
+    zero_note = ""
+
+    def person_at(cycle_timing, bar):  # the person from these first cycle starts, with the effects asked for
+        nonlocal zero, zero_note
         model, fitted, comparison = _search(model_for, cycle_timing, names, timing, bar.update, threads)
-        if zero:  # a lab-shaped record: does its zero move faster than the slow drift follows?
+        if zero and not zero_note:  # a lab-shaped record: does its zero move faster than the slow drift follows?
             denser = tuple(zero_drift(record.time, ZERO_WANDERS_SECONDS))
             said = _zero_wanders(model, fitted, model_for(model.timing, model.variation, model.phase_template, denser))
             if said:
                 bar.total += steps - 1
-                zero = denser
+                zero, zero_note = denser, said
                 model, fitted, comparison = _search(model_for, cycle_timing, names, timing, bar.update, threads)
-                notes.append(said)
-        step = bar.update
         if not fitted["converged"]:
             raise FitError(f"{record.source}: the likelihood search did not converge ({fitted['message']}); try "
                            "--variation independent, a longer record or a per-cycle estimator (--estimator ekf)")
         change = None
         if check_change:
             change = change_test(model, fitted["params"], level, threads)
-            step()
+            bar.update()
         result = person_result(record, model, fitted, intervals=intervals, level=level, cov_type=cov_type,
-                               comparison=comparison, record_warnings=record_warnings, notes=notes, change=change,
-                               prepared=prepared, threads=threads)
+                               comparison=comparison, record_warnings=list(record_warnings),
+                               notes=notes + ([zero_note] if zero_note else []), change=change, prepared=prepared,
+                               threads=threads)
         result = _changed_in_time(result, threads) if change is not None else result
-        step()
-    if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
-        result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress, threads=threads)
-        if len(given) > len(effects_asked):  # the record brought its floor
-            result.notes.append(_floor_note(result))
-            result.record_warnings.extend(_floor_worse(result))
+        bar.update()
+        if effects:  # as given: a bare name is configured for the record (extend.configured_for_record)
+            result = fit_effects(result, given, intervals=intervals, cov_type=cov_type, progress=progress,
+                                 threads=threads)
+        return result
+
+    with tqdm(total=steps, desc="identify (record)", unit="fit", disable=not progress, leave=False) as bar:
+        result = person_at(cycle_timing, bar)
+
+        def again(placed):
+            bar.total += steps
+            return person_at(placed, bar)
+
+        if _rides_measured_floor(result):
+            result = _starts_without_floor(result, cycle_timing, again, n_harmonics, first)
+    if len(given) > len(effects_asked):  # the record brought its floor
+        result.notes.append(_floor_note(result))
+        result.record_warnings.extend(_floor_worse(result))
     return result
+
+
+def _check_options(variation, intervals, timing, cov_type):
+    """An :class:`~smd_statespace.errors.OptionError` naming the first of :func:`identify_person`'s options that is
+    not one of its choices."""
+    if variation != "auto" and variation not in VARIATIONS:
+        raise OptionError(f"variation {variation!r} is not one of: auto, {', '.join(VARIATIONS)}")
+    if intervals not in INTERVAL_METHODS:
+        raise OptionError(f"intervals {intervals!r} is not one of: {', '.join(INTERVAL_METHODS)}")
+    if timing not in ("model",) + TIMING_METHODS:
+        raise OptionError(f"timing {timing!r} is not one of: model, {', '.join(TIMING_METHODS)}")
+    if cov_type not in COV_TYPES:
+        raise OptionError(f"cov_type {cov_type!r} is not one of: {', '.join(COV_TYPES)}")
+
+
+def _first_timing(record, force, n_harmonics, method):
+    """The cycle starts estimated from ``force`` (N, or anything affine in it) before any fit; refused where they
+    are fewer than :data:`MIN_CYCLES` whole cycles."""
+    cycle_timing = estimate_timing(record.time, force, n_harmonics, method, source=record.source)
+    inside = np.sum((cycle_timing.boundaries > record.time[0]) & (cycle_timing.boundaries < record.time[-1]))
+    if inside - 1 < MIN_CYCLES:
+        raise CycleError(f"{record.source}: {max(inside - 1, 0)} whole bouncing cycles found; the record-level model "
+                         f"needs at least {MIN_CYCLES} to estimate the cycle-to-cycle variation: use a longer record "
+                         "or a per-cycle estimator (--estimator ekf)")
+    return cycle_timing
+
+
+def _starts_without_floor(result, cycle_timing, person_at, n_harmonics, method):
+    """The person again from cycle starts placed on the force less the measured floor's share, where they differ.
+
+    The first cycle starts are placed on the GRF (:func:`_first_timing`), whose peaks a floor near resonance
+    moves: on simulated records of people on a 3.48 Hz floor they were up to half a cycle off, and the fit with
+    the floor then fitted worse than the one without it (likelihood ratio down to -534, ``f_h`` -27 %;
+    docs/effects.md, "Why a measured floor can fit worse than no floor"). Here the floor's share of the body's
+    acceleration at ``result``'s ``f_h`` and ``xi_h`` (:func:`~smd_statespace.person.timing.floor_share`) is
+    taken out, the starts are placed again on what is left, and the person is identified from them
+    (``person_at``, the whole of :func:`identify_person` from its first starts on). Of the two the fit with the
+    lower AIC is kept (the same model, its variation model chosen in each; the starts are estimated as ``f_h``
+    is), and a note says both.
+    """
+    record = result.record
+    share = floor_share(record.time, record.floor_acc, result.f_h, result.xi_h)
+    try:
+        placed = _first_timing(record, record.force - record.mass * share, n_harmonics, method)
+    except CycleError:
+        return result
+    before, after = cycle_timing.boundaries, placed.boundaries
+    if before.size == after.size and np.max(np.abs(after - before)) < 0.5 / record.fs:
+        return result  # the same starts to the sample
+    again = person_at(placed)
+    kept = min((again, result), key=lambda fit: aic({"params": fit.params, "loglike": fit.loglike}))
+    which = "the new starts" if kept is again else "the GRF's starts"
+    kept.notes.append(f"the cycle starts were placed again on the force less the measured floor's share (the "
+                      f"person's response to floor_acc at f_h {result.f_h:.3f} Hz, xi_h {result.xi_h:.3f}): "
+                      f"log-likelihood {again.loglike:.1f} from them, {result.loglike:.1f} from the starts placed on "
+                      f"the GRF; the fit from {which} is kept")
+    return kept
+
+
+def _rides_measured_floor(result) -> bool:
+    """Whether ``result``'s model has a measured floor (``floor_mode``, source "measured") and its record the
+    ``floor_acc`` it measured."""
+    return getattr(result.record, "floor_acc", None) is not None and any(
+        effect.name == "floor_mode" and getattr(effect, "source", None) == "measured" for effect in result.effects)
 
 
 def _search(model_for, cycle_timing, names, timing: str, step, threads: int) -> tuple:
@@ -422,9 +488,9 @@ def _floor_worse(result) -> list:
     if not lr < FLOOR_WORSE:
         return []
     return [f"the record's floor_acc makes the fit worse, not better (likelihood ratio {lr:.1f} against the person "
-            "without it, the same unknowns): the model misses something, and each cycle's force takes up the "
-            "floor's terms better than the physics does (on simulated records: cycle starts placed up to half a "
-            "cycle off, where the floor's resonance moves the force's peaks); f_h is "
+            "without it, the same unknowns): is it the vertical acceleration of the floor under the plate, upward "
+            "positive, in m/s^2? (one with its sign flipped fits worse than no floor) Else the model misses "
+            "something, and each cycle's force takes up the floor's terms better than the physics does; f_h is "
             f"{result.f_h:.3f} Hz with the floor and {result.before.f_h:.3f} Hz without it (--no-floor): read "
             "neither beyond its interval"]
 

@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import CycleError, OptionError
 from ..signals import SUPPORTED_FB, find_cycles
 
-__all__ = ["TIMING_METHODS", "CycleTiming", "estimate_timing"]
+__all__ = ["TIMING_METHODS", "CycleTiming", "estimate_timing", "floor_share"]
 
 TIMING_METHODS = ("template", "peaks")
 """Ways :func:`estimate_timing` places the force-cycle boundaries."""
@@ -381,3 +381,34 @@ def _regular_edges(inner):
     if abs(b[-1] - b[-2] - period) > EDGE_TOLERANCE * period:
         b[-1] = b[-2] + (b[-2] - b[-3])
     return b
+
+
+def floor_share(time, floor_acc, f_h, xi_h) -> np.ndarray:
+    """The body's acceleration (m/s^2) that a measured floor drives through the person's leg, shape (N,).
+
+    A person on a moving floor obeys ``u'' = -w_h^2 (u - z) - 2 xi_h w_h (u' - z') + F`` (Eq. 2 relative to the
+    floor: ``u`` the body's and ``z`` the floor's vertical displacement, upward, m; ``w_h = 2 pi f_h``; ``F`` the
+    biomechanical force per unit mass). The part of ``u''`` that ``z`` drives alone (``F = 0``, the person at rest
+    at the record's start) is the floor's acceleration ``z''`` (``floor_acc``) through
+    ``H(s) = (2 xi_h w_h s + w_h^2) / (s^2 + 2 xi_h w_h s + w_h^2)``. The force less ``M_h`` times this is what
+    the person's own force makes; its peaks are where the cycle starts lie, where a floor near resonance moves
+    the GRF's (:func:`~smd_statespace.person.fit.identify_person` places the starts on it again).
+
+    Parameters
+    ----------
+    time : array_like, shape (N,)
+        Sample times (s), uniformly spaced.
+    floor_acc : array_like, shape (N,)
+        The floor's vertical acceleration (m/s^2, upward).
+    f_h : float
+        Natural frequency of the person (Hz).
+    xi_h : float
+        Damping ratio of the person.
+    """
+    from scipy.signal import lsim
+
+    w = 2.0 * np.pi * f_h
+    time = np.asarray(time, dtype=float)
+    _, share, _ = lsim(([2.0 * xi_h * w, w * w], [1.0, 2.0 * xi_h * w, w * w]), np.asarray(floor_acc, dtype=float),
+                       time - time[0])
+    return np.asarray(share, dtype=float)
