@@ -477,8 +477,10 @@ FLOOR_WORSE = -10.0
 """A record's measured floor whose likelihood ratio against the person without it is below this is warned of
 (:func:`_floor_worse`). The two models have the same unknowns (the floor adds none), so the ratio is their AIC
 difference: over 10, the worse model has essentially no support (Burnham & Anderson 2002, Sect. 2.6). On the floor
-rows of ``benchmarks/person_effects.py`` (seed 92, jumps) 5 of 15 records were below it (-27 to -534), 3 between
-it and 0 (docs/effects.md, "Why a measured floor can fit worse than no floor")."""
+rows of ``benchmarks/floor_starts.py`` (seed 92: 32 records of ``person_effects.py``, one refused, and 12 of a
+person at the floor's resonance) 12 of 43 were below it with the starts placed on the GRF, 4 with them placed
+again without the floor's share (:func:`_starts_without_floor`; docs/effects.md, "Why a measured floor can fit
+worse than no floor")."""
 
 
 def _floor_worse(result) -> list:
