@@ -366,14 +366,18 @@ def _starts_without_floor(result, cycle_timing, person_at, n_harmonics, method):
     moves: on simulated records of people on a 3.48 Hz floor they were up to half a cycle off, and the fit with
     the floor then fitted worse than the one without it (likelihood ratio down to -534, ``f_h`` -27 %;
     docs/effects.md, "Why a measured floor can fit worse than no floor"). Here the floor's share of the body's
-    acceleration at ``result``'s ``f_h`` and ``xi_h`` (:func:`~smd_statespace.person.timing.floor_share`) is
-    taken out, the starts are placed again on what is left, and the person is identified from them
-    (``person_at``, the whole of :func:`identify_person` from its first starts on). Of the two the fit with the
-    lower AIC is kept (the same model, its variation model chosen in each; the starts are estimated as ``f_h``
-    is), and a note says both.
+    acceleration at ``result``'s ``f_h`` and ``xi_h`` (:func:`~smd_statespace.person.timing.floor_share`; those of
+    the fit without the floor where ``result``'s sit on a search bound and its do not: on two records the floor's
+    first fit ran to 0.5 Hz, the fit without it was at 3.2 and 3.5 Hz) is taken out, the starts are placed again
+    on what is left, and the person is identified from them (``person_at``, the whole of :func:`identify_person`
+    from its first starts on). Of the two the fit with the lower AIC is kept (the same model, its variation model
+    chosen in each; the starts are estimated as ``f_h`` is), and a note says both.
     """
-    record = result.record
-    share = floor_share(record.time, record.floor_acc, result.f_h, result.xi_h)
+    record, person = result.record, result
+    if result.model.person_at_bound(result.params) and result.before is not None and \
+            not result.before.model.person_at_bound(result.before.params):
+        person = result.before  # the floor's fit is degenerate there: the person without the floor
+    share = floor_share(record.time, record.floor_acc, person.f_h, person.xi_h)
     try:
         placed = _first_timing(record, record.force - record.mass * share, n_harmonics, method)
     except CycleError:
@@ -384,8 +388,9 @@ def _starts_without_floor(result, cycle_timing, person_at, n_harmonics, method):
     again = person_at(placed)
     kept = min((again, result), key=lambda fit: aic({"params": fit.params, "loglike": fit.loglike}))
     which = "the new starts" if kept is again else "the GRF's starts"
+    whose = ", the fit without the floor's: the first fit's sat on a search bound" if person is not result else ""
     kept.notes.append(f"the cycle starts were placed again on the force less the measured floor's share (the "
-                      f"person's response to floor_acc at f_h {result.f_h:.3f} Hz, xi_h {result.xi_h:.3f}): "
+                      f"person's response to floor_acc at f_h {person.f_h:.3f} Hz, xi_h {person.xi_h:.3f}{whose}): "
                       f"log-likelihood {again.loglike:.1f} from them, {result.loglike:.1f} from the starts placed on "
                       f"the GRF; the fit from {which} is kept")
     return kept
@@ -478,7 +483,7 @@ FLOOR_WORSE = -10.0
 (:func:`_floor_worse`). The two models have the same unknowns (the floor adds none), so the ratio is their AIC
 difference: over 10, the worse model has essentially no support (Burnham & Anderson 2002, Sect. 2.6). On the floor
 rows of ``benchmarks/floor_starts.py`` (seed 92: 32 records of ``person_effects.py``, one refused, and 12 of a
-person at the floor's resonance) 12 of 43 were below it with the starts placed on the GRF, 4 with them placed
+person at the floor's resonance) 12 of 43 were below it with the starts placed on the GRF, 3 with them placed
 again without the floor's share (:func:`_starts_without_floor`; docs/effects.md, "Why a measured floor can fit
 worse than no floor")."""
 
